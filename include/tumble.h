@@ -1,0 +1,223 @@
+/* tumble.h: the public C API of tumble, a physics library for virtual worlds.
+
+   A world keeps its state in flat arrays per quantity (positions, velocities,
+   masses, ...) and steps it with one of several integrators chosen by name.
+   Objects are addressed by generation-checked value ids (tumble/id.h).
+   Units are SI, axes right-handed, gravity a world setting.
+
+   Rules that hold for every function below:
+   - a function that can fail returns a tb_status; on failure the world is
+     unchanged and tb_world_message() holds a one-line reason;
+   - NaN or Inf, non-positive masses or steps, negative stiffness, unknown
+     names and stale ids are refused, never crash, abort or exit;
+   - pointers to state arrays stay valid until the next step or structural
+     change (adding or removing an object) of that world;
+   - structural changes are refused (TB_ERR_BUSY) while the world is stepping,
+     that is, from inside a force or field callback;
+   - worlds share nothing: several may live in one process and each may be
+     stepped on its own thread. */
+#ifndef TUMBLE_H
+#define TUMBLE_H
+
+#include "tumble/base.h"
+#include "tumble/id.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct tb_world tb_world;
+
+typedef struct tb_field_id { uint32_t index1; uint32_t generation; } tb_field_id;
+typedef struct tb_force_id { uint32_t index1; uint32_t generation; } tb_force_id;
+
+/* ---------------------------------------------------------------- world -- */
+
+typedef struct tb_world_def {
+    double gravity[3];       /* m/s^2; default (0, 0, -9.81): z is up */
+    double linear_drag;      /* N s/m; every particle feels -c v; default 0 */
+    double quadratic_drag;   /* N s^2/m^2; every particle feels -c |v| v; default 0 */
+    const char *integrator;  /* a name from tb_integrator_name(); NULL: "verlet" */
+    tb_allocator allocator;  /* all of the world's memory goes through it */
+} tb_world_def;
+
+/* The defaults above. Start from this and change what you need. */
+TB_API tb_world_def tb_default_world_def(void);
+
+/* Create a world. On failure *world is NULL and, when message is not NULL,
+   the reason is written to it (at most message_size bytes). */
+TB_API tb_status tb_world_create(const tb_world_def *def, tb_world **world,
+                                 char *message, size_t message_size);
+
+/* Free the world and everything in it. NULL is ignored. */
+TB_API void tb_world_destroy(tb_world *world);
+
+/* The reason for the last failure in this world ("" if none yet). */
+TB_API const char *tb_world_message(const tb_world *world);
+
+/* Simulated time in seconds: the sum of all completed steps. */
+TB_API double tb_world_time(const tb_world *world);
+
+TB_API tb_status tb_world_set_gravity(tb_world *world, const double gravity[3]);
+TB_API void tb_world_gravity(const tb_world *world, double gravity[3]);
+
+/* Drag on every particle: f = -(linear + quadratic |v|) v. Both >= 0. */
+TB_API tb_status tb_world_set_drag(tb_world *world, double linear, double quadratic);
+
+/* ----------------------------------------------------------- stepping -- */
+
+/* Integrators, by name:
+     "euler"            explicit (forward) Euler. Order 1, 1 force evaluation
+                        per step. Unstable on undamped oscillations at any step.
+     "symplectic_euler" semi-implicit Euler: kick v with the forces at the
+                        start, then drift x with the new v. Order 1, 1
+                        evaluation; ODE's dWorldStep for free bodies.
+                        Oscillations stay bounded for h w < 2.
+     "verlet"           velocity Verlet: kick h/2, drift h, kick h/2. Order 2,
+                        2 evaluations (forces may depend on velocity, so the
+                        end-of-step forces are not reused). Bounded for h w < 2.
+     "rk4"              classic Runge-Kutta. Order 4, 4 evaluations; slightly
+                        dissipative; stable on oscillations for h w < 2 sqrt 2.
+   The split methods ("symplectic_euler", "verlet") need a velocity to kick:
+   tracers have none, so a world holding tracers refuses them (and a world
+   using them refuses tracers). "euler" and "rk4" move tracers and particles
+   alike. Force callbacks run once per force evaluation. */
+TB_API int tb_integrator_count(void);
+TB_API const char *tb_integrator_name(int index);   /* NULL past the end */
+TB_API int tb_integrator_order(int index);           /* 0 past the end */
+
+TB_API tb_status tb_world_set_integrator(tb_world *world, const char *name);
+TB_API const char *tb_world_integrator(const tb_world *world);
+
+/* Advance by h seconds (finite, > 0). If a callback fails, the step is
+   abandoned and the state is bit-identical to what it was before. */
+TB_API tb_status tb_world_step(tb_world *world, double h);
+
+/* -------------------------------------------------------------- tracers -- */
+/* Tracers are massless points with only a position, carried by the sum of
+   the world's velocity fields: dx/dt = v(x, t). */
+
+typedef struct tb_tracer_def {
+    double position[3];  /* m */
+} tb_tracer_def;
+
+TB_API tb_tracer_def tb_default_tracer_def(void);
+TB_API tb_status tb_world_add_tracer(tb_world *world, const tb_tracer_def *def, tb_tracer_id *id);
+TB_API tb_status tb_world_remove_tracer(tb_world *world, tb_tracer_id id);
+TB_API tb_status tb_tracer_position(const tb_world *world, tb_tracer_id id, double position[3]);
+TB_API tb_status tb_tracer_set_position(tb_world *world, tb_tracer_id id, const double position[3]);
+
+TB_API size_t tb_world_tracer_count(const tb_world *world);
+/* Flat array of 3 * count positions (m), in slot order. */
+TB_API const double *tb_world_tracer_positions(const tb_world *world);
+TB_API tb_tracer_id tb_world_tracer_at(const tb_world *world, size_t slot);
+/* The field velocity (m/s) at each tracer now, 3 * count values. Calls the
+   field callbacks, so it can fail like a step. */
+TB_API tb_status tb_world_tracer_velocities(tb_world *world, double *velocities);
+
+/* ---------------------------------------------------------------- fields -- */
+
+/* Arguments of a velocity-field callback: add the field's velocity at each
+   position to `velocities`. Return TB_OK, or fail with a reason in message. */
+typedef struct tb_field_args {
+    double time;                /* s */
+    size_t count;
+    const double *positions;    /* 3 * count, m */
+    double *velocities;         /* 3 * count, m/s: add to it */
+    char *message;              /* TB_MESSAGE_SIZE bytes */
+} tb_field_args;
+typedef tb_status tb_field_fn(const tb_field_args *args, void *user);
+
+/* v = u everywhere. */
+TB_API tb_status tb_world_add_uniform_field(tb_world *world, const double velocity[3], tb_field_id *id);
+/* Rigid rotation: v = omega x (x - centre); omega in rad/s. */
+TB_API tb_status tb_world_add_vortex_field(tb_world *world, const double omega[3],
+                                           const double centre[3], tb_field_id *id);
+TB_API tb_status tb_world_add_field(tb_world *world, tb_field_fn *fn, void *user, tb_field_id *id);
+TB_API tb_status tb_world_remove_field(tb_world *world, tb_field_id id);
+
+/* ------------------------------------------------------------ particles -- */
+/* Point masses: dv/dt = f / m. A pinned particle has infinite inertia: it
+   takes no force, keeps its velocity, and counts as mass 0 in diagnostics. */
+
+typedef struct tb_particle_def {
+    double position[3];  /* m */
+    double velocity[3];  /* m/s */
+    double mass;         /* kg, finite and > 0; default 1 */
+    int pinned;          /* nonzero: immovable by forces (cloth corners) */
+} tb_particle_def;
+
+TB_API tb_particle_def tb_default_particle_def(void);
+/* Adding a particle may move the state arrays. Removing one also removes
+   the springs attached to it. */
+TB_API tb_status tb_world_add_particle(tb_world *world, const tb_particle_def *def, tb_particle_id *id);
+TB_API tb_status tb_world_remove_particle(tb_world *world, tb_particle_id id);
+TB_API tb_status tb_particle_position(const tb_world *world, tb_particle_id id, double position[3]);
+TB_API tb_status tb_particle_velocity(const tb_world *world, tb_particle_id id, double velocity[3]);
+TB_API tb_status tb_particle_mass(const tb_world *world, tb_particle_id id, double *mass);
+TB_API tb_status tb_particle_set_position(tb_world *world, tb_particle_id id, const double position[3]);
+TB_API tb_status tb_particle_set_velocity(tb_world *world, tb_particle_id id, const double velocity[3]);
+
+TB_API size_t tb_world_particle_count(const tb_world *world);
+/* Flat arrays in slot order: 3 * count positions (m), 3 * count velocities
+   (m/s), count masses (kg, 0 for pinned particles). */
+TB_API const double *tb_world_particle_positions(const tb_world *world);
+TB_API const double *tb_world_particle_velocities(const tb_world *world);
+TB_API const double *tb_world_particle_masses(const tb_world *world);
+TB_API tb_particle_id tb_world_particle_at(const tb_world *world, size_t slot);
+
+/* -------------------------------------------------------------- springs -- */
+/* Hooke springs with damping along their axis:
+     f_a = -(k (|d| - rest) + c (v_a - v_b) . n) n,  d = x_a - x_b, n = d / |d|,
+   and f_b = -f_a. With a null `b` the spring ties `a` to the fixed `anchor`. */
+
+typedef struct tb_spring_def {
+    tb_particle_id a;
+    tb_particle_id b;        /* null: anchor the spring at `anchor` */
+    double anchor[3];        /* m, used when b is null */
+    double stiffness;        /* k, N/m, >= 0 */
+    double damping;          /* c, N s/m, >= 0 */
+    double rest_length;      /* m; negative (the default): the distance at creation */
+} tb_spring_def;
+
+TB_API tb_spring_def tb_default_spring_def(void);
+TB_API tb_status tb_world_add_spring(tb_world *world, const tb_spring_def *def, tb_spring_id *id);
+TB_API tb_status tb_world_remove_spring(tb_world *world, tb_spring_id id);
+TB_API size_t tb_world_spring_count(const tb_world *world);
+
+/* ---------------------------------------------------------- user forces -- */
+
+/* Arguments of a force callback: add forces (N) on the particles. It is
+   called once per force evaluation with whole arrays, never per particle.
+   The state it sees may be an intermediate stage of the integrator. */
+typedef struct tb_force_args {
+    double time;                /* s */
+    size_t count;               /* particles */
+    const double *positions;    /* 3 * count, m */
+    const double *velocities;   /* 3 * count, m/s */
+    const double *masses;       /* count, kg (0 for pinned) */
+    double *forces;             /* 3 * count, N: add to it */
+    char *message;              /* TB_MESSAGE_SIZE bytes */
+} tb_force_args;
+typedef tb_status tb_force_fn(const tb_force_args *args, void *user);
+
+TB_API tb_status tb_world_add_force(tb_world *world, tb_force_fn *fn, void *user, tb_force_id *id);
+TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
+
+/* ---------------------------------------------------------- diagnostics -- */
+
+typedef struct tb_energy {
+    double kinetic;          /* J, sum of m v^2 / 2 */
+    double gravity;          /* J, sum of -m g . x (zero at the origin) */
+    double spring;           /* J, sum of k (|d| - rest)^2 / 2 */
+    double total;            /* J */
+} tb_energy;
+
+TB_API tb_energy tb_world_energy(const tb_world *world);
+/* Total linear momentum, kg m/s. */
+TB_API void tb_world_momentum(const tb_world *world, double momentum[3]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,910 @@
+/* tumble_lua.c: the Lua 5.4 module `tumble`, over the public C API only.
+
+   Types are full userdata with locked metatables: tumble.world owns a
+   tb_world; tumble.particle, tumble.tracer, tumble.spring, tumble.field and
+   tumble.force are handles holding a value id and, as user value, their
+   world (so a handle keeps its world alive and every call checks the id).
+
+   The world's user value is a table holding its Lua callbacks under
+   integer keys and the tables handed to them (reused from call to call).
+   Callbacks run under lua_pcall with a traceback handler inside a protected
+   C function, so no Lua error ever unwinds through the core. */
+#include "tumble_lua.h"
+
+#include <lauxlib.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define WORLD_MT "tumble.world"
+
+enum handle_kind { H_PARTICLE, H_TRACER, H_SPRING, H_FIELD, H_FORCE, H_KINDS };
+static const char *const handle_mt[H_KINDS] = {
+    "tumble.particle", "tumble.tracer", "tumble.spring", "tumble.field", "tumble.force"
+};
+
+typedef struct lua_world {
+    tb_world *world;  /* NULL once closed */
+    double dt;        /* default step, s */
+    lua_State *L;     /* while tb_lua_step runs: the thread stepping ... */
+    int index;        /* ... and the world's absolute stack index there */
+    int next_key;     /* next callback key in the user value table */
+} lua_world;
+
+typedef struct lua_handle {
+    int kind;
+    uint32_t index1, generation;
+    int key;          /* fields and forces written in Lua: their callback key */
+} lua_handle;
+
+/* What a C callback needs to find its Lua function. Lives as a userdata in
+   the world's user value table, so its address is stable. */
+typedef struct lua_callback {
+    lua_world *owner;
+    int key;
+} lua_callback;
+
+/* ------------------------------------------------------------ helpers -- */
+
+static int traceback(lua_State *L)
+{
+    const char *msg = lua_tostring(L, 1);
+    if (!msg) {
+        if (luaL_callmeta(L, 1, "__tostring") && lua_type(L, -1) == LUA_TSTRING)
+            msg = lua_tostring(L, -1);
+        else
+            msg = lua_pushfstring(L, "(error object is a %s value)", luaL_typename(L, 1));
+    }
+    luaL_traceback(L, L, msg, 1);
+    return 1;
+}
+
+/* Copy the first line of s into a message buffer. */
+static void first_line(char *out, size_t size, const char *s)
+{
+    size_t n = strcspn(s ? s : "", "\n");
+    if (n >= size)
+        n = size - 1;
+    memcpy(out, s ? s : "", n);
+    out[n] = 0;
+}
+
+static lua_world *to_world(lua_State *L, int idx)
+{
+    lua_world *lw = luaL_checkudata(L, idx, WORLD_MT);
+    if (!lw->world)
+        luaL_error(L, "tumble: the world is closed");
+    return lw;
+}
+
+static int fail(lua_State *L, lua_world *lw, const char *fname)
+{
+    return luaL_error(L, "%s: %s", fname, tb_world_message(lw->world));
+}
+
+static void check_options(lua_State *L, int idx, const char *fname, const char *const known[])
+{
+    luaL_checktype(L, idx, LUA_TTABLE);
+    lua_pushnil(L);
+    while (lua_next(L, idx)) {
+        int i, ok = 0;
+        lua_pop(L, 1);
+        if (lua_type(L, -1) == LUA_TSTRING)
+            for (i = 0; known[i] && !ok; ++i)
+                ok = strcmp(known[i], lua_tostring(L, -1)) == 0;
+        if (!ok) {
+            luaL_Buffer b;
+            luaL_buffinit(L, &b);
+            for (i = 0; known[i]; ++i) {
+                if (i)
+                    luaL_addstring(&b, ", ");
+                luaL_addstring(&b, known[i]);
+            }
+            luaL_pushresult(&b);
+            luaL_error(L, "%s: unknown option '%s' (known: %s)", fname,
+                       lua_type(L, -2) == LUA_TSTRING ? lua_tostring(L, -2) : luaL_typename(L, -2),
+                       lua_tostring(L, -1));
+        }
+    }
+}
+
+/* A {x, y, z} table at idx into out. */
+static void read_vec3(lua_State *L, int idx, const char *fname, const char *what, double out[3])
+{
+    int i;
+    if (lua_type(L, idx) != LUA_TTABLE)
+        luaL_error(L, "%s: '%s' must be a table {x, y, z} (got %s)", fname, what, luaL_typename(L, idx));
+    for (i = 0; i < 3; ++i) {
+        int isnum;
+        lua_rawgeti(L, idx, i + 1);
+        out[i] = lua_tonumberx(L, -1, &isnum);
+        if (!isnum)
+            luaL_error(L, "%s: '%s' must be a table {x, y, z} of numbers (element %d is %s)", fname, what,
+                       i + 1, luaL_typename(L, -1));
+        lua_pop(L, 1);
+    }
+}
+
+/* Optional field `key` of the table at idx: a vector, if present. */
+static int opt_vec3(lua_State *L, int idx, const char *key, const char *fname, double out[3])
+{
+    int present = lua_getfield(L, idx, key) != LUA_TNIL;
+    if (present)
+        read_vec3(L, lua_gettop(L), fname, key, out);
+    lua_pop(L, 1);
+    return present;
+}
+
+static int opt_number(lua_State *L, int idx, const char *key, const char *fname, double *out)
+{
+    int present = lua_getfield(L, idx, key) != LUA_TNIL;
+    if (present) {
+        int isnum;
+        *out = lua_tonumberx(L, -1, &isnum);
+        if (!isnum)
+            luaL_error(L, "%s: '%s' must be a number (got %s)", fname, key, luaL_typename(L, -1));
+    }
+    lua_pop(L, 1);
+    return present;
+}
+
+/* Three numbers at idx, or one {x, y, z} table. */
+static void vec3_args(lua_State *L, int idx, const char *fname, double out[3])
+{
+    if (lua_type(L, idx) == LUA_TTABLE) {
+        read_vec3(L, idx, fname, "argument", out);
+    } else {
+        out[0] = luaL_checknumber(L, idx);
+        out[1] = luaL_checknumber(L, idx + 1);
+        out[2] = luaL_checknumber(L, idx + 2);
+    }
+}
+
+static int push_vec3(lua_State *L, const double v[3])
+{
+    lua_pushnumber(L, v[0]);
+    lua_pushnumber(L, v[1]);
+    lua_pushnumber(L, v[2]);
+    return 3;
+}
+
+/* ------------------------------------------------------------ handles -- */
+
+static void push_handle(lua_State *L, int world_idx, int kind, uint32_t index1, uint32_t generation, int key)
+{
+    lua_handle *h;
+    world_idx = lua_absindex(L, world_idx);
+    h = lua_newuserdatauv(L, sizeof *h, 1);
+    h->kind = kind;
+    h->index1 = index1;
+    h->generation = generation;
+    h->key = key;
+    lua_pushvalue(L, world_idx);
+    lua_setiuservalue(L, -2, 1);
+    luaL_setmetatable(L, handle_mt[kind]);
+}
+
+/* The handle at idx (of `kind`) and its open world. */
+static lua_handle *check_handle(lua_State *L, int idx, int kind, lua_world **lw)
+{
+    lua_handle *h = luaL_checkudata(L, idx, handle_mt[kind]);
+    lua_getiuservalue(L, idx, 1);
+    *lw = lua_touserdata(L, -1);
+    lua_pop(L, 1);
+    if (!*lw || !(*lw)->world)
+        luaL_error(L, "%s: its world is closed", handle_mt[kind]);
+    return h;
+}
+
+static tb_particle_id particle_id(const lua_handle *h)
+{
+    tb_particle_id id;
+    id.index1 = h->index1;
+    id.generation = h->generation;
+    return id;
+}
+
+static tb_tracer_id tracer_id(const lua_handle *h)
+{
+    tb_tracer_id id;
+    id.index1 = h->index1;
+    id.generation = h->generation;
+    return id;
+}
+
+static int particle_get(lua_State *L, tb_status (*get)(const tb_world *, tb_particle_id, double[3]),
+                        const char *fname)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_PARTICLE, &lw);
+    double v[3];
+    if (get(lw->world, particle_id(h), v) != TB_OK)
+        return fail(L, lw, fname);
+    return push_vec3(L, v);
+}
+
+static int particle_set(lua_State *L, tb_status (*set)(tb_world *, tb_particle_id, const double[3]),
+                        const char *fname)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_PARTICLE, &lw);
+    double v[3];
+    vec3_args(L, 2, fname, v);
+    if (set(lw->world, particle_id(h), v) != TB_OK)
+        return fail(L, lw, fname);
+    return 0;
+}
+
+static int particle_pos(lua_State *L) { return particle_get(L, tb_particle_position, "particle:pos"); }
+static int particle_vel(lua_State *L) { return particle_get(L, tb_particle_velocity, "particle:vel"); }
+static int particle_set_pos(lua_State *L) { return particle_set(L, tb_particle_set_position, "particle:set_pos"); }
+static int particle_set_vel(lua_State *L) { return particle_set(L, tb_particle_set_velocity, "particle:set_vel"); }
+
+static int particle_mass(lua_State *L)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_PARTICLE, &lw);
+    double m;
+    if (tb_particle_mass(lw->world, particle_id(h), &m) != TB_OK)
+        return fail(L, lw, "particle:mass");
+    lua_pushnumber(L, m);
+    return 1;
+}
+
+static int tracer_pos(lua_State *L)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_TRACER, &lw);
+    double v[3];
+    if (tb_tracer_position(lw->world, tracer_id(h), v) != TB_OK)
+        return fail(L, lw, "tracer:pos");
+    return push_vec3(L, v);
+}
+
+static int tracer_set_pos(lua_State *L)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_TRACER, &lw);
+    double v[3];
+    vec3_args(L, 2, "tracer:set_pos", v);
+    if (tb_tracer_set_position(lw->world, tracer_id(h), v) != TB_OK)
+        return fail(L, lw, "tracer:set_pos");
+    return 0;
+}
+
+/* Forget a Lua callback of the world at world_idx: function and record. */
+static void forget_callback(lua_State *L, int world_idx, int key)
+{
+    lua_getiuservalue(L, world_idx, 1);
+    lua_pushnil(L);
+    lua_rawseti(L, -2, key);
+    lua_pushnil(L);
+    lua_rawseti(L, -2, -key);
+    lua_pop(L, 1);
+}
+
+static int handle_remove(lua_State *L)
+{
+    lua_handle *h = lua_touserdata(L, 1);
+    int kind, k;
+    lua_world *lw;
+    tb_status st = TB_OK;
+    for (kind = 0; kind < H_KINDS && !luaL_testudata(L, 1, handle_mt[kind]); ++kind)
+        ;
+    if (kind == H_KINDS)
+        return luaL_typeerror(L, 1, "tumble handle");
+    h = check_handle(L, 1, kind, &lw);
+    k = h->kind;
+    if (k == H_PARTICLE) {
+        st = tb_world_remove_particle(lw->world, particle_id(h));
+    } else if (k == H_TRACER) {
+        st = tb_world_remove_tracer(lw->world, tracer_id(h));
+    } else if (k == H_SPRING) {
+        tb_spring_id id;
+        id.index1 = h->index1;
+        id.generation = h->generation;
+        st = tb_world_remove_spring(lw->world, id);
+    } else if (k == H_FIELD) {
+        tb_field_id id;
+        id.index1 = h->index1;
+        id.generation = h->generation;
+        st = tb_world_remove_field(lw->world, id);
+    } else {
+        tb_force_id id;
+        id.index1 = h->index1;
+        id.generation = h->generation;
+        st = tb_world_remove_force(lw->world, id);
+    }
+    if (st != TB_OK)
+        return fail(L, lw, "remove");
+    if (h->key) {
+        lua_getiuservalue(L, 1, 1); /* the handle's world */
+        forget_callback(L, lua_gettop(L), h->key);
+        lua_pop(L, 1);
+    }
+    return 0;
+}
+
+static int handle_id(lua_State *L)
+{
+    lua_handle *h = NULL;
+    int kind;
+    for (kind = 0; kind < H_KINDS && !h; ++kind)
+        h = luaL_testudata(L, 1, handle_mt[kind]);
+    if (!h)
+        return luaL_typeerror(L, 1, "tumble handle");
+    lua_pushinteger(L, (lua_Integer)h->index1);
+    lua_pushinteger(L, (lua_Integer)h->generation);
+    return 2;
+}
+
+static int handle_tostring(lua_State *L)
+{
+    lua_handle *h = lua_touserdata(L, 1);
+    lua_pushfstring(L, "%s %d.%d", handle_mt[h->kind], (int)h->index1, (int)h->generation);
+    return 1;
+}
+
+static int handle_eq(lua_State *L)
+{
+    lua_handle *a = lua_touserdata(L, 1), *b = lua_touserdata(L, 2);
+    lua_getiuservalue(L, 1, 1);
+    lua_getiuservalue(L, 2, 1);
+    lua_pushboolean(L, a->kind == b->kind && a->index1 == b->index1 && a->generation == b->generation &&
+                           lua_rawequal(L, -1, -2));
+    return 1;
+}
+
+static const luaL_Reg particle_methods[] = {
+    { "pos", particle_pos }, { "vel", particle_vel }, { "mass", particle_mass },
+    { "set_pos", particle_set_pos }, { "set_vel", particle_set_vel },
+    { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
+};
+static const luaL_Reg tracer_methods[] = {
+    { "pos", tracer_pos }, { "set_pos", tracer_set_pos },
+    { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
+};
+static const luaL_Reg plain_methods[] = {
+    { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
+};
+
+/* ------------------------------------------------ callbacks into Lua -- */
+
+/* A table in the world's table under `name`, made if missing. */
+static int scratch_table(lua_State *L, int table_idx, const char *name)
+{
+    if (lua_getfield(L, table_idx, name) != LUA_TTABLE) {
+        lua_pop(L, 1);
+        lua_newtable(L);
+        lua_pushvalue(L, -1);
+        lua_setfield(L, table_idx, name);
+    }
+    return lua_gettop(L);
+}
+
+static void fill(lua_State *L, int table_idx, const double *values, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        lua_pushnumber(L, values ? values[i] : 0.0);
+        lua_rawseti(L, table_idx, (lua_Integer)i + 1);
+    }
+}
+
+/* Add the numbers of the table at idx, 1..n, to out. */
+static void add_back(lua_State *L, int table_idx, double *out, size_t n, const char *what)
+{
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        int isnum;
+        double v;
+        lua_rawgeti(L, table_idx, (lua_Integer)i + 1);
+        v = lua_tonumberx(L, -1, &isnum);
+        if (!isnum)
+            luaL_error(L, "%s[%d] is %s, not a number", what, (int)i + 1, luaL_typename(L, -1));
+        out[i] += v;
+        lua_pop(L, 1);
+    }
+}
+
+typedef struct force_call { lua_callback *cb; const tb_force_args *args; } force_call;
+typedef struct field_call { lua_callback *cb; const tb_field_args *args; } field_call;
+
+/* fn(t, state, forces): state = {n, pos, vel, mass} flat arrays, forces a
+   flat array of 3n zeros to add to. */
+static int force_body(lua_State *L)
+{
+    force_call *c = lua_touserdata(L, 1);
+    const tb_force_args *a = c->args;
+    int t, state;
+    lua_getiuservalue(L, c->cb->owner->index, 1);
+    t = lua_gettop(L);
+    lua_rawgeti(L, t, c->cb->key);
+    lua_pushnumber(L, a->time);
+    state = scratch_table(L, t, "force_state");
+    lua_pushinteger(L, (lua_Integer)a->count);
+    lua_setfield(L, state, "n");
+    fill(L, scratch_table(L, state, "pos"), a->positions, 3 * a->count);
+    fill(L, scratch_table(L, state, "vel"), a->velocities, 3 * a->count);
+    fill(L, scratch_table(L, state, "mass"), a->masses, a->count);
+    lua_settop(L, state);
+    fill(L, scratch_table(L, t, "force_out"), NULL, 3 * a->count);
+    lua_call(L, 3, 0);
+    lua_getfield(L, t, "force_out");
+    add_back(L, lua_gettop(L), a->forces, 3 * a->count, "forces");
+    return 0;
+}
+
+/* fn(t, pos, vel): pos flat positions, vel a flat array of 3n zeros to add to. */
+static int field_body(lua_State *L)
+{
+    field_call *c = lua_touserdata(L, 1);
+    const tb_field_args *a = c->args;
+    int t, vel;
+    lua_getiuservalue(L, c->cb->owner->index, 1);
+    t = lua_gettop(L);
+    lua_rawgeti(L, t, c->cb->key);
+    lua_pushnumber(L, a->time);
+    fill(L, scratch_table(L, t, "field_pos"), a->positions, 3 * a->count);
+    vel = scratch_table(L, t, "field_out");
+    fill(L, vel, NULL, 3 * a->count);
+    lua_call(L, 3, 0);
+    lua_getfield(L, t, "field_out");
+    add_back(L, lua_gettop(L), a->velocities, 3 * a->count, "vel");
+    return 0;
+}
+
+static tb_status call_protected(lua_callback *cb, lua_CFunction body, void *call, char *message)
+{
+    lua_State *L = cb->owner->L;
+    int top, rc;
+    if (!L) {
+        first_line(message, TB_MESSAGE_SIZE, "a Lua callback ran outside tb_lua_step (use it to step Lua worlds)");
+        return TB_ERR_CALLBACK;
+    }
+    if (!lua_checkstack(L, 8)) {
+        first_line(message, TB_MESSAGE_SIZE, "Lua stack overflow");
+        return TB_ERR_CALLBACK;
+    }
+    top = lua_gettop(L);
+    lua_pushcfunction(L, traceback);
+    lua_pushcfunction(L, body);
+    lua_pushlightuserdata(L, call);
+    rc = lua_pcall(L, 1, 0, top + 1);
+    if (rc != LUA_OK)
+        first_line(message, TB_MESSAGE_SIZE, lua_tostring(L, -1));
+    lua_settop(L, top);
+    return rc == LUA_OK ? TB_OK : TB_ERR_CALLBACK;
+}
+
+static tb_status lua_force(const tb_force_args *args, void *user)
+{
+    force_call c;
+    c.cb = user;
+    c.args = args;
+    return call_protected(c.cb, force_body, &c, args->message);
+}
+
+static tb_status lua_field(const tb_field_args *args, void *user)
+{
+    field_call c;
+    c.cb = user;
+    c.args = args;
+    return call_protected(c.cb, field_body, &c, args->message);
+}
+
+/* Store the function at fn_idx in the world's table; returns the record. */
+static lua_callback *keep_callback(lua_State *L, int world_idx, lua_world *lw, int fn_idx)
+{
+    lua_callback *cb;
+    int key = ++lw->next_key;
+    lua_getiuservalue(L, world_idx, 1);
+    lua_pushvalue(L, fn_idx);
+    lua_rawseti(L, -2, key);
+    cb = lua_newuserdatauv(L, sizeof *cb, 0);
+    cb->owner = lw;
+    cb->key = key;
+    lua_rawseti(L, -2, -key);
+    lua_pop(L, 1);
+    return cb;
+}
+
+/* -------------------------------------------------------------- world -- */
+
+static const char *const world_options[] = { "gravity", "integrator", "dt", "drag", NULL };
+static const char *const drag_options[] = { "linear", "quadratic", NULL };
+static const char *const particle_options[] = { "pos", "vel", "mass", "pinned", NULL };
+static const char *const tracer_options[] = { "pos", NULL };
+static const char *const spring_options[] = { "k", "damping", "rest", NULL };
+static const char *const field_options[] = { "uniform", "vortex", "centre", NULL };
+
+static void read_drag(lua_State *L, int idx, const char *fname, double *linear, double *quadratic)
+{
+    check_options(L, idx, fname, drag_options);
+    opt_number(L, idx, "linear", fname, linear);
+    opt_number(L, idx, "quadratic", fname, quadratic);
+}
+
+static int world_new(lua_State *L)
+{
+    tb_world_def def = tb_default_world_def();
+    char message[TB_MESSAGE_SIZE];
+    lua_world *lw;
+    double dt = 1.0 / 60;
+    int top;
+    if (lua_isnoneornil(L, 1))
+        lua_newtable(L);
+    lua_settop(L, 1);
+    check_options(L, 1, "tumble.world", world_options);
+    opt_vec3(L, 1, "gravity", "tumble.world", def.gravity);
+    opt_number(L, 1, "dt", "tumble.world", &dt);
+    if (!(isfinite(dt) && dt > 0))
+        return luaL_error(L, "tumble.world: 'dt' must be finite and > 0 (got %f)", dt);
+    if (lua_getfield(L, 1, "integrator") != LUA_TNIL) {
+        if (lua_type(L, -1) != LUA_TSTRING)
+            return luaL_error(L, "tumble.world: 'integrator' must be a string");
+        def.integrator = lua_tostring(L, -1);
+    }
+    top = lua_gettop(L);
+    if (lua_getfield(L, 1, "drag") != LUA_TNIL)
+        read_drag(L, lua_gettop(L), "tumble.world: drag", &def.linear_drag, &def.quadratic_drag);
+    lua_settop(L, top);
+    lw = lua_newuserdatauv(L, sizeof *lw, 1);
+    memset(lw, 0, sizeof *lw);
+    lw->dt = dt;
+    lua_newtable(L);
+    lua_setiuservalue(L, -2, 1);
+    luaL_setmetatable(L, WORLD_MT);
+    /* The world's memory counts against the Lua state's allocator. */
+    def.allocator.realloc = (tb_realloc_fn *)lua_getallocf(L, &def.allocator.user);
+    if (tb_world_create(&def, &lw->world, message, sizeof message) != TB_OK)
+        return luaL_error(L, "tumble.world: %s", message);
+    return 1;
+}
+
+static int world_close(lua_State *L)
+{
+    lua_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    if (lw->L)
+        return luaL_error(L, "tumble: cannot close a world while it is stepping");
+    tb_world_destroy(lw->world);
+    lw->world = NULL;
+    return 0;
+}
+
+static int world_gc(lua_State *L)
+{
+    lua_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    tb_world_destroy(lw->world);
+    lw->world = NULL;
+    return 0;
+}
+
+static int world_tostring(lua_State *L)
+{
+    lua_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    if (!lw->world)
+        lua_pushliteral(L, "tumble.world (closed)");
+    else
+        lua_pushfstring(L, "tumble.world (%s, %d particles, %d tracers, %d springs, t = %f s)",
+                        tb_world_integrator(lw->world), (int)tb_world_particle_count(lw->world),
+                        (int)tb_world_tracer_count(lw->world), (int)tb_world_spring_count(lw->world),
+                        tb_world_time(lw->world));
+    return 1;
+}
+
+static int world_particle(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    tb_particle_def def = tb_default_particle_def();
+    tb_particle_id id;
+    check_options(L, 2, "world:particle", particle_options);
+    opt_vec3(L, 2, "pos", "world:particle", def.position);
+    opt_vec3(L, 2, "vel", "world:particle", def.velocity);
+    opt_number(L, 2, "mass", "world:particle", &def.mass);
+    lua_getfield(L, 2, "pinned");
+    def.pinned = lua_toboolean(L, -1);
+    lua_pop(L, 1);
+    if (tb_world_add_particle(lw->world, &def, &id) != TB_OK)
+        return fail(L, lw, "world:particle");
+    push_handle(L, 1, H_PARTICLE, id.index1, id.generation, 0);
+    return 1;
+}
+
+static int world_tracer(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    tb_tracer_def def = tb_default_tracer_def();
+    tb_tracer_id id;
+    check_options(L, 2, "world:tracer", tracer_options);
+    opt_vec3(L, 2, "pos", "world:tracer", def.position);
+    if (tb_world_add_tracer(lw->world, &def, &id) != TB_OK)
+        return fail(L, lw, "world:tracer");
+    push_handle(L, 1, H_TRACER, id.index1, id.generation, 0);
+    return 1;
+}
+
+/* world:spring(a, b_or_point, {k = N/m, damping = N s/m, rest = m}) */
+static int world_spring(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1), *other;
+    tb_spring_def def = tb_default_spring_def();
+    tb_spring_id id;
+    lua_handle *a = check_handle(L, 2, H_PARTICLE, &other);
+    if (other != lw)
+        return luaL_error(L, "world:spring: particle a belongs to another world");
+    def.a = particle_id(a);
+    if (lua_type(L, 3) == LUA_TTABLE) {
+        read_vec3(L, 3, "world:spring", "anchor", def.anchor);
+    } else {
+        lua_handle *b = check_handle(L, 3, H_PARTICLE, &other);
+        if (other != lw)
+            return luaL_error(L, "world:spring: particle b belongs to another world");
+        def.b = particle_id(b);
+    }
+    if (!lua_isnoneornil(L, 4)) {
+        check_options(L, 4, "world:spring", spring_options);
+        opt_number(L, 4, "k", "world:spring", &def.stiffness);
+        opt_number(L, 4, "damping", "world:spring", &def.damping);
+        opt_number(L, 4, "rest", "world:spring", &def.rest_length);
+    }
+    if (tb_world_add_spring(lw->world, &def, &id) != TB_OK)
+        return fail(L, lw, "world:spring");
+    push_handle(L, 1, H_SPRING, id.index1, id.generation, 0);
+    return 1;
+}
+
+static int world_drag(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    double linear = 0, quadratic = 0;
+    read_drag(L, 2, "world:drag", &linear, &quadratic);
+    if (tb_world_set_drag(lw->world, linear, quadratic) != TB_OK)
+        return fail(L, lw, "world:drag");
+    return 0;
+}
+
+/* world:field{uniform = v} | world:field{vortex = omega, centre = c} | world:field(fn) */
+static int world_field(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    tb_field_id id;
+    tb_status st;
+    int key = 0;
+    if (lua_type(L, 2) == LUA_TFUNCTION) {
+        lua_callback *cb = keep_callback(L, 1, lw, 2);
+        key = cb->key;
+        st = tb_world_add_field(lw->world, lua_field, cb, &id);
+        if (st != TB_OK)
+            forget_callback(L, 1, key);
+    } else {
+        double v[3], c[3] = { 0, 0, 0 };
+        check_options(L, 2, "world:field", field_options);
+        opt_vec3(L, 2, "centre", "world:field", c);
+        if (opt_vec3(L, 2, "uniform", "world:field", v))
+            st = tb_world_add_uniform_field(lw->world, v, &id);
+        else if (opt_vec3(L, 2, "vortex", "world:field", v))
+            st = tb_world_add_vortex_field(lw->world, v, c, &id);
+        else
+            return luaL_error(L, "world:field: give {uniform = {x, y, z}}, {vortex = omega, centre = c} or a function");
+    }
+    if (st != TB_OK)
+        return fail(L, lw, "world:field");
+    push_handle(L, 1, H_FIELD, id.index1, id.generation, key);
+    return 1;
+}
+
+static int world_force(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    lua_callback *cb;
+    tb_force_id id;
+    luaL_checktype(L, 2, LUA_TFUNCTION);
+    cb = keep_callback(L, 1, lw, 2);
+    if (tb_world_add_force(lw->world, lua_force, cb, &id) != TB_OK) {
+        forget_callback(L, 1, cb->key);
+        return fail(L, lw, "world:force");
+    }
+    push_handle(L, 1, H_FORCE, id.index1, id.generation, cb->key);
+    return 1;
+}
+
+static int world_step(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    double h = luaL_optnumber(L, 2, lw->dt);
+    if (tb_lua_step(L, 1, h) != TB_OK)
+        return fail(L, lw, "world:step");
+    return 0;
+}
+
+static int world_time(lua_State *L)
+{
+    lua_pushnumber(L, tb_world_time(to_world(L, 1)->world));
+    return 1;
+}
+
+static int world_dt(lua_State *L)
+{
+    lua_pushnumber(L, to_world(L, 1)->dt);
+    return 1;
+}
+
+static int world_set_dt(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    double dt = luaL_checknumber(L, 2);
+    if (!(isfinite(dt) && dt > 0))
+        return luaL_error(L, "world:set_dt: step must be finite and > 0 (got %f)", dt);
+    lw->dt = dt;
+    return 0;
+}
+
+static int world_integrator(lua_State *L)
+{
+    lua_pushstring(L, tb_world_integrator(to_world(L, 1)->world));
+    return 1;
+}
+
+static int world_set_integrator(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    if (tb_world_set_integrator(lw->world, luaL_checkstring(L, 2)) != TB_OK)
+        return fail(L, lw, "world:set_integrator");
+    return 0;
+}
+
+static int world_gravity(lua_State *L)
+{
+    double g[3];
+    tb_world_gravity(to_world(L, 1)->world, g);
+    return push_vec3(L, g);
+}
+
+static int world_set_gravity(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    double g[3];
+    vec3_args(L, 2, "world:set_gravity", g);
+    if (tb_world_set_gravity(lw->world, g) != TB_OK)
+        return fail(L, lw, "world:set_gravity");
+    return 0;
+}
+
+static int world_energy(lua_State *L)
+{
+    tb_energy e = tb_world_energy(to_world(L, 1)->world);
+    lua_createtable(L, 0, 4);
+    lua_pushnumber(L, e.kinetic);
+    lua_setfield(L, -2, "kinetic");
+    lua_pushnumber(L, e.gravity);
+    lua_setfield(L, -2, "gravity");
+    lua_pushnumber(L, e.spring);
+    lua_setfield(L, -2, "spring");
+    lua_pushnumber(L, e.total);
+    lua_setfield(L, -2, "total");
+    return 1;
+}
+
+static int world_momentum(lua_State *L)
+{
+    double p[3];
+    tb_world_momentum(to_world(L, 1)->world, p);
+    return push_vec3(L, p);
+}
+
+static int world_counts(lua_State *L)
+{
+    tb_world *w = to_world(L, 1)->world;
+    lua_pushinteger(L, (lua_Integer)tb_world_particle_count(w));
+    lua_pushinteger(L, (lua_Integer)tb_world_tracer_count(w));
+    lua_pushinteger(L, (lua_Integer)tb_world_spring_count(w));
+    return 3;
+}
+
+static const luaL_Reg world_methods[] = {
+    { "particle", world_particle }, { "tracer", world_tracer }, { "spring", world_spring },
+    { "drag", world_drag }, { "field", world_field }, { "force", world_force },
+    { "step", world_step }, { "time", world_time }, { "dt", world_dt }, { "set_dt", world_set_dt },
+    { "integrator", world_integrator }, { "set_integrator", world_set_integrator },
+    { "gravity", world_gravity }, { "set_gravity", world_set_gravity },
+    { "energy", world_energy }, { "momentum", world_momentum }, { "counts", world_counts },
+    { "close", world_close }, { NULL, NULL }
+};
+
+/* ------------------------------------------------------------- module -- */
+
+static int integrators(lua_State *L)
+{
+    int i, n = tb_integrator_count();
+    lua_createtable(L, n, 0);
+    for (i = 0; i < n; ++i) {
+        lua_pushstring(L, tb_integrator_name(i));
+        lua_rawseti(L, -2, i + 1);
+    }
+    return 1;
+}
+
+static void new_metatable(lua_State *L, const char *name, const luaL_Reg *methods)
+{
+    luaL_newmetatable(L, name);
+    lua_newtable(L);
+    luaL_setfuncs(L, methods, 0);
+    lua_setfield(L, -2, "__index");
+    lua_pushstring(L, name);
+    lua_setfield(L, -2, "__metatable"); /* scripts cannot reach or swap it */
+}
+
+int luaopen_tumble(lua_State *L)
+{
+    static const luaL_Reg funcs[] = { { "world", world_new }, { "integrators", integrators }, { NULL, NULL } };
+    static const luaL_Reg *const kind_methods[H_KINDS] = {
+        particle_methods, tracer_methods, plain_methods, plain_methods, plain_methods
+    };
+    int k;
+    new_metatable(L, WORLD_MT, world_methods);
+    lua_pushcfunction(L, world_gc);
+    lua_setfield(L, -2, "__gc");
+    lua_pushcfunction(L, world_close);
+    lua_setfield(L, -2, "__close");
+    lua_pushcfunction(L, world_tostring);
+    lua_setfield(L, -2, "__tostring");
+    lua_pop(L, 1);
+    for (k = 0; k < H_KINDS; ++k) {
+        new_metatable(L, handle_mt[k], kind_methods[k]);
+        lua_pushcfunction(L, handle_tostring);
+        lua_setfield(L, -2, "__tostring");
+        lua_pushcfunction(L, handle_eq);
+        lua_setfield(L, -2, "__eq");
+        lua_pop(L, 1);
+    }
+    luaL_newlib(L, funcs);
+    lua_pushfstring(L, "%d.%d.%d", TB_VERSION_MAJOR, TB_VERSION_MINOR, TB_VERSION_PATCH);
+    lua_setfield(L, -2, "version");
+    return 1;
+}
+
+/* ------------------------------------------------------ host entries -- */
+
+tb_world *tb_lua_check_world(lua_State *L, int idx)
+{
+    return to_world(L, idx)->world;
+}
+
+tb_world *tb_lua_to_world(lua_State *L, int idx)
+{
+    lua_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    return lw ? lw->world : NULL;
+}
+
+double tb_lua_world_dt(lua_State *L, int idx)
+{
+    lua_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    return lw && lw->world ? lw->dt : 0;
+}
+
+/* Run a core call with the world's Lua callbacks pointed at (L, idx). */
+static tb_status with_callbacks(lua_State *L, int idx, double h, double *velocities)
+{
+    lua_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    tb_status st;
+    if (!lw || !lw->world)
+        return TB_ERR_ARGUMENT;
+    if (lw->L) /* nested: the core refuses it as busy */
+        return velocities ? tb_world_tracer_velocities(lw->world, velocities) : tb_world_step(lw->world, h);
+    lw->L = L;
+    lw->index = lua_absindex(L, idx);
+    st = velocities ? tb_world_tracer_velocities(lw->world, velocities) : tb_world_step(lw->world, h);
+    lw->L = NULL;
+    return st;
+}
+
+tb_status tb_lua_step(lua_State *L, int idx, double h)
+{
+    return with_callbacks(L, idx, h, NULL);
+}
+
+tb_status tb_lua_tracer_velocities(lua_State *L, int idx, double *velocities)
+{
+    return with_callbacks(L, idx, 0, velocities);
+}

@@ -1,0 +1,377 @@
+/* tumble_main.c: the `tumble` command. Runs a Lua scene script and writes
+   its trajectory as CSV. Errors are one line on stderr and a non-zero exit;
+   the output file appears only when the whole run succeeded. */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime */
+#include "tumble_lua.h"
+
+#include <lauxlib.h>
+#include <lualib.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static const char usage[] =
+    "usage: tumble run SCENE.lua [--out FILE.csv] [--integrator NAME] [--dt SECONDS]\n"
+    "                            [--until SECONDS] [--every SECONDS] [--quiet]\n"
+    "       tumble --help | --version\n"
+    "\n"
+    "Runs a scene script and writes its trajectory as CSV.\n"
+    "\n"
+    "  run SCENE.lua      the script builds a world and returns\n"
+    "                     { world = w, duration = S, record_every = S }\n"
+    "  --out FILE.csv     where to write the trajectory (default: the scene's\n"
+    "                     name with .csv, in the current directory); written to\n"
+    "                     FILE.csv.part and renamed only when the run succeeds\n"
+    "  --integrator NAME  override the scene's integrator: %s\n"
+    "  --dt SECONDS       override the step (default: the world's dt, 1/60 s\n"
+    "                     unless the scene says otherwise)\n"
+    "  --until SECONDS    override the scene's duration\n"
+    "  --every SECONDS    override record_every (default 1/60 s; 0 records\n"
+    "                     every step)\n"
+    "  --quiet            print no summary\n"
+    "\n"
+    "Output: header t,kind,id,x,y,z,vx,vy,vz then one row per object per\n"
+    "recorded step, numbers as %%.17g. kind is particle or tracer; id is the\n"
+    "object's id index (as in handle:id()); a tracer's velocity is the field\n"
+    "velocity at its position. Steps are recorded at t = 0, every\n"
+    "record_every seconds (rounded to whole steps), and at the end.\n"
+    "\n"
+    "Summary (stdout): steps, simulated time, wall time, and the relative\n"
+    "energy drift (E_end - E_start) / |E_start| of the particles.\n"
+    "Exit status: 0 on success, 1 when the scene or the run fails, 2 for a\n"
+    "bad command line.\n";
+
+typedef struct options {
+    const char *scene, *out, *integrator;
+    double dt, until, every;
+    int quiet;
+} options;
+
+static int die(int code, const char *fmt, const char *arg)
+{
+    fprintf(stderr, "tumble: ");
+    fprintf(stderr, fmt, arg);
+    fputc('\n', stderr);
+    return code;
+}
+
+static void print_usage(FILE *f)
+{
+    char names[256] = "";
+    int i;
+    for (i = 0; tb_integrator_name(i); ++i) {
+        if (i)
+            strncat(names, ", ", sizeof names - strlen(names) - 1);
+        strncat(names, tb_integrator_name(i), sizeof names - strlen(names) - 1);
+    }
+    fprintf(f, usage, names);
+}
+
+static int parse_seconds(const char *flag, const char *text, double *out, int allow_zero)
+{
+    char *end;
+    double v;
+    if (!text)
+        return die(2, "%s needs a value in seconds", flag);
+    v = strtod(text, &end);
+    if (end == text || *end || !isfinite(v) || v < 0 || (v == 0 && !allow_zero))
+        return die(2, "bad number of seconds '%s'", text);
+    *out = v;
+    return 0;
+}
+
+static int parse(int argc, char **argv, options *o)
+{
+    int i, rc;
+    memset(o, 0, sizeof *o);
+    o->dt = o->until = o->every = -1;
+    if (argc < 2)
+        return print_usage(stderr), 2;
+    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))
+        return print_usage(stdout), -1;
+    if (!strcmp(argv[1], "--version"))
+        return printf("tumble %d.%d.%d\n", TB_VERSION_MAJOR, TB_VERSION_MINOR, TB_VERSION_PATCH), -1;
+    if (strcmp(argv[1], "run"))
+        return die(2, "unknown command '%s' (try tumble --help)", argv[1]);
+    for (i = 2; i < argc; ++i) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--out")) {
+            if (!v)
+                return die(2, "%s needs a file name", a);
+            o->out = v, ++i;
+        } else if (!strcmp(a, "--integrator")) {
+            if (!v)
+                return die(2, "%s needs a name", a);
+            o->integrator = v, ++i;
+        } else if (!strcmp(a, "--dt")) {
+            if ((rc = parse_seconds(a, v, &o->dt, 0)))
+                return rc;
+            ++i;
+        } else if (!strcmp(a, "--until")) {
+            if ((rc = parse_seconds(a, v, &o->until, 1)))
+                return rc;
+            ++i;
+        } else if (!strcmp(a, "--every")) {
+            if ((rc = parse_seconds(a, v, &o->every, 1)))
+                return rc;
+            ++i;
+        } else if (!strcmp(a, "--quiet")) {
+            o->quiet = 1;
+        } else if (a[0] == '-') {
+            return die(2, "unknown option '%s' (try tumble --help)", a);
+        } else if (!o->scene) {
+            o->scene = a;
+        } else {
+            return die(2, "unexpected argument '%s'", a);
+        }
+    }
+    if (!o->scene)
+        return die(2, "%s", "run needs a scene script");
+    return 0;
+}
+
+static int message_handler(lua_State *L)
+{
+    const char *msg = lua_tostring(L, 1);
+    if (!msg)
+        msg = lua_pushfstring(L, "(error object is a %s value)", luaL_typename(L, 1));
+    luaL_traceback(L, L, msg, 1);
+    return 1;
+}
+
+/* Print the first line of the Lua error on top of the stack. */
+static int lua_die(lua_State *L, const char *prefix)
+{
+    const char *msg = lua_tostring(L, -1);
+    size_t n = strcspn(msg ? msg : "", "\n");
+    fprintf(stderr, "tumble: %s%.*s\n", prefix, (int)n, msg ? msg : "(no message)");
+    return 1;
+}
+
+/* Read the whole file: scenes load as text, never as bytecode. */
+static char *slurp(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    char *buf = NULL;
+    size_t cap = 0, n = 0, got;
+    if (!f)
+        return NULL;
+    do {
+        if (n == cap) {
+            char *more = realloc(buf, cap ? 2 * cap : 65536);
+            if (!more) {
+                free(buf);
+                fclose(f);
+                return NULL;
+            }
+            buf = more;
+            cap = cap ? 2 * cap : 65536;
+        }
+        got = fread(buf + n, 1, cap - n, f);
+        n += got;
+    } while (got > 0);
+    if (ferror(f)) {
+        free(buf);
+        buf = NULL;
+    }
+    fclose(f);
+    *size = n;
+    return buf;
+}
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Rows for every object at the current time. Returns rows written or -1. */
+static long record(FILE *f, lua_State *L, int world_idx, tb_world *w, double **tracer_vel, size_t *cap)
+{
+    const double t = tb_world_time(w);
+    size_t i, n = tb_world_tracer_count(w);
+    long rows = 0;
+    if (n) {
+        const double *x;
+        if (*cap < 3 * n) {
+            double *more = realloc(*tracer_vel, 3 * n * sizeof(double));
+            if (!more)
+                return -1;
+            *tracer_vel = more;
+            *cap = 3 * n;
+        }
+        if (tb_lua_tracer_velocities(L, world_idx, *tracer_vel) != TB_OK)
+            return -1;
+        x = tb_world_tracer_positions(w);
+        for (i = 0; i < n; ++i, ++rows) {
+            const double *p = x + 3 * i, *v = *tracer_vel + 3 * i;
+            fprintf(f, "%.17g,tracer,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", t,
+                    (unsigned)tb_world_tracer_at(w, i).index1, p[0], p[1], p[2], v[0], v[1], v[2]);
+        }
+    }
+    n = tb_world_particle_count(w);
+    if (n) {
+        const double *x = tb_world_particle_positions(w), *vel = tb_world_particle_velocities(w);
+        for (i = 0; i < n; ++i, ++rows) {
+            const double *p = x + 3 * i, *v = vel + 3 * i;
+            fprintf(f, "%.17g,particle,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", t,
+                    (unsigned)tb_world_particle_at(w, i).index1, p[0], p[1], p[2], v[0], v[1], v[2]);
+        }
+    }
+    return rows;
+}
+
+/* The scene's name without directory and extension, plus ".csv". */
+static void default_out(const char *scene, char *out, size_t size)
+{
+    const char *base = strrchr(scene, '/'), *dot;
+    size_t n;
+    base = base ? base + 1 : scene;
+    dot = strrchr(base, '.');
+    n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+    snprintf(out, size, "%.*s.csv", (int)n, base);
+}
+
+static double scene_number(lua_State *L, int idx, const char *key, double fallback, int *bad)
+{
+    double v = fallback;
+    int isnum = 1;
+    if (lua_getfield(L, idx, key) != LUA_TNIL)
+        v = lua_tonumberx(L, -1, &isnum);
+    lua_pop(L, 1);
+    if (!isnum || !isfinite(v) || v < 0)
+        *bad = 1;
+    return v;
+}
+
+static int run(lua_State *L, const options *o)
+{
+    char out_path[4096], part_path[4200];
+    size_t size, cap = 0;
+    char *text;
+    tb_world *w;
+    tb_energy e0, e1;
+    double dt, duration, every, t0, wall, *tracer_vel = NULL;
+    long steps, step, every_steps, rows = 0, r;
+    int scene_idx, world_idx, bad = 0;
+    FILE *f;
+
+    text = slurp(o->scene, &size);
+    if (!text)
+        return die(1, "cannot read scene '%s'", o->scene);
+    lua_pushcfunction(L, message_handler);
+    lua_pushfstring(L, "@%s", o->scene);
+    if (luaL_loadbufferx(L, text, size, lua_tostring(L, -1), "t") != LUA_OK) {
+        free(text);
+        return lua_die(L, "");
+    }
+    free(text);
+    if (lua_pcall(L, 0, 1, 1) != LUA_OK)
+        return lua_die(L, "");
+    if (!lua_istable(L, -1))
+        return die(1, "%s: the scene must return a table { world = w, duration = seconds }", o->scene);
+    scene_idx = lua_gettop(L);
+    lua_getfield(L, scene_idx, "world");
+    world_idx = lua_gettop(L);
+    if (!luaL_testudata(L, world_idx, "tumble.world"))
+        return die(1, "%s: the scene's table has no 'world' (a tumble.world)", o->scene);
+    w = tb_lua_to_world(L, world_idx);
+    if (!w)
+        return die(1, "%s: the scene's world is closed (a `local w <close>` closes it when the "
+                      "script returns: scenes that return their world must not use <close>)", o->scene);
+
+    if (o->integrator && tb_world_set_integrator(w, o->integrator) != TB_OK)
+        return die(1, "%s", tb_world_message(w));
+    dt = o->dt > 0 ? o->dt : tb_lua_world_dt(L, world_idx);
+    duration = o->until >= 0 ? o->until : scene_number(L, scene_idx, "duration", -1, &bad);
+    every = o->every >= 0 ? o->every : scene_number(L, scene_idx, "record_every", 1.0 / 60, &bad);
+    if (bad || duration < 0)
+        return die(1, "%s: the scene's table needs 'duration' (and 'record_every', if given) as seconds >= 0",
+                   o->scene);
+    steps = (long)ceil(duration / dt - 1e-9);
+    every_steps = every > 0 ? (long)floor(every / dt + 0.5) : 1;
+    if (every_steps < 1)
+        every_steps = 1;
+
+    if (o->out)
+        snprintf(out_path, sizeof out_path, "%s", o->out);
+    else
+        default_out(o->scene, out_path, sizeof out_path);
+    snprintf(part_path, sizeof part_path, "%s.part", out_path);
+    f = fopen(part_path, "w");
+    if (!f)
+        return die(1, "cannot write '%s'", part_path);
+    fprintf(f, "t,kind,id,x,y,z,vx,vy,vz\n");
+
+    e0 = tb_world_energy(w);
+    t0 = now();
+    r = record(f, L, world_idx, w, &tracer_vel, &cap);
+    for (step = 1; r >= 0 && step <= steps; ++step) {
+        rows += r;
+        r = 0;
+        if (tb_lua_step(L, world_idx, dt) != TB_OK) {
+            r = -1;
+            break;
+        }
+        if (step % every_steps == 0 || step == steps)
+            r = record(f, L, world_idx, w, &tracer_vel, &cap);
+    }
+    wall = now() - t0;
+    free(tracer_vel);
+    if (r < 0 || ferror(f) | fclose(f)) {
+        remove(part_path);
+        if (r < 0)
+            fprintf(stderr, "tumble: %s: at t = %.17g s: %s\n", o->scene, tb_world_time(w), tb_world_message(w));
+        else
+            fprintf(stderr, "tumble: error writing '%s'\n", part_path);
+        return 1;
+    }
+    rows += r;
+    if (rename(part_path, out_path)) {
+        remove(part_path);
+        return die(1, "cannot rename to '%s'", out_path);
+    }
+    e1 = tb_world_energy(w);
+    if (!o->quiet) {
+        printf("scene       %s\n", o->scene);
+        printf("integrator  %s, dt %.6g s\n", tb_world_integrator(w), dt);
+        printf("objects     %zu particles, %zu tracers, %zu springs\n", tb_world_particle_count(w),
+               tb_world_tracer_count(w), tb_world_spring_count(w));
+        printf("steps       %ld, simulated %.6g s, wall %.3f ms (%.3g us/step)\n", steps, tb_world_time(w),
+               1e3 * wall, steps ? 1e6 * wall / (double)steps : 0.0);
+        if (e0.total != 0)
+            printf("energy      %.9g J -> %.9g J, relative drift %.3e\n", e0.total, e1.total,
+                   (e1.total - e0.total) / fabs(e0.total));
+        else
+            printf("energy      %.9g J -> %.9g J, relative drift n/a (starts at 0)\n", e0.total, e1.total);
+        printf("wrote       %s (%ld rows)\n", out_path, rows);
+    }
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    options o;
+    lua_State *L;
+    int rc = parse(argc, argv, &o);
+    if (rc)
+        return rc < 0 ? 0 : rc;
+    L = luaL_newstate();
+    if (!L)
+        return die(1, "%s", "cannot create a Lua state (out of memory)");
+    luaL_openlibs(L);
+    luaL_requiref(L, "tumble", luaopen_tumble, 0);
+    lua_pop(L, 1);
+    /* Lua 5.4 seeds math.random from the clock: make scenes repeatable. */
+    lua_getglobal(L, "math");
+    lua_getfield(L, -1, "randomseed");
+    lua_pushinteger(L, 0);
+    lua_call(L, 1, 0);
+    lua_settop(L, 0);
+    rc = run(L, &o);
+    lua_close(L);
+    return rc;
+}

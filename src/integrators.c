@@ -1,0 +1,111 @@
+/* integrators.c: the stepping methods, each a short function over the
+   state-vector primitives (derive, axpy) or the split primitives (prepare
+   forces, sweep kicks and drifts). Adding a method touches this file only. */
+#include "world.h"
+
+#include <string.h>
+
+/* y += h F(t, y). Writes y only after its one evaluation. */
+static tb_status euler(tb_world *w, double h)
+{
+    tb_status st = tb__state_scratch(w, 1);
+    double *dy;
+    if (st != TB_OK)
+        return st;
+    dy = tb__scratch_vector(w, 0);
+    if ((st = tb__derive(w, w->time, w->y, dy)) != TB_OK)
+        return st;
+    tb__state_axpy(w, w->y, w->y, h, dy);
+    return TB_OK;
+}
+
+/* Classic RK4 with three scratch vectors: a stage state, a stage slope and
+   the running sum k1 + 2 k2 + 2 k3 + k4. Writes y only at the end. */
+static tb_status rk4(tb_world *w, double h)
+{
+    const double t = w->time;
+    double *stage, *k, *sum;
+    tb_status st = tb__state_scratch(w, 3);
+    if (st != TB_OK)
+        return st;
+    stage = tb__scratch_vector(w, 0);
+    k = tb__scratch_vector(w, 1);
+    sum = tb__scratch_vector(w, 2);
+    if ((st = tb__derive(w, t, w->y, sum)) != TB_OK)
+        return st;
+    tb__state_axpy(w, stage, w->y, h / 2, sum);
+    if ((st = tb__derive(w, t + h / 2, stage, k)) != TB_OK)
+        return st;
+    tb__state_axpy(w, sum, sum, 2, k);
+    tb__state_axpy(w, stage, w->y, h / 2, k);
+    if ((st = tb__derive(w, t + h / 2, stage, k)) != TB_OK)
+        return st;
+    tb__state_axpy(w, sum, sum, 2, k);
+    tb__state_axpy(w, stage, w->y, h, k);
+    if ((st = tb__derive(w, t + h, stage, k)) != TB_OK)
+        return st;
+    tb__state_axpy(w, sum, sum, 1, k);
+    tb__state_axpy(w, w->y, w->y, h / 6, sum);
+    return TB_OK;
+}
+
+/* Kick with the forces at the start, then drift with the new velocity. */
+static tb_status symplectic_euler(tb_world *w, double h)
+{
+    const tb__split_op kick_drift[2] = { { 0, h }, { 1, h } };
+    tb_status st = tb__particle_prepare(w, w->time);
+    if (st != TB_OK)
+        return st;
+    tb__particle_sweep(w, kick_drift, 2);
+    return TB_OK;
+}
+
+/* Kick h/2, drift h, evaluate the forces again, kick h/2. The second
+   evaluation comes after the state moved: tb_world_step snapshots it when a
+   callback could fail there. */
+static tb_status verlet(tb_world *w, double h)
+{
+    const tb__split_op kick_drift[2] = { { 0, h / 2 }, { 1, h } };
+    const tb__split_op kick[1] = { { 0, h / 2 } };
+    tb_status st = tb__particle_prepare(w, w->time);
+    if (st != TB_OK)
+        return st;
+    tb__particle_sweep(w, kick_drift, 2);
+    if ((st = tb__particle_prepare(w, w->time + h)) != TB_OK)
+        return st;
+    tb__particle_sweep(w, kick, 1);
+    return TB_OK;
+}
+
+/* name, order, split, updates before its last evaluation, scratch vectors */
+static const tb__method methods[] = {
+    { "euler", 1, 0, 0, 1, euler },
+    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler },
+    { "verlet", 2, 1, 1, 0, verlet },
+    { "rk4", 4, 0, 0, 3, rk4 },
+};
+#define METHOD_COUNT ((int)(sizeof methods / sizeof methods[0]))
+
+const tb__method *tb__method_find(const char *name)
+{
+    int i;
+    for (i = 0; name && i < METHOD_COUNT; ++i)
+        if (strcmp(methods[i].name, name) == 0)
+            return &methods[i];
+    return NULL;
+}
+
+int tb_integrator_count(void)
+{
+    return METHOD_COUNT;
+}
+
+const char *tb_integrator_name(int index)
+{
+    return index >= 0 && index < METHOD_COUNT ? methods[index].name : NULL;
+}
+
+int tb_integrator_order(int index)
+{
+    return index >= 0 && index < METHOD_COUNT ? methods[index].order : 0;
+}

@@ -1,0 +1,192 @@
+/* world.c: creating and destroying worlds, world settings, the step driver. */
+#include "world.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+tb_world_def tb_default_world_def(void)
+{
+    tb_world_def def;
+    memset(&def, 0, sizeof def);
+    def.gravity[2] = -9.81;
+    return def;
+}
+
+static tb_status check_drag(tb_world *w, double linear, double quadratic)
+{
+    if (!(isfinite(linear) && linear >= 0) || !(isfinite(quadratic) && quadratic >= 0))
+        return tb__fail(w, TB_ERR_ARGUMENT,
+                        "drag coefficients must be finite and >= 0 (got linear %g, quadratic %g)",
+                        linear, quadratic);
+    return TB_OK;
+}
+
+tb_status tb_world_create(const tb_world_def *def, tb_world **world, char *message, size_t message_size)
+{
+    tb_world scratch, *w;
+    tb_status st = TB_OK;
+
+    /* Validate on a stack copy so the failure message has somewhere to go. */
+    memset(&scratch, 0, sizeof scratch);
+    if (world)
+        *world = NULL;
+    if (!def || !world)
+        st = tb__fail(&scratch, TB_ERR_ARGUMENT, "tb_world_create needs a definition and an output pointer");
+    else if (!tb__finite3(def->gravity))
+        st = tb__fail(&scratch, TB_ERR_ARGUMENT, "gravity must be finite");
+    else if ((st = check_drag(&scratch, def->linear_drag, def->quadratic_drag)) != TB_OK)
+        ;
+    else if (!tb__method_find(def->integrator ? def->integrator : "verlet"))
+        st = tb__fail(&scratch, TB_ERR_ARGUMENT, "unknown integrator '%s'", def->integrator);
+    if (st == TB_OK) {
+        scratch.allocator = def->allocator;
+        w = tb__alloc(&scratch, NULL, 0, sizeof *w);
+        if (!w) {
+            st = tb__fail(&scratch, TB_ERR_MEMORY, "out of memory creating a world");
+        } else {
+            memset(w, 0, sizeof *w);
+            w->allocator = def->allocator;
+            w->method = tb__method_find(def->integrator ? def->integrator : "verlet");
+            memcpy(w->gravity, def->gravity, sizeof w->gravity);
+            w->linear_drag = def->linear_drag;
+            w->fields.item_size = sizeof(tb__field);
+            w->forces.item_size = sizeof(tb__force);
+            w->quadratic_drag = def->quadratic_drag;
+            *world = w;
+        }
+    }
+    if (st != TB_OK && message && message_size)
+        snprintf(message, message_size, "%s", scratch.message);
+    return st;
+}
+
+void tb_world_destroy(tb_world *w)
+{
+    void **arrays[3];
+    size_t sizes[3] = { sizeof(double), sizeof(double), 3 * sizeof(double) };
+    if (!w)
+        return;
+    if (w->scratch)
+        tb__alloc(w, w->scratch, w->scratch_count * w->y_size * sizeof(double), 0);
+    if (w->y)
+        tb__alloc(w, w->y, w->y_size * sizeof(double), 0);
+    arrays[0] = (void **)&w->mass;
+    arrays[1] = (void **)&w->inv_mass;
+    arrays[2] = (void **)&w->force;
+    tb__free_arrays(w, arrays, sizes, 3, w->particle_cap);
+    tb__ids_free(w, &w->tracer_ids);
+    tb__ids_free(w, &w->particle_ids);
+    tb__springs_free(w);
+    tb__list_free(w, &w->fields);
+    tb__list_free(w, &w->forces);
+    tb__alloc(w, w, sizeof *w, 0);
+}
+
+const char *tb_world_message(const tb_world *w)
+{
+    return w->message;
+}
+
+double tb_world_time(const tb_world *w)
+{
+    return w->time;
+}
+
+tb_status tb_world_set_gravity(tb_world *w, const double gravity[3])
+{
+    if (!tb__finite3(gravity))
+        return tb__fail(w, TB_ERR_ARGUMENT, "gravity must be finite");
+    memcpy(w->gravity, gravity, sizeof w->gravity);
+    return TB_OK;
+}
+
+void tb_world_gravity(const tb_world *w, double gravity[3])
+{
+    memcpy(gravity, w->gravity, sizeof w->gravity);
+}
+
+tb_status tb_world_set_drag(tb_world *w, double linear, double quadratic)
+{
+    tb_status st = check_drag(w, linear, quadratic);
+    if (st == TB_OK) {
+        w->linear_drag = linear;
+        w->quadratic_drag = quadratic;
+    }
+    return st;
+}
+
+static tb_status refuse_split_with_tracers(tb_world *w, const tb__method *m)
+{
+    if (m->split && w->tracer_count)
+        return tb__fail(w, TB_ERR_ARGUMENT,
+                        "integrator '%s' kicks velocities and tracers have none: "
+                        "use 'euler' or 'rk4' for a world with tracers", m->name);
+    return TB_OK;
+}
+
+tb_status tb_world_set_integrator(tb_world *w, const char *name)
+{
+    const tb__method *m = name ? tb__method_find(name) : NULL;
+    tb_status st;
+    if (!m)
+        return tb__fail(w, TB_ERR_ARGUMENT, "unknown integrator '%s'", name ? name : "(null)");
+    if ((st = tb__check_busy(w, "change the integrator")) != TB_OK)
+        return st;
+    if ((st = refuse_split_with_tracers(w, m)) != TB_OK)
+        return st;
+    w->method = m;
+    return TB_OK;
+}
+
+const char *tb_world_integrator(const tb_world *w)
+{
+    return w->method->name;
+}
+
+tb_status tb__derive(tb_world *w, double t, const double *y, double *dy)
+{
+    tb_status st = TB_OK;
+    if (w->tracer_count)
+        st = tb__tracer_derive(w, t, y, dy);
+    if (st == TB_OK && w->particle_count)
+        st = tb__particle_derive(w, t, y, dy);
+    return st;
+}
+
+/* A step can fail inside a callback. Methods that write the state only after
+   their last force evaluation leave it untouched by construction; the others
+   get a snapshot to roll back to, taken only when something can fail. */
+tb_status tb_world_step(tb_world *w, double h)
+{
+    tb_status st;
+    int snapshot;
+    double *saved = NULL;
+    if (!(isfinite(h) && h > 0))
+        return tb__fail(w, TB_ERR_ARGUMENT, "step must be finite and > 0 (got %g)", h);
+    if ((st = tb__check_busy(w, "step")) != TB_OK)
+        return st;
+    if ((st = refuse_split_with_tracers(w, w->method)) != TB_OK)
+        return st;
+    snapshot = w->method->updates_before_last_evaluation && w->forces.count > 0;
+    if (snapshot) {
+        if ((st = tb__state_scratch(w, (size_t)w->method->scratch + 1)) != TB_OK)
+            return st;
+        saved = tb__scratch_vector(w, (size_t)w->method->scratch);
+        tb__state_copy(w, saved, w->y);
+    }
+    w->stepping = 1;
+    st = w->method->step(w, h);
+    w->stepping = 0;
+    if (st != TB_OK) {
+        if (snapshot)
+            tb__state_copy(w, w->y, saved);
+        return st;
+    }
+    {   /* compensated sum: t after n steps of h is n h to the last bit */
+        const double add = h - w->time_carry, sum = w->time + add;
+        w->time_carry = (sum - w->time) - add;
+        w->time = sum;
+    }
+    return TB_OK;
+}
