@@ -1,0 +1,194 @@
+/* test_integrators.c: each method against the theory of its order and its
+   stability function, on problems whose exact solution is known. */
+#include "test_main.h"
+#include "tumble.h"
+
+#include <math.h>
+#include <string.h>
+
+static const double PI = 3.14159265358979323846;
+
+/* A unit mass on a spring of stiffness w^2 to an anchor at the origin, rest
+   length 0, no gravity: x'' = -w^2 x along x. */
+static tb_world *oscillator(const char *integrator, double w, double x0, double v0, tb_particle_id *id)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_particle_def p = tb_default_particle_def();
+    tb_spring_def s = tb_default_spring_def();
+    tb_world *world;
+    def.gravity[2] = 0;
+    def.integrator = integrator;
+    assert_int_equal(tb_world_create(&def, &world, NULL, 0), TB_OK);
+    p.position[0] = x0;
+    p.velocity[0] = v0;
+    assert_int_equal(tb_world_add_particle(world, &p, id), TB_OK);
+    s.a = *id;
+    s.stiffness = w * w;
+    s.rest_length = 0;
+    assert_int_equal(tb_world_add_spring(world, &s, NULL), TB_OK);
+    return world;
+}
+
+/* Error in phase space, |(x, v / w) - exact|, after n steps of T / n. */
+static double oscillator_error(const char *integrator, double T, int n)
+{
+    const double w = 2, x0 = 1;
+    tb_particle_id id;
+    tb_world *world = oscillator(integrator, w, x0, 0, &id);
+    double x[3], v[3], ex, ev;
+    int i;
+    for (i = 0; i < n; ++i)
+        assert_int_equal(tb_world_step(world, T / n), TB_OK);
+    tb_particle_position(world, id, x);
+    tb_particle_velocity(world, id, v);
+    tb_world_destroy(world);
+    ex = x[0] - x0 * cos(w * T);
+    ev = (v[0] + x0 * w * sin(w * T)) / w;
+    return sqrt(ex * ex + ev * ev);
+}
+
+/* Order p from halving the step: e(h) / e(h/2) = 2^p in the asymptotic
+   range. The step counts keep h w small enough to be asymptotic and the
+   error far above rounding (RK4 at n = 200 errs about 1e-7). */
+static void check_order(const char *integrator, int n, double expected)
+{
+    const double T = 5;
+    double e1 = oscillator_error(integrator, T, n), e2 = oscillator_error(integrator, T, 2 * n);
+    double order = log2(e1 / e2);
+    print_message("%-17s h = %-8.3g error %.3e -> %.3e, order %.3f\n", integrator, T / n, e1, e2, order);
+    assert_true(fabs(order - expected) <= 0.15);
+}
+
+static void euler_is_first_order(void **state) { (void)state; check_order("euler", 20000, 1); }
+static void symplectic_euler_is_first_order(void **state) { (void)state; check_order("symplectic_euler", 2000, 1); }
+static void verlet_is_second_order(void **state) { (void)state; check_order("verlet", 400, 2); }
+static void rk4_is_fourth_order(void **state) { (void)state; check_order("rk4", 100, 4); }
+
+/* A tracer in the vortex v = w (-y, x, 0) obeys the linear test equation
+   z' = i w z with z = x + i y, so a method with stability function R moves it
+   by the factor R(i w h) each step: after n steps the radius is exactly
+   r0 |R(i w h)|^n, up to rounding. */
+static double vortex_radius(const char *integrator, double w, double h, int n, double r0)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_tracer_def t = tb_default_tracer_def();
+    double omega[3] = { 0, 0, 0 }, centre[3] = { 0, 0, 0 }, x[3];
+    tb_tracer_id id;
+    tb_world *world;
+    int i;
+    omega[2] = w;
+    def.integrator = integrator;
+    assert_int_equal(tb_world_create(&def, &world, NULL, 0), TB_OK);
+    assert_int_equal(tb_world_add_vortex_field(world, omega, centre, NULL), TB_OK);
+    t.position[0] = r0;
+    t.position[2] = 0.25; /* the axial coordinate must not move */
+    assert_int_equal(tb_world_add_tracer(world, &t, &id), TB_OK);
+    for (i = 0; i < n; ++i)
+        assert_int_equal(tb_world_step(world, h), TB_OK);
+    assert_int_equal(tb_tracer_position(world, id, x), TB_OK);
+    assert_true(x[2] == 0.25);
+    tb_world_destroy(world);
+    return hypot(x[0], x[1]);
+}
+
+static void vortex_radius_follows_stability_functions(void **state)
+{
+    const double w = 2 * PI, h = 0.01, r0 = 1.5, th = w * h;
+    const int n = 100; /* one turn */
+    /* forward Euler: |1 + i th| = sqrt(1 + th^2) */
+    const double euler = r0 * pow(1 + th * th, n / 2.0);
+    /* RK4: R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24 at z = i th */
+    const double re = 1 - th * th / 2 + th * th * th * th / 24, im = th - th * th * th / 6;
+    const double rk4 = r0 * pow(re * re + im * im, n / 2.0);
+    double r;
+    (void)state;
+    r = vortex_radius("euler", w, h, n, r0);
+    print_message("euler: r / r0 = %.15f (theory %.15f)\n", r / r0, euler / r0);
+    assert_rel(r, euler, 1e-12);
+    r = vortex_radius("rk4", w, h, n, r0);
+    print_message("rk4: 1 - r / r0 = %.6e (theory %.6e)\n", 1 - r / r0, 1 - rk4 / r0);
+    assert_rel(r, rk4, 1e-12);
+    /* the figure the issue quotes: RK4 loses 4.27e-8 of the radius per turn */
+    assert_true(fabs((1 - rk4 / r0) - 4.27e-8) < 0.005e-8);
+    /* and forward Euler grows over 10 turns exactly as (1 + th^2)^(n/2) */
+    r = vortex_radius("euler", w, h, 10 * n, r0);
+    assert_rel(r, r0 * pow(1 + th * th, 10 * n / 2.0), 1e-12);
+}
+
+/* Explicit Euler on the oscillator multiplies v^2 + w^2 x^2 by exactly
+   1 + (h w)^2 per step: the energy grows geometrically. */
+static void euler_energy_grows_as_predicted(void **state)
+{
+    const double w = 3, h = 0.01 / 3; /* h w = 0.01 */
+    tb_particle_id id;
+    tb_world *world = oscillator("euler", w, 0.7, 0.4, &id);
+    double e0 = tb_world_energy(world).total;
+    int i;
+    (void)state;
+    for (i = 0; i < 2000; ++i)
+        assert_int_equal(tb_world_step(world, h), TB_OK);
+    assert_rel(tb_world_energy(world).total, e0 * pow(1 + (h * w) * (h * w), 2000), 1e-11);
+    tb_world_destroy(world);
+}
+
+/* Symplectic methods conserve a modified energy exactly, so the true energy
+   only oscillates, within a band set by h w, and never drifts. Over 10^6
+   steps the deviation must stay inside that band and be no wider at the end
+   than at the start.
+   - symplectic Euler conserves Q = v^2 + w^2 x^2 - h w^2 x v; since
+     w |x v| <= E, Q / (2 + h w) <= E <= Q / (2 - h w), and with v0 = 0,
+     Q = 2 E0: |E/E0 - 1| <= h w / (2 - h w);
+   - Verlet conserves v^2 + w^2 x^2 (1 - (h w)^2 / 4): |E/E0 - 1| <=
+     (h w)^2 / 4 / (1 - (h w)^2 / 4). */
+static void check_bounded(const char *integrator, double band)
+{
+    const double w = 1, h = 0.1;
+    const long n = 1000000, window = 1000;
+    tb_particle_id id;
+    tb_world *world = oscillator(integrator, w, 1, 0, &id);
+    double e0 = tb_world_energy(world).total, early = 0, late = 0;
+    long i;
+    for (i = 1; i <= n; ++i) {
+        double dev;
+        assert_int_equal(tb_world_step(world, h), TB_OK);
+        if (i > window && i <= n - window)
+            continue; /* energies cost a pass: look at both ends only */
+        dev = fabs(tb_world_energy(world).total / e0 - 1);
+        if (i <= window && dev > early)
+            early = dev;
+        if (i > n - window && dev > late)
+            late = dev;
+    }
+    print_message("%s: max |E/E0 - 1| %.4e over the first 10^3 steps, %.4e over the last (bound %.4e)\n",
+                  integrator, early, late, band);
+    assert_below(early, band);
+    assert_below(late, band);
+    /* no drift: the band at the end is the band at the start (windows of
+       ~16 periods sample the extremes equally well) */
+    assert_rel(late, early, 0.02);
+    tb_world_destroy(world);
+}
+
+static void symplectic_euler_energy_stays_bounded(void **state)
+{
+    (void)state;
+    check_bounded("symplectic_euler", 0.1 / (2 - 0.1) * (1 + 1e-9));
+}
+
+static void verlet_energy_stays_bounded(void **state)
+{
+    (void)state;
+    check_bounded("verlet", 0.0025 / (1 - 0.0025) * (1 + 1e-9));
+}
+
+static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(euler_is_first_order),
+    cmocka_unit_test(symplectic_euler_is_first_order),
+    cmocka_unit_test(verlet_is_second_order),
+    cmocka_unit_test(rk4_is_fourth_order),
+    cmocka_unit_test(vortex_radius_follows_stability_functions),
+    cmocka_unit_test(euler_energy_grows_as_predicted),
+    cmocka_unit_test(symplectic_euler_energy_stays_bounded),
+    cmocka_unit_test(verlet_energy_stays_bounded),
+};
+TB_TEST_MAIN(tests)

@@ -1,0 +1,512 @@
+/* test_world.c: worlds, ids, allocation and bad input at the C API boundary.
+   Every refusal must leave the world exactly as it was: the tests compare a
+   fingerprint of the whole observable state before and after. */
+#include "test_main.h"
+#include "tumble.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- a fingerprint of everything a user can observe --------------------- */
+
+typedef struct fingerprint {
+    double time, gravity[3];
+    size_t particles, tracers, springs;
+    double data[64];
+    size_t n;
+    char integrator[32];
+} fingerprint;
+
+static void take(const tb_world *w, fingerprint *f)
+{
+    size_t i, np = tb_world_particle_count(w), nt = tb_world_tracer_count(w);
+    memset(f, 0, sizeof *f);
+    f->time = tb_world_time(w);
+    tb_world_gravity(w, f->gravity);
+    f->particles = np;
+    f->tracers = nt;
+    f->springs = tb_world_spring_count(w);
+    for (i = 0; i < 3 * np && f->n + 7 <= 64; i += 3) {
+        memcpy(f->data + f->n, tb_world_particle_positions(w) + i, 3 * sizeof(double));
+        memcpy(f->data + f->n + 3, tb_world_particle_velocities(w) + i, 3 * sizeof(double));
+        f->data[f->n + 6] = tb_world_particle_masses(w)[i / 3];
+        f->n += 7;
+    }
+    for (i = 0; i < 3 * nt && f->n + 3 <= 64; i += 3) {
+        memcpy(f->data + f->n, tb_world_tracer_positions(w) + i, 3 * sizeof(double));
+        f->n += 3;
+    }
+    strncpy(f->integrator, tb_world_integrator(w), sizeof f->integrator - 1);
+}
+
+#define assert_unchanged(w, before)                                     \
+    do {                                                                \
+        fingerprint after_;                                             \
+        take((w), &after_);                                             \
+        assert_memory_equal(&(before), &after_, sizeof after_);         \
+    } while (0)
+
+static tb_world *make_world(const char *integrator)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_world *w = NULL;
+    def.integrator = integrator;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    return w;
+}
+
+static tb_particle_id add_particle(tb_world *w, double x, double vx, double mass)
+{
+    tb_particle_def def = tb_default_particle_def();
+    tb_particle_id id;
+    def.position[0] = x;
+    def.velocity[0] = vx;
+    def.mass = mass;
+    assert_int_equal(tb_world_add_particle(w, &def, &id), TB_OK);
+    return id;
+}
+
+/* ---- creation ------------------------------------------------------------ */
+
+static void create_rejects_bad_definitions(void **state)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_world *w = (tb_world *)&def; /* must be reset to NULL on failure */
+    char message[TB_MESSAGE_SIZE];
+    (void)state;
+    def.gravity[1] = NAN;
+    assert_int_equal(tb_world_create(&def, &w, message, sizeof message), TB_ERR_ARGUMENT);
+    assert_null(w);
+    assert_non_null(strstr(message, "gravity"));
+
+    def = tb_default_world_def();
+    def.integrator = "leapfrog-9000";
+    assert_int_equal(tb_world_create(&def, &w, message, sizeof message), TB_ERR_ARGUMENT);
+    assert_non_null(strstr(message, "leapfrog-9000"));
+
+    def = tb_default_world_def();
+    def.linear_drag = -1;
+    assert_int_equal(tb_world_create(&def, &w, message, sizeof message), TB_ERR_ARGUMENT);
+    def.linear_drag = INFINITY;
+    assert_int_equal(tb_world_create(&def, &w, message, sizeof message), TB_ERR_ARGUMENT);
+    assert_non_null(strstr(message, "drag"));
+    assert_int_equal(tb_world_create(NULL, &w, NULL, 0), TB_ERR_ARGUMENT);
+}
+
+static void defaults_are_documented_values(void **state)
+{
+    tb_world *w = make_world(NULL);
+    double g[3];
+    tb_energy e;
+    (void)state;
+    tb_world_gravity(w, g);
+    assert_true(g[0] == 0 && g[1] == 0 && g[2] == -9.81);
+    assert_string_equal(tb_world_integrator(w), "verlet");
+    assert_true(tb_world_time(w) == 0);
+    assert_int_equal(tb_world_particle_count(w), 0);
+    e = tb_world_energy(w);
+    assert_true(e.total == 0);
+    assert_int_equal(tb_world_step(w, 0.01), TB_OK); /* an empty world steps */
+    assert_true(tb_world_time(w) == 0.01);
+    tb_world_destroy(w);
+    tb_world_destroy(NULL);
+}
+
+/* ---- ids ----------------------------------------------------------------- */
+
+static void ids_survive_swap_remove_and_go_stale(void **state)
+{
+    tb_world *w = make_world(NULL);
+    tb_particle_id a = add_particle(w, 1, 0, 1), b = add_particle(w, 2, 0, 2), c = add_particle(w, 3, 0, 3);
+    tb_particle_id d;
+    double x[3], m;
+    fingerprint before;
+    (void)state;
+    assert_int_equal(tb_world_remove_particle(w, a), TB_OK);
+    assert_int_equal(tb_world_particle_count(w), 2);
+    /* c moved into a's slot; both survivors still answer with their own data */
+    assert_int_equal(tb_particle_position(w, c, x), TB_OK);
+    assert_true(x[0] == 3);
+    assert_int_equal(tb_particle_mass(w, b, &m), TB_OK);
+    assert_true(m == 2);
+    /* a is stale, and stays stale when its index is reused */
+    take(w, &before);
+    assert_int_equal(tb_particle_position(w, a, x), TB_ERR_STALE_ID);
+    assert_int_equal(tb_world_remove_particle(w, a), TB_ERR_STALE_ID);
+    assert_int_equal(tb_particle_set_position(w, a, x), TB_ERR_STALE_ID);
+    assert_non_null(strstr(tb_world_message(w), "removed"));
+    assert_unchanged(w, before);
+    d = add_particle(w, 4, 0, 4);
+    assert_int_equal(d.index1, a.index1);
+    assert_int_not_equal(d.generation, a.generation);
+    assert_int_equal(tb_particle_position(w, a, x), TB_ERR_STALE_ID);
+    assert_int_equal(tb_particle_position(w, d, x), TB_OK);
+    assert_true(x[0] == 4);
+    /* the null id and made-up ids are refused */
+    {
+        tb_particle_id null_id = { 0, 0 }, forged = { 99, 1 }, free_gen = { a.index1, a.generation + 1 };
+        assert_int_equal(tb_particle_position(w, null_id, x), TB_ERR_STALE_ID);
+        assert_int_equal(tb_particle_position(w, forged, x), TB_ERR_STALE_ID);
+        assert_int_equal(tb_world_remove_particle(w, d), TB_OK);
+        free_gen.generation = d.generation + 1; /* the generation a free entry has */
+        assert_int_equal(tb_particle_position(w, free_gen, x), TB_ERR_STALE_ID);
+    }
+    /* slot order ids match */
+    assert_true(TB_ID_EQUAL(tb_world_particle_at(w, 0), c) || TB_ID_EQUAL(tb_world_particle_at(w, 1), c));
+    assert_true(TB_ID_IS_NULL(tb_world_particle_at(w, 5)));
+    tb_world_destroy(w);
+}
+
+static void removing_a_particle_removes_its_springs(void **state)
+{
+    tb_world *w = make_world(NULL);
+    tb_particle_id a = add_particle(w, 0, 0, 1), b = add_particle(w, 1, 0, 1), c = add_particle(w, 2, 0, 1);
+    tb_spring_def def = tb_default_spring_def();
+    tb_spring_id ab, bc, ca;
+    tb_energy e;
+    (void)state;
+    def.stiffness = 10;
+    def.a = a, def.b = b;
+    assert_int_equal(tb_world_add_spring(w, &def, &ab), TB_OK);
+    def.a = b, def.b = c;
+    assert_int_equal(tb_world_add_spring(w, &def, &bc), TB_OK);
+    def.a = c, def.b = a, def.rest_length = 1; /* stretched by 1 m: 5 J */
+    assert_int_equal(tb_world_add_spring(w, &def, &ca), TB_OK);
+    e = tb_world_energy(w);
+    assert_rel(e.spring, 5.0, 1e-15);
+    assert_int_equal(tb_world_remove_particle(w, b), TB_OK);
+    assert_int_equal(tb_world_spring_count(w), 1);
+    assert_int_equal(tb_world_remove_spring(w, ab), TB_ERR_STALE_ID);
+    /* the surviving spring still joins a and c (c moved slots) */
+    e = tb_world_energy(w);
+    assert_rel(e.spring, 5.0, 1e-15);
+    assert_int_equal(tb_world_remove_spring(w, ca), TB_OK);
+    assert_int_equal(tb_world_spring_count(w), 0);
+    tb_world_destroy(w);
+}
+
+/* ---- bad input ------------------------------------------------------------ */
+
+static void bad_particles_are_refused(void **state)
+{
+    tb_world *w = make_world(NULL);
+    tb_particle_def def = tb_default_particle_def();
+    tb_particle_id id = add_particle(w, 1, 2, 3);
+    const double bad_masses[] = { 0, -1, NAN, INFINITY, -0.0 };
+    double nanv[3] = { 0, NAN, 0 }, infv[3] = { INFINITY, 0, 0 };
+    fingerprint before;
+    size_t i;
+    (void)state;
+    take(w, &before);
+    for (i = 0; i < sizeof bad_masses / sizeof bad_masses[0]; ++i) {
+        def = tb_default_particle_def();
+        def.mass = bad_masses[i];
+        assert_int_equal(tb_world_add_particle(w, &def, NULL), TB_ERR_ARGUMENT);
+        assert_non_null(strstr(tb_world_message(w), "mass"));
+    }
+    def = tb_default_particle_def();
+    def.position[2] = NAN;
+    assert_int_equal(tb_world_add_particle(w, &def, NULL), TB_ERR_ARGUMENT);
+    def = tb_default_particle_def();
+    def.velocity[0] = -INFINITY;
+    assert_int_equal(tb_world_add_particle(w, &def, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_world_add_particle(w, NULL, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_particle_set_position(w, id, nanv), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_particle_set_velocity(w, id, infv), TB_ERR_ARGUMENT);
+    assert_non_null(strstr(tb_world_message(w), "finite"));
+    assert_unchanged(w, before);
+    tb_world_destroy(w);
+}
+
+static void bad_steps_and_settings_are_refused(void **state)
+{
+    tb_world *w = make_world(NULL);
+    const double bad_steps[] = { 0, -0.01, NAN, INFINITY, -INFINITY };
+    double g[3] = { 0, INFINITY, 0 };
+    fingerprint before;
+    size_t i;
+    (void)state;
+    add_particle(w, 1, 2, 3);
+    take(w, &before);
+    for (i = 0; i < sizeof bad_steps / sizeof bad_steps[0]; ++i) {
+        assert_int_equal(tb_world_step(w, bad_steps[i]), TB_ERR_ARGUMENT);
+        assert_non_null(strstr(tb_world_message(w), "step"));
+    }
+    assert_int_equal(tb_world_set_integrator(w, "rk5"), TB_ERR_ARGUMENT);
+    assert_non_null(strstr(tb_world_message(w), "rk5"));
+    assert_int_equal(tb_world_set_integrator(w, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_world_set_gravity(w, g), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_world_set_drag(w, -0.5, 0), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_world_set_drag(w, 0, NAN), TB_ERR_ARGUMENT);
+    assert_unchanged(w, before);
+    tb_world_destroy(w);
+}
+
+static void bad_springs_are_refused(void **state)
+{
+    tb_world *w = make_world(NULL);
+    tb_particle_id a = add_particle(w, 0, 0, 1), b = add_particle(w, 1, 0, 1), gone = add_particle(w, 2, 0, 1);
+    tb_spring_def def;
+    fingerprint before;
+    (void)state;
+    assert_int_equal(tb_world_remove_particle(w, gone), TB_OK);
+    take(w, &before);
+
+    def = tb_default_spring_def();
+    def.a = a, def.b = gone, def.stiffness = 1;
+    assert_int_equal(tb_world_add_spring(w, &def, NULL), TB_ERR_STALE_ID); /* names a missing particle */
+    def.a = gone, def.b = a;
+    assert_int_equal(tb_world_add_spring(w, &def, NULL), TB_ERR_STALE_ID);
+    def.a = a, def.b = b, def.stiffness = -1;
+    assert_int_equal(tb_world_add_spring(w, &def, NULL), TB_ERR_ARGUMENT);
+    assert_non_null(strstr(tb_world_message(w), "stiffness"));
+    def.stiffness = NAN;
+    assert_int_equal(tb_world_add_spring(w, &def, NULL), TB_ERR_ARGUMENT);
+    def.stiffness = 1, def.damping = -2;
+    assert_int_equal(tb_world_add_spring(w, &def, NULL), TB_ERR_ARGUMENT);
+    def.damping = 0, def.rest_length = INFINITY;
+    assert_int_equal(tb_world_add_spring(w, &def, NULL), TB_ERR_ARGUMENT);
+    def.rest_length = -1, def.b = a;
+    assert_int_equal(tb_world_add_spring(w, &def, NULL), TB_ERR_ARGUMENT); /* to itself */
+    def.b.index1 = 0, def.anchor[0] = NAN;
+    assert_int_equal(tb_world_add_spring(w, &def, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_world_add_spring(w, NULL, NULL), TB_ERR_ARGUMENT);
+    assert_unchanged(w, before);
+    tb_world_destroy(w);
+}
+
+static void tracers_and_split_methods_exclude_each_other(void **state)
+{
+    tb_world *w = make_world("verlet");
+    tb_tracer_def def = tb_default_tracer_def();
+    tb_tracer_id id;
+    double omega[3] = { 0, 0, 1 }, centre[3] = { 0, 0, 0 }, bad[3] = { NAN, 0, 0 };
+    fingerprint before;
+    (void)state;
+    assert_int_equal(tb_world_add_tracer(w, &def, &id), TB_ERR_ARGUMENT);
+    assert_non_null(strstr(tb_world_message(w), "rk4"));
+    assert_int_equal(tb_world_set_integrator(w, "rk4"), TB_OK);
+    assert_int_equal(tb_world_add_tracer(w, &def, &id), TB_OK);
+    take(w, &before);
+    assert_int_equal(tb_world_set_integrator(w, "symplectic_euler"), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_world_add_vortex_field(w, bad, centre, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_world_add_uniform_field(w, bad, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_world_add_field(w, NULL, NULL, NULL), TB_ERR_ARGUMENT);
+    def.position[0] = INFINITY;
+    assert_int_equal(tb_world_add_tracer(w, &def, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_tracer_set_position(w, id, bad), TB_ERR_ARGUMENT);
+    assert_unchanged(w, before);
+    assert_int_equal(tb_world_add_vortex_field(w, omega, centre, NULL), TB_OK);
+    assert_int_equal(tb_world_remove_tracer(w, id), TB_OK);
+    assert_int_equal(tb_world_remove_tracer(w, id), TB_ERR_STALE_ID);
+    assert_int_equal(tb_world_set_integrator(w, "symplectic_euler"), TB_OK);
+    tb_world_destroy(w);
+}
+
+/* ---- callbacks: failure rolls back, structure is frozen ------------------- */
+
+typedef struct flaky { int calls, fail_at, tried_add; tb_status add_status; tb_world *w; } flaky;
+
+static tb_status flaky_force(const tb_force_args *args, void *user)
+{
+    flaky *f = user;
+    size_t i;
+    if (++f->calls == f->fail_at) {
+        strcpy(args->message, "flaky force gave up");
+        return TB_ERR_CALLBACK;
+    }
+    for (i = 0; i < args->count; ++i)
+        args->forces[3 * i + 1] += 0.5 * args->positions[3 * i]; /* something state-dependent */
+    if (f->tried_add) {
+        tb_particle_def def = tb_default_particle_def();
+        f->add_status = tb_world_add_particle(f->w, &def, NULL);
+        f->tried_add = 0;
+    }
+    return TB_OK;
+}
+
+static void failing_callback_leaves_state_bit_identical(void **state)
+{
+    int m;
+    (void)state;
+    for (m = 0; m < tb_integrator_count(); ++m) {
+        const char *name = tb_integrator_name(m);
+        int evaluations = 0, k;
+        /* count the evaluations of one step, then fail at each one in turn */
+        for (k = 0; k <= evaluations + 1; ++k) {
+            tb_world *w = make_world(name);
+            tb_spring_def sdef = tb_default_spring_def();
+            flaky f;
+            fingerprint before;
+            memset(&f, 0, sizeof f);
+            sdef.a = add_particle(w, 1, 2, 3);
+            sdef.b = add_particle(w, 2, -1, 1);
+            sdef.stiffness = 40;
+            sdef.damping = 0.3;
+            assert_int_equal(tb_world_add_spring(w, &sdef, NULL), TB_OK);
+            assert_int_equal(tb_world_add_force(w, flaky_force, &f, NULL), TB_OK);
+            assert_int_equal(tb_world_step(w, 0.01), TB_OK); /* move off the initial state */
+            if (k == 0) {
+                int before_calls = f.calls;
+                assert_int_equal(tb_world_step(w, 0.01), TB_OK);
+                evaluations = f.calls - before_calls;
+                assert_int_equal(evaluations, !strcmp(name, "rk4") ? 4 : !strcmp(name, "verlet") ? 2 : 1);
+                tb_world_destroy(w);
+                continue;
+            }
+            if (k > evaluations) {
+                tb_world_destroy(w);
+                break;
+            }
+            take(w, &before);
+            f.fail_at = f.calls + k;
+            assert_int_equal(tb_world_step(w, 0.01), TB_ERR_CALLBACK);
+            assert_non_null(strstr(tb_world_message(w), "flaky force gave up"));
+            assert_unchanged(w, before);
+            tb_world_destroy(w);
+        }
+    }
+}
+
+static void structural_changes_are_refused_while_stepping(void **state)
+{
+    tb_world *w = make_world("rk4");
+    flaky f;
+    double x[3];
+    (void)state;
+    memset(&f, 0, sizeof f);
+    f.w = w;
+    f.tried_add = 1;
+    add_particle(w, 1, 0, 1);
+    assert_int_equal(tb_world_add_force(w, flaky_force, &f, NULL), TB_OK);
+    assert_int_equal(tb_world_step(w, 0.01), TB_OK);
+    assert_int_equal(f.add_status, TB_ERR_BUSY);
+    assert_int_equal(tb_world_particle_count(w), 1);
+    assert_int_equal(tb_particle_position(w, tb_world_particle_at(w, 0), x), TB_OK);
+    tb_world_destroy(w);
+}
+
+/* ---- allocation ----------------------------------------------------------- */
+
+typedef struct budget { long live_bytes; long allocations, fail_after; int size_mismatch; } budget;
+
+/* Each block carries its size in a header so the test can check old_size. */
+static void *counting_realloc(void *user, void *ptr, size_t old_size, size_t new_size)
+{
+    budget *b = user;
+    size_t *p = ptr ? (size_t *)ptr - 2 : NULL;
+    if (p && p[0] != old_size)
+        b->size_mismatch = 1;
+    if (new_size == 0) {
+        if (p) {
+            b->live_bytes -= (long)old_size;
+            free(p);
+        }
+        return NULL;
+    }
+    if (b->fail_after >= 0 && b->allocations >= b->fail_after)
+        return NULL;
+    b->allocations++;
+    p = realloc(p, new_size + 2 * sizeof(size_t));
+    if (!p)
+        return NULL;
+    b->live_bytes += (long)new_size - (long)old_size;
+    p[0] = new_size;
+    return p + 2;
+}
+
+static void allocator_hooks_see_every_byte(void **state)
+{
+    budget b = { 0, 0, -1, 0 };
+    tb_world_def def = tb_default_world_def();
+    tb_world *w;
+    int i;
+    (void)state;
+    def.allocator.realloc = counting_realloc;
+    def.allocator.user = &b;
+    def.integrator = "rk4";
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    for (i = 0; i < 100; ++i) {
+        tb_tracer_def t = tb_default_tracer_def();
+        add_particle(w, i, 0, 1);
+        assert_int_equal(tb_world_add_tracer(w, &t, NULL), TB_OK);
+    }
+    assert_int_equal(tb_world_step(w, 0.01), TB_OK);
+    assert_true(b.live_bytes > 0);
+    tb_world_destroy(w);
+    assert_int_equal(b.live_bytes, 0);
+    assert_false(b.size_mismatch);
+}
+
+static void out_of_memory_is_a_status_not_a_crash(void **state)
+{
+    long limit;
+    (void)state;
+    /* Fail the n-th allocation for every n until a run completes. */
+    for (limit = 0; limit < 200; ++limit) {
+        budget b = { 0, 0, -1, 0 };
+        tb_world_def def = tb_default_world_def();
+        tb_world *w;
+        int i, done = 1;
+        b.fail_after = limit;
+        def.allocator.realloc = counting_realloc;
+        def.allocator.user = &b;
+        def.integrator = "rk4";
+        if (tb_world_create(&def, &w, NULL, 0) != TB_OK)
+            continue;
+        for (i = 0; i < 40 && done; ++i) {
+            tb_particle_def p = tb_default_particle_def();
+            size_t n = tb_world_particle_count(w);
+            tb_status st = tb_world_add_particle(w, &p, NULL);
+            if (st != TB_OK) {
+                assert_int_equal(st, TB_ERR_MEMORY);
+                assert_int_equal(tb_world_particle_count(w), n);
+                done = 0;
+            }
+        }
+        if (done && tb_world_step(w, 0.01) != TB_OK) {
+            assert_true(tb_world_time(w) == 0);
+            done = 0;
+        }
+        tb_world_destroy(w);
+        assert_int_equal(b.live_bytes, 0);
+        assert_false(b.size_mismatch);
+        if (done)
+            return;
+    }
+    fail_msg("no run completed within 200 allocations");
+}
+
+static void worlds_are_independent(void **state)
+{
+    tb_world *a = make_world("symplectic_euler"), *b = make_world("symplectic_euler");
+    tb_particle_id pa = add_particle(a, 0, 1, 1);
+    double x[3];
+    (void)state;
+    add_particle(b, 0, 1, 1);
+    assert_int_equal(tb_world_step(a, 0.5), TB_OK);
+    assert_int_equal(tb_particle_position(b, pa, x), TB_OK); /* same index, other world: still valid there */
+    assert_true(x[0] == 0);
+    assert_int_equal(tb_particle_position(a, pa, x), TB_OK);
+    assert_true(x[0] == 0.5);
+    tb_world_destroy(a);
+    tb_world_destroy(b);
+}
+
+static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(create_rejects_bad_definitions),
+    cmocka_unit_test(defaults_are_documented_values),
+    cmocka_unit_test(ids_survive_swap_remove_and_go_stale),
+    cmocka_unit_test(removing_a_particle_removes_its_springs),
+    cmocka_unit_test(bad_particles_are_refused),
+    cmocka_unit_test(bad_steps_and_settings_are_refused),
+    cmocka_unit_test(bad_springs_are_refused),
+    cmocka_unit_test(tracers_and_split_methods_exclude_each_other),
+    cmocka_unit_test(failing_callback_leaves_state_bit_identical),
+    cmocka_unit_test(structural_changes_are_refused_while_stepping),
+    cmocka_unit_test(allocator_hooks_see_every_byte),
+    cmocka_unit_test(out_of_memory_is_a_status_not_a_crash),
+    cmocka_unit_test(worlds_are_independent),
+};
+TB_TEST_MAIN(tests)
