@@ -73,14 +73,12 @@ TB_API tb_status tb_world_set_drag(tb_world *world, double linear, double quadra
                         start, then drift x with the new v. Order 1, 1
                         evaluation; ODE's dWorldStep for free bodies.
                         Oscillations stay bounded for h w < 2.
-     "verlet"           velocity Verlet: kick h/2, drift h, kick h/2. Order 2
-                        for forces of position only, 2 evaluations (the
-                        end-of-step forces are not reused because they may
-                        depend on velocity). Bounded for h w < 2. With drag or
-                        spring damping the closing kick sees the half-step
-                        velocity, so the damping is first-order accurate:
-                        velocities decay by (1 - k h / 2)^2 per step, not
-                        e^(-k h). Use "rk4" where damping must be accurate.
+     "verlet"           velocity Verlet: kick h/2, drift h, kick h/2. Order 2,
+                        2 evaluations (the end-of-step forces are not reused
+                        because they may depend on velocity). Bounded for
+                        h w < 2. Drag, damping and callbacks are evaluated for
+                        the closing kick at the predicted end velocity
+                        v_n + h a_n, which keeps order 2 with damping.
      "rk4"              classic Runge-Kutta. Order 4, 4 evaluations; slightly
                         dissipative; stable on oscillations for h w < 2 sqrt 2.
    The split methods ("symplectic_euler", "verlet") need a velocity to kick:

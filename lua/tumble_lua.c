@@ -410,15 +410,15 @@ static void add_back(lua_State *L, int table_idx, double *out, size_t n, const c
 typedef struct force_call { lua_callback *cb; const tb_force_args *args; } force_call;
 typedef struct field_call { lua_callback *cb; const tb_field_args *args; } field_call;
 
-/* fn(t, state, forces): state = {n, pos, vel, mass} flat arrays, forces a
+/* Protected body of a Lua force: (call record, the world's table).
+   fn(t, state, forces): state = {n, pos, vel, mass} flat arrays, forces a
    flat array of 3n zeros to add to. */
 static int force_body(lua_State *L)
 {
     force_call *c = lua_touserdata(L, 1);
     const tb_force_args *a = c->args;
-    int t, state;
-    lua_getiuservalue(L, c->cb->owner->index, 1);
-    t = lua_gettop(L);
+    const int t = 2; /* the world's table */
+    int state;
     lua_rawgeti(L, t, c->cb->key);
     lua_pushnumber(L, a->time);
     state = scratch_table(L, t, "force_state");
@@ -440,9 +440,8 @@ static int field_body(lua_State *L)
 {
     field_call *c = lua_touserdata(L, 1);
     const tb_field_args *a = c->args;
-    int t, vel;
-    lua_getiuservalue(L, c->cb->owner->index, 1);
-    t = lua_gettop(L);
+    const int t = 2; /* the world's table */
+    int vel;
     lua_rawgeti(L, t, c->cb->key);
     lua_pushnumber(L, a->time);
     fill(L, scratch_table(L, t, "field_pos"), a->positions, 3 * a->count);
@@ -470,7 +469,10 @@ static tb_status call_protected(lua_callback *cb, lua_CFunction body, void *call
     lua_pushcfunction(L, traceback);
     lua_pushcfunction(L, body);
     lua_pushlightuserdata(L, call);
-    rc = lua_pcall(L, 1, 0, top + 1);
+    /* Stack indices belong to a call frame: fetch the world's table here, in
+       the frame that tb_lua_step was called from, and hand it to the body. */
+    lua_getiuservalue(L, cb->owner->index, 1);
+    rc = lua_pcall(L, 2, 0, top + 1);
     if (rc != LUA_OK)
         first_line(message, TB_MESSAGE_SIZE, lua_tostring(L, -1));
     lua_settop(L, top);

@@ -190,9 +190,9 @@ tb_status tb__particle_global_forces(tb_world *w, double t, const double *pos, c
 }
 
 /* Acceleration of particles [b, e) from the global forces `f` (or none) and
-   the local ones, gravity and drag: a = (f + m g - (c1 + c2 |v|) v) / m.
-   `out` may alias `v` only when scale is a step (kick: v += h a); for derive
-   scale is 1 and out is a separate array that is assigned, not added to. */
+   the local ones, gravity and drag: a = (f + m g - (c1 + c2 |v|) v) / m,
+   scaled and added to `out` (a kick: v += h a) or assigned (derive). `v`,
+   the velocity the drag sees, may be `out` itself. */
 static void accelerate(const tb_world *w, size_t b, size_t e, const double *f, const double *v,
                        double *out, double scale, int add)
 {
@@ -234,16 +234,37 @@ tb_status tb__particle_derive(tb_world *w, double t, const double *y, double *dy
     return TB_OK;
 }
 
-tb_status tb__particle_prepare(tb_world *w, double t)
+tb_status tb__particle_prepare(tb_world *w, double t, const double *velocity)
 {
-    return tb__particle_global_forces(w, t, w->y + w->off_particle_pos, w->y + w->off_particle_vel,
-                                      &w->force_ready);
+    w->kick_velocity = velocity;
+    return tb__particle_global_forces(w, t, w->y + w->off_particle_pos,
+                                      velocity ? velocity : w->y + w->off_particle_vel, &w->force_ready);
+}
+
+int tb__particle_velocity_dependent(const tb_world *w)
+{
+    size_t s;
+    if (w->linear_drag != 0 || w->quadratic_drag != 0 || w->forces.count)
+        return 1;
+    for (s = 0; s < w->spring_count; ++s)
+        if (w->spring_c[s] != 0)
+            return 1;
+    return 0;
+}
+
+void tb__particle_extrapolate_velocity(const tb_world *w, double *saved)
+{
+    const double *v = w->y + w->off_particle_vel;
+    size_t i;
+    for (i = 0; i < 3 * w->particle_count; ++i)
+        saved[i] = 2 * v[i] - saved[i];
 }
 
 void tb__particle_sweep(tb_world *w, const tb__split_op *ops, int n)
 {
     double *pos = w->y + w->off_particle_pos, *vel = w->y + w->off_particle_vel;
     const double *f = w->force_ready ? w->force : NULL;
+    const double *seen = w->kick_velocity ? w->kick_velocity : vel;
     size_t b, i;
     int k;
     for (b = 0; b < w->particle_count; b += BLOCK) {
@@ -254,7 +275,7 @@ void tb__particle_sweep(tb_world *w, const tb__split_op *ops, int n)
                 for (i = 3 * b; i < 3 * e; ++i)
                     pos[i] += h * vel[i];
             } else {
-                accelerate(w, b, e, f, vel, vel, h, 1);
+                accelerate(w, b, e, f, seen, vel, h, 1);
             }
         }
     }

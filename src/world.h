@@ -95,6 +95,9 @@ struct tb_world {
     double *inv_mass;      /* [particle_cap] 1/kg, 0 when pinned */
     double *force;         /* [3 * particle_cap] N, forces that are not local */
     int force_ready;       /* w->force holds this evaluation's global forces */
+    const double *kick_velocity; /* [3 * particle_count] the velocities that
+                              velocity-dependent forces of the next kicks see;
+                              NULL: the current ones */
     tb__ids particle_ids;
 
     /* springs: endpoints are particle slots, kept right on swap-remove */
@@ -166,7 +169,14 @@ tb_status tb__particle_global_forces(tb_world *w, double t, const double *pos,
    blocks that stay in cache. Kicks use w->force (see tb__particle_prepare)
    plus the local forces (gravity, drag) at the moment of the kick. */
 typedef struct tb__split_op { int drift; double h; } tb__split_op;
-tb_status tb__particle_prepare(tb_world *w, double t);
+/* velocity: what damping and drag see, in this evaluation and the kicks
+   after it (3 * particle_count values); NULL: the current velocities. */
+tb_status tb__particle_prepare(tb_world *w, double t, const double *velocity);
+/* Whether any force depends on velocity (drag, spring damping, callbacks). */
+int tb__particle_velocity_dependent(const tb_world *w);
+/* saved = 2 v - saved on the particle velocities: with saved = v_n and the
+   current v = v_n + h/2 a_n, this predicts v_{n+1} = v_n + h a_n. */
+void tb__particle_extrapolate_velocity(const tb_world *w, double *saved);
 void tb__particle_sweep(tb_world *w, const tb__split_op *ops, int n);
 
 /* ---- springs.c, forces.c, fields.c ------------------------------------- */

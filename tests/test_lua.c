@@ -1,0 +1,267 @@
+/* test_lua.c: the Lua binding. Bad input from scripts becomes a Lua error
+   that names the problem and leaves the world as it was; callbacks get
+   whole arrays; an error inside a callback abandons the step without
+   touching the state. */
+#include "test_main.h"
+#include "tumble_lua.h"
+
+#include <lauxlib.h>
+#include <lualib.h>
+#include <math.h>
+#include <string.h>
+
+static lua_State *new_state(void)
+{
+    lua_State *L = luaL_newstate();
+    assert_non_null(L);
+    luaL_openlibs(L);
+    luaL_requiref(L, "tumble", luaopen_tumble, 0);
+    lua_setglobal(L, "tumble");
+    return L;
+}
+
+static int traceback(lua_State *L)
+{
+    luaL_traceback(L, L, lua_tostring(L, 1), 1);
+    return 1;
+}
+
+/* Run a chunk named "=test"; NULL on success, else the first line of the
+   error (kept in a static buffer). */
+static const char *run(lua_State *L, const char *code)
+{
+    static char message[512];
+    int base = lua_gettop(L);
+    lua_pushcfunction(L, traceback);
+    if (luaL_loadbufferx(L, code, strlen(code), "=test", "t") != LUA_OK ||
+        lua_pcall(L, 0, 0, base + 1) != LUA_OK) {
+        const char *m = lua_tostring(L, -1);
+        size_t n = strcspn(m, "\n");
+        snprintf(message, sizeof message, "%.*s", (int)n, m);
+        lua_settop(L, base);
+        return message;
+    }
+    lua_settop(L, base);
+    return NULL;
+}
+
+static void expect_ok(lua_State *L, const char *code)
+{
+    const char *err = run(L, code);
+    if (err)
+        fail_msg("unexpected Lua error: %s", err);
+}
+
+/* The error must mention `needle`. */
+static void expect_error(lua_State *L, const char *code, const char *needle)
+{
+    const char *err = run(L, code);
+    if (!err)
+        fail_msg("expected an error mentioning '%s' from: %s", needle, code);
+    if (!strstr(err, needle))
+        fail_msg("error '%s' does not mention '%s'", err, needle);
+}
+
+/* A script-side fingerprint of the world: positions, velocities, counts and
+   time, printed exactly (%a), so "unchanged" means bit-identical. */
+static const char *fingerprint_fn =
+    "function fingerprint(w, ...)\n"
+    "  local parts = { w:time(), w:integrator(), w:counts() }\n"
+    "  for _, p in ipairs{...} do\n"
+    "    local x, y, z = p:pos(); local u, v, s = p:vel()\n"
+    "    for _, n in ipairs{x, y, z, u, v, s} do parts[#parts + 1] = string.format('%a', n) end\n"
+    "  end\n"
+    "  return table.concat(parts, ' ')\n"
+    "end\n";
+
+static void bad_input_from_lua_is_refused(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, fingerprint_fn);
+    expect_ok(L, "w = tumble.world{ dt = 0.01 }\n"
+                 "p = w:particle{ pos = {1, 2, 3}, vel = {0, 1, 0}, mass = 2 }\n"
+                 "q = w:particle{ pos = {0, 0, 0} }\n"
+                 "gone = w:particle{}\n gone:remove()\n"
+                 "before = fingerprint(w, p, q)\n");
+    expect_error(L, "w:particle{ pos = {0/0, 0, 0} }", "finite");
+    expect_error(L, "w:particle{ vel = {1/0, 0, 0} }", "finite");
+    expect_error(L, "w:particle{ mass = 0 }", "mass");
+    expect_error(L, "w:particle{ mass = -1 }", "mass");
+    expect_error(L, "w:particle{ mass = 0/0 }", "mass");
+    expect_error(L, "w:particle{ mass = 'heavy' }", "'mass' must be a number");
+    expect_error(L, "w:particle{ pos = {1, 2} }", "'pos' must be a table {x, y, z} of numbers");
+    expect_error(L, "w:particle{ postion = {1, 2, 3} }", "unknown option 'postion'");
+    expect_error(L, "w:step(0)", "step must be finite and > 0");
+    expect_error(L, "w:step(-1)", "step must be finite and > 0");
+    expect_error(L, "w:step(0/0)", "step must be finite and > 0");
+    expect_error(L, "w:set_integrator('midpoint')", "unknown integrator 'midpoint'");
+    expect_error(L, "w:set_dt(-0.1)", "finite and > 0");
+    expect_error(L, "w:spring(p, q, { k = -5 })", "stiffness");
+    expect_error(L, "w:spring(p, gone, { k = 5 })", "removed");
+    expect_error(L, "w:spring(p, p, { k = 5 })", "itself");
+    expect_error(L, "w:spring(p, {0, 0, 0/0}, { k = 5 })", "anchor");
+    expect_error(L, "gone:pos()", "removed");
+    expect_error(L, "gone:set_pos(1, 2, 3)", "removed");
+    expect_error(L, "gone:remove()", "removed");
+    expect_error(L, "p:set_pos(0/0, 0, 0)", "finite");
+    expect_error(L, "w:drag{ linear = -1 }", "drag");
+    expect_error(L, "w:set_gravity(0, 0, 1/0)", "gravity");
+    expect_error(L, "w:field{ vortex = {0, 0, 0/0} }", "finite");
+    expect_error(L, "w:tracer{ pos = {0, 0, 0} }", "rk4"); /* verlet has no tracers */
+    expect_error(L, "w:force(42)", "function expected");
+    expect_error(L, "tumble.world{ integrator = 'nope' }", "unknown integrator 'nope'");
+    expect_error(L, "tumble.world{ gravity = {0, 0, 0/0} }", "gravity");
+    expect_error(L, "tumble.world{ dt = 0 }", "'dt' must be finite and > 0");
+    expect_error(L, "tumble.world{ gravty = {0, 0, 0} }", "unknown option 'gravty'");
+    expect_error(L, "w.step(42)", "tumble.world expected");
+    expect_ok(L, "assert(fingerprint(w, p, q) == before, 'the world changed')");
+    lua_close(L);
+}
+
+static void metatables_are_locked_and_handles_print(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{}\n p = w:particle{}\n"
+                 "assert(getmetatable(w) == 'tumble.world')\n"
+                 "assert(getmetatable(p) == 'tumble.particle')\n"
+                 "assert(tostring(p) == 'tumble.particle 1.1', tostring(p))\n"
+                 "assert(tostring(w):find('verlet'))\n"
+                 "local index, generation = p:id(); assert(index == 1 and generation == 1)\n"
+                 "assert(p == w:particle{} == false)\n"
+                 "assert(#tumble.integrators() == 4)\n");
+    expect_error(L, "w.world = 1", "index"); /* userdata fields are not writable */
+    lua_close(L);
+}
+
+static void close_and_collect(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "do\n local w <close> = tumble.world{}\n kept = w:particle{}\n end\n");
+    expect_error(L, "kept:pos()", "closed");
+    expect_ok(L, "w = tumble.world{}\n w:close()\n w:close()\n");
+    expect_error(L, "w:step()", "closed");
+    expect_ok(L, "assert(tostring(w) == 'tumble.world (closed)')");
+    /* worlds left to the collector, with callbacks that capture them */
+    expect_ok(L, "for i = 1, 50 do\n local w = tumble.world{ integrator = 'rk4' }\n"
+                 " w:particle{}\n w:force(function() return w end)\n w:step()\n end\n"
+                 "collectgarbage(); collectgarbage()");
+    lua_close(L);
+}
+
+/* A Lua force sees flat arrays and adds to a flat array: a constant push F
+   on a mass m under Verlet gives x = v0 t + F t^2 / (2 m) exactly. */
+static void lua_force_gets_whole_arrays(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{ gravity = {0, 0, 0}, dt = 1/64 }\n"
+                 "a = w:particle{ pos = {0, 0, 0}, vel = {1, 0, 0}, mass = 2 }\n"
+                 "b = w:particle{ pos = {5, 0, 0}, mass = 4, pinned = true }\n"
+                 "calls, seen = 0, nil\n"
+                 "w:force(function(t, s, f)\n"
+                 "  calls = calls + 1\n"
+                 "  seen = s.n .. ' ' .. #s.pos .. ' ' .. #s.vel .. ' ' .. #s.mass .. ' ' .. #f\n"
+                 "  for i = 1, s.n do\n"
+                 "    if s.mass[i] > 0 then f[3 * i] = f[3 * i] + 6 end\n"
+                 "  end\n"
+                 "end)\n"
+                 "for i = 1, 64 do w:step() end\n"
+                 "local x, y, z = a:pos()\n"
+                 "assert(calls == 128, 'verlet evaluates twice per step: ' .. calls)\n"
+                 "assert(seen == '2 6 6 2 6', seen)\n"
+                 "assert(x == 1 and z == 6 / 2 / 2, x .. ' ' .. z)\n"
+                 "assert(select(1, b:pos()) == 5 and b:mass() == 0)\n");
+    lua_close(L);
+}
+
+/* A Lua field: u = (-y, x, 0) written in Lua must move a tracer exactly as
+   the built-in vortex with omega = (0, 0, 1) does. */
+static void lua_field_matches_builtin_vortex(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "local function run(make)\n"
+                 "  local w = tumble.world{ integrator = 'rk4', dt = 0.01 }\n"
+                 "  make(w)\n"
+                 "  local t = w:tracer{ pos = {1, 0.5, 0} }\n"
+                 "  for i = 1, 300 do w:step() end\n"
+                 "  return string.format('%a %a %a', t:pos())\n"
+                 "end\n"
+                 "local lua = run(function(w) w:field(function(t, pos, vel)\n"
+                 "  for i = 1, #pos, 3 do\n"
+                 "    vel[i] = vel[i] - pos[i + 1]; vel[i + 1] = vel[i + 1] + pos[i]\n"
+                 "  end end) end)\n"
+                 "local c = run(function(w) w:field{ vortex = {0, 0, 1} } end)\n"
+                 "assert(lua == c, lua .. ' vs ' .. c)\n");
+    lua_close(L);
+}
+
+/* An error inside a force callback, for every integrator and at every force
+   evaluation of the step, abandons the step: the state is bit-identical and
+   the message names the file and line. */
+static void callback_error_leaves_state_bit_identical(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, fingerprint_fn);
+    expect_ok(L, "for _, name in ipairs(tumble.integrators()) do\n"
+                 "  local evaluations = ({ euler = 1, symplectic_euler = 1, verlet = 2, rk4 = 4 })[name]\n"
+                 "  for fail_at = 1, evaluations do\n"
+                 "    local w = tumble.world{ integrator = name, dt = 0.01, drag = { linear = 0.3 } }\n"
+                 "    local p = w:particle{ pos = {1, 2, 3}, vel = {3, 0, 1} }\n"
+                 "    local q = w:particle{ pos = {0, 1, 0}, vel = {0, 0, -1}, mass = 3 }\n"
+                 "    w:spring(p, q, { k = 30, damping = 0.2 })\n"
+                 "    local calls, armed = 0, false\n"
+                 "    w:force(function(t, s, f)\n"
+                 "      calls = calls + 1\n"
+                 "      if armed and calls == fail_at then error('boom at ' .. calls) end\n"
+                 "      f[1] = f[1] + s.pos[2]\n"
+                 "    end)\n"
+                 "    w:step(); w:step()\n"
+                 "    local before = fingerprint(w, p, q)\n"
+                 "    calls, armed = 0, true\n"
+                 "    local ok, err = pcall(w.step, w)\n"
+                 "    assert(not ok, name .. ': the step should fail')\n"
+                 "    assert(err:find('test:11: boom at ' .. fail_at, 1, true), err)\n"
+                 "    assert(fingerprint(w, p, q) == before, name .. ': state changed')\n"
+                 "    armed = false\n"
+                 "    w:step()\n" /* and the world steps on afterwards */
+                 "    assert(fingerprint(w, p, q) ~= before)\n"
+                 "  end\n"
+                 "end\n");
+    lua_close(L);
+}
+
+static void structure_is_frozen_inside_callbacks(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{ integrator = 'rk4' }\n p = w:particle{}\n"
+                 "w:force(function() w:particle{} end)\n");
+    expect_error(L, "w:step()", "cannot add a particle while the world is stepping");
+    expect_ok(L, "local n = w:counts(); assert(n == 1)");
+    expect_ok(L, "v = tumble.world{ integrator = 'rk4' }\n v:particle{}\n"
+                 "v:force(function() v:step() end)\n");
+    expect_error(L, "v:step()", "cannot step while the world is stepping");
+    expect_ok(L, "u = tumble.world{ integrator = 'rk4' }\n u:particle{}\n"
+                 "u:force(function() u:close() end)\n");
+    expect_error(L, "u:step()", "cannot close a world while it is stepping");
+    expect_ok(L, "x = tumble.world{ integrator = 'rk4' }\n x:particle{}\n"
+                 "x:force(function(t, s, f) f[1] = 'sideways' end)\n");
+    expect_error(L, "x:step()", "forces[1] is string, not a number");
+    lua_close(L);
+}
+
+static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(bad_input_from_lua_is_refused),
+    cmocka_unit_test(metatables_are_locked_and_handles_print),
+    cmocka_unit_test(close_and_collect),
+    cmocka_unit_test(lua_force_gets_whole_arrays),
+    cmocka_unit_test(lua_field_matches_builtin_vortex),
+    cmocka_unit_test(callback_error_leaves_state_bit_identical),
+    cmocka_unit_test(structure_is_frozen_inside_callbacks),
+};
+TB_TEST_MAIN(tests)
