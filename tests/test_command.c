@@ -1,0 +1,291 @@
+/* test_command.c: the `tumble` command as a user runs it. Every scene runs
+   and writes CSV rows that parse; broken scripts and bad arguments exit
+   non-zero with a one-line message and leave no file behind. */
+#define _POSIX_C_SOURCE 200809L
+#include "test_main.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#ifndef TUMBLE_EXE
+#error "TUMBLE_EXE must name the tumble executable"
+#endif
+
+static char err_text[4096], out_text[8192];
+
+/* Each test process works in its own folder, so ctest -j can run cases
+   side by side. */
+static const char *work_dir(void)
+{
+    static char dir[512];
+    if (!dir[0]) {
+        char cmd[600];
+        snprintf(dir, sizeof dir, "%s/%ld", WORK_DIR, (long)getpid());
+        snprintf(cmd, sizeof cmd, "mkdir -p '%s'", dir);
+        if (system(cmd) != 0)
+            fail_msg("cannot make %s", dir);
+    }
+    return dir;
+}
+
+static void slurp(const char *path, char *buf, size_t size)
+{
+    FILE *f = fopen(path, "r");
+    size_t n = 0;
+    buf[0] = 0;
+    if (f) {
+        n = fread(buf, 1, size - 1, f);
+        fclose(f);
+    }
+    buf[n] = 0;
+}
+
+static int exists(const char *path)
+{
+    return access(path, F_OK) == 0;
+}
+
+/* Run `tumble ARGS` in WORK_DIR; returns its exit status. */
+static int tumble(const char *args)
+{
+    char cmd[2048];
+    int rc;
+    snprintf(cmd, sizeof cmd, "cd '%s' && '%s' %s > out.txt 2> err.txt", work_dir(), TUMBLE_EXE, args);
+    rc = system(cmd);
+    snprintf(cmd, sizeof cmd, "%s/err.txt", work_dir());
+    slurp(cmd, err_text, sizeof err_text);
+    snprintf(cmd, sizeof cmd, "%s/out.txt", work_dir());
+    slurp(cmd, out_text, sizeof out_text);
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+static void write_file(const char *name, const char *text)
+{
+    char path[1100];
+    FILE *f;
+    snprintf(path, sizeof path, "%s/%s", work_dir(), name);
+    f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
+static void work_path(char *path, size_t size, const char *name)
+{
+    snprintf(path, size, "%s/%s", work_dir(), name);
+}
+
+static double number(const char *field, const char *what)
+{
+    char *end;
+    double v = strtod(field, &end);
+    if (end == field || *end || !isfinite(v))
+        fail_msg("%s '%s' is not a finite number", what, field);
+    return v;
+}
+
+/* Parse a trajectory: header, then rows of 9 fields. Returns the row count
+   and the last row's numbers in last[] (t, id, x, y, z, vx, vy, vz). */
+static long parse_csv(const char *path, const char *kind, double last[8])
+{
+    FILE *f = fopen(path, "r");
+    char line[1024];
+    long rows = 0;
+    double t_prev = -1;
+    assert_non_null(f);
+    assert_non_null(fgets(line, sizeof line, f));
+    assert_string_equal(line, "t,kind,id,x,y,z,vx,vy,vz\n");
+    while (fgets(line, sizeof line, f)) {
+        char *fields[9], *save = NULL, *p = line;
+        int n = 0, k;
+        line[strcspn(line, "\n")] = 0;
+        while (n < 9 && (fields[n] = strtok_r(p, ",", &save)) != NULL)
+            ++n, p = NULL;
+        if (n != 9 || strtok_r(NULL, ",", &save))
+            fail_msg("row %ld has %d fields, not 9", rows + 1, n);
+        if (strcmp(fields[1], kind))
+            fail_msg("row %ld has kind '%s', expected '%s'", rows + 1, fields[1], kind);
+        last[0] = number(fields[0], "t");
+        if (last[0] < t_prev)
+            fail_msg("time goes backwards at row %ld", rows + 1);
+        t_prev = last[0];
+        last[1] = number(fields[2], "id");
+        for (k = 3; k < 9; ++k)
+            last[k - 1] = number(fields[k], "a coordinate");
+        ++rows;
+    }
+    fclose(f);
+    return rows;
+}
+
+/* Run a shipped scene and check its CSV: rows = objects x recorded steps. */
+static long run_scene(const char *scene, const char *kind, long objects, long records, double last[8])
+{
+    char args[1024], csv[1024];
+    long rows;
+    snprintf(args, sizeof args, "run '%s/%s.lua' --out %s.csv", SCENES_DIR, scene, scene);
+    assert_int_equal(tumble(args), 0);
+    assert_non_null(strstr(out_text, "steps"));
+    assert_non_null(strstr(out_text, "wall"));
+    assert_non_null(strstr(out_text, "relative drift"));
+    work_path(csv, sizeof csv, scene);
+    strcat(csv, ".csv");
+    rows = parse_csv(csv, kind, last);
+    assert_int_equal(rows, objects * records);
+    strcat(csv, ".part");
+    assert_false(exists(csv));
+    return rows;
+}
+
+/* The default scene: a ball with linear drag. Its last row must match the
+   closed form to Verlet's second-order error (about (kh)^2 v0 t ~ 1e-6 m
+   here; the bound is 1e-4 m so only a wrong model could fail it). */
+static void projectile_scene(void **state)
+{
+    double last[8], t, k = 0.05, gk = -9.81 / 0.05, x, z;
+    (void)state;
+    run_scene("projectile", "particle", 1, 76, last); /* t = 0, 1/30 ... 2.5 */
+    t = last[0];
+    assert_rel(t, 2.5, 1e-15);
+    x = 9 * (1 - exp(-k * t)) / k;
+    z = 1 + gk * t + (12 - gk) * (1 - exp(-k * t)) / k;
+    assert_true(fabs(last[2] - x) < 1e-4);
+    assert_true(fabs(last[4] - z) < 1e-4);
+}
+
+static void vortex_scene(void **state)
+{
+    double last[8];
+    (void)state;
+    run_scene("vortex", "tracer", 12, 161, last); /* 8 s every 1/20 s */
+    /* tracer 12 started at radius 3: RK4 keeps it to 1e-8 over two turns */
+    assert_true(fabs(hypot(last[2], last[3]) - 0.25 * last[1]) < 1e-8);
+    /* its CSV velocity is the field's: |v| = omega r */
+    assert_rel(hypot(last[5], last[6]), 2 * 3.14159265358979 / 4 * 0.25 * last[1], 1e-8);
+}
+
+static void oscillator_scene(void **state)
+{
+    double last[8];
+    (void)state;
+    run_scene("oscillator", "particle", 1, 501, last);
+}
+
+static void rope_scene(void **state)
+{
+    double last[8];
+    (void)state;
+    run_scene("rope", "particle", 20, 91, last);
+}
+
+static void cloth_scene(void **state)
+{
+    double last[8];
+    (void)state;
+    run_scene("cloth", "particle", 225, 92, last); /* every 33 steps of 1 ms, and the end */
+}
+
+static void broken_script_names_its_line(void **state)
+{
+    char csv[1024];
+    (void)state;
+    write_file("broken.lua", "local tumble = require 'tumble'\nlocal w = tumble.world{}\nw:explode()\n");
+    assert_int_equal(tumble("run broken.lua --out broken.csv"), 1);
+    assert_non_null(strstr(err_text, "broken.lua:3:"));
+    assert_int_equal(strchr(err_text, '\n') - err_text + 1, (long)strlen(err_text)); /* one line */
+    write_file("syntax.lua", "local x = 1\nlocal y = = 2\n");
+    assert_int_equal(tumble("run syntax.lua --out broken.csv"), 1);
+    assert_non_null(strstr(err_text, "syntax.lua:2:"));
+    write_file("nothing.lua", "return 42\n");
+    assert_int_equal(tumble("run nothing.lua --out broken.csv"), 1);
+    assert_non_null(strstr(err_text, "must return a table"));
+    write_file("closed.lua", "local tumble = require 'tumble'\nlocal w <close> = tumble.world{}\n"
+                             "return { world = w, duration = 1 }\n");
+    assert_int_equal(tumble("run closed.lua --out broken.csv"), 1);
+    assert_non_null(strstr(err_text, "<close>"));
+    work_path(csv, sizeof csv, "broken.csv");
+    assert_false(exists(csv));
+}
+
+/* A force that fails half way: exit 1, the message names the file, line
+   and time, and neither the CSV nor its partial file exists. */
+static void failure_mid_run_leaves_no_file(void **state)
+{
+    char csv[1024];
+    (void)state;
+    write_file("fails.lua", "local tumble = require 'tumble'\n"
+                            "local w = tumble.world{ dt = 0.01 }\n"
+                            "w:particle{}\n"
+                            "w:force(function(t, s, f)\n"
+                            "  if t > 0.5 then error('the engine fell off') end\n"
+                            "end)\n"
+                            "return { world = w, duration = 1 }\n");
+    assert_int_equal(tumble("run fails.lua --out fails.csv"), 1);
+    assert_non_null(strstr(err_text, "fails.lua:5: the engine fell off"));
+    assert_non_null(strstr(err_text, "t = 0.5"));
+    work_path(csv, sizeof csv, "fails.csv");
+    assert_false(exists(csv));
+    strcat(csv, ".part");
+    assert_false(exists(csv));
+}
+
+static void bad_arguments_are_refused(void **state)
+{
+    char scene[1024], args[2048];
+    (void)state;
+    snprintf(scene, sizeof scene, "'%s/projectile.lua'", SCENES_DIR);
+    snprintf(args, sizeof args, "run %s --dt -1", scene);
+    assert_int_equal(tumble(args), 2);
+    assert_non_null(strstr(err_text, "-1"));
+    snprintf(args, sizeof args, "run %s --dt fast", scene);
+    assert_int_equal(tumble(args), 2);
+    snprintf(args, sizeof args, "run %s --until", scene);
+    assert_int_equal(tumble(args), 2);
+    snprintf(args, sizeof args, "run %s --frobnicate", scene);
+    assert_int_equal(tumble(args), 2);
+    assert_non_null(strstr(err_text, "--frobnicate"));
+    snprintf(args, sizeof args, "run %s --integrator leapfrog --out bad.csv", scene);
+    assert_int_equal(tumble(args), 1);
+    assert_non_null(strstr(err_text, "leapfrog"));
+    assert_int_equal(tumble("run no-such-scene.lua"), 1);
+    assert_non_null(strstr(err_text, "no-such-scene.lua"));
+    assert_int_equal(tumble("fly"), 2);
+    assert_int_equal(tumble(""), 2);
+    snprintf(args, sizeof args, "%s/bad.csv", work_dir());
+    assert_false(exists(args));
+}
+
+static void overrides_and_help(void **state)
+{
+    char args[2048], csv[1024];
+    double last[8];
+    (void)state;
+    snprintf(args, sizeof args, "run '%s/projectile.lua' --integrator rk4 --dt 0.01 --until 1 --every 0.5 "
+             "--out over.csv", SCENES_DIR);
+    assert_int_equal(tumble(args), 0);
+    assert_non_null(strstr(out_text, "rk4, dt 0.01 s"));
+    assert_non_null(strstr(out_text, "steps       100"));
+    work_path(csv, sizeof csv, "over.csv");
+    assert_int_equal(parse_csv(csv, "particle", last), 3); /* t = 0, 0.5, 1 */
+    assert_int_equal(tumble("--help"), 0);
+    assert_non_null(strstr(out_text, "t,kind,id,x,y,z,vx,vy,vz"));
+    assert_non_null(strstr(out_text, "symplectic_euler"));
+    assert_non_null(strstr(out_text, "--until"));
+}
+
+static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(projectile_scene),
+    cmocka_unit_test(vortex_scene),
+    cmocka_unit_test(oscillator_scene),
+    cmocka_unit_test(rope_scene),
+    cmocka_unit_test(cloth_scene),
+    cmocka_unit_test(broken_script_names_its_line),
+    cmocka_unit_test(failure_mid_run_leaves_no_file),
+    cmocka_unit_test(bad_arguments_are_refused),
+    cmocka_unit_test(overrides_and_help),
+};
+TB_TEST_MAIN(tests)
