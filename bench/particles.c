@@ -154,11 +154,12 @@ static double median(const bench_case *c)
    add per state double, one add per parameter double into running sums that
    stay in L1), so it runs at the speed the memory allows and nothing else:
    the fair bound on any step that must touch this state.
+   When the state fits in a cache it measures that cache's bandwidth.
    It is compiled with the library's flags (-O2, no contraction, no -march).
-   GCC's -O2 vectorizes only loops of known trip count over pointers that
+   GCC 12 at -O2 vectorizes only loops of known trip count over pointers that
    cannot alias, hence the fixed blocks and `restrict`: written as one plain
-   loop it runs scalar and is bound by its instructions, not by memory, in
-   L1 and L2. With 0 < s < 1 and c > 0 the state converges to c / (1 - s)
+   loop it runs scalar and is bound by its instructions, not by the memory,
+   whenever the state is in cache. With 0 < s < 1 and c > 0 the state converges to c / (1 - s)
    = 1, so nothing overflows or goes subnormal however long it runs. */
 #define STREAM_SCALE 0.999
 #define STREAM_ADD 1e-3
