@@ -12,8 +12,9 @@
      names and stale ids are refused, never crash, abort or exit;
    - pointers to state arrays stay valid until the next step or structural
      change (adding or removing an object) of that world;
-   - structural changes are refused (TB_ERR_BUSY) while the world is stepping,
-     that is, from inside a force or field callback;
+   - structural changes, setters and nested steps are refused (TB_ERR_BUSY)
+     while the world is stepping, that is, from inside a force or field
+     callback (callbacks only add to the forces or velocities they are given);
    - worlds share nothing: several may live in one process and each may be
      stepped on its own thread. */
 #ifndef TUMBLE_H
@@ -49,7 +50,8 @@ TB_API tb_world_def tb_default_world_def(void);
 TB_API tb_status tb_world_create(const tb_world_def *def, tb_world **world,
                                  char *message, size_t message_size);
 
-/* Free the world and everything in it. NULL is ignored. */
+/* Free the world and everything in it. NULL is ignored. Never call it from
+   inside the world's own callbacks. */
 TB_API void tb_world_destroy(tb_world *world);
 
 /* The reason for the last failure in this world ("" if none yet). */

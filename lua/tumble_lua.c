@@ -285,7 +285,7 @@ static void forget_callback(lua_State *L, int world_idx, int key)
 
 static int handle_remove(lua_State *L)
 {
-    lua_handle *h = lua_touserdata(L, 1);
+    lua_handle *h;
     int kind, k;
     lua_world *lw;
     tb_status st = TB_OK;

@@ -111,7 +111,9 @@ static tb_status get3(const tb_world *w, tb_particle_id id, size_t offset, doubl
 static tb_status set3(tb_world *w, tb_particle_id id, size_t offset, const double in[3], const char *what)
 {
     uint32_t slot;
-    tb_status st = find(w, id, &slot);
+    tb_status st = tb__check_busy(w, "set a particle's state");
+    if (st == TB_OK)
+        st = find(w, id, &slot);
     if (st != TB_OK)
         return st;
     if (!in || !tb__finite3(in))

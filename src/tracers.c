@@ -81,7 +81,9 @@ tb_status tb_tracer_position(const tb_world *w, tb_tracer_id id, double position
 tb_status tb_tracer_set_position(tb_world *w, tb_tracer_id id, const double position[3])
 {
     uint32_t slot;
-    tb_status st = find(w, id, &slot);
+    tb_status st = tb__check_busy(w, "set a tracer's position");
+    if (st == TB_OK)
+        st = find(w, id, &slot);
     if (st != TB_OK)
         return st;
     if (!tb__finite3(position))

@@ -95,7 +95,9 @@ double tb_world_time(const tb_world *w)
 
 tb_status tb_world_set_gravity(tb_world *w, const double gravity[3])
 {
-    if (!tb__finite3(gravity))
+    if (w->stepping)
+        return tb__check_busy(w, "change gravity");
+    if (!gravity || !tb__finite3(gravity))
         return tb__fail(w, TB_ERR_ARGUMENT, "gravity must be finite");
     memcpy(w->gravity, gravity, sizeof w->gravity);
     return TB_OK;
@@ -108,7 +110,9 @@ void tb_world_gravity(const tb_world *w, double gravity[3])
 
 tb_status tb_world_set_drag(tb_world *w, double linear, double quadratic)
 {
-    tb_status st = check_drag(w, linear, quadratic);
+    tb_status st = tb__check_busy(w, "change drag");
+    if (st == TB_OK)
+        st = check_drag(w, linear, quadratic);
     if (st == TB_OK) {
         w->linear_drag = linear;
         w->quadratic_drag = quadratic;

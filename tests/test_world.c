@@ -306,7 +306,11 @@ static void tracers_and_split_methods_exclude_each_other(void **state)
 
 /* ---- callbacks: failure rolls back, structure is frozen ------------------- */
 
-typedef struct flaky { int calls, fail_at, tried_add; tb_status add_status; tb_world *w; } flaky;
+typedef struct flaky {
+    int calls, fail_at, tried_add;
+    tb_status add_status, set_status, gravity_status, step_status;
+    tb_world *w;
+} flaky;
 
 static tb_status flaky_force(const tb_force_args *args, void *user)
 {
@@ -320,7 +324,11 @@ static tb_status flaky_force(const tb_force_args *args, void *user)
         args->forces[3 * i + 1] += 0.5 * args->positions[3 * i]; /* something state-dependent */
     if (f->tried_add) {
         tb_particle_def def = tb_default_particle_def();
+        double g[3] = { 0, 0, 0 };
         f->add_status = tb_world_add_particle(f->w, &def, NULL);
+        f->set_status = tb_particle_set_position(f->w, tb_world_particle_at(f->w, 0), g);
+        f->gravity_status = tb_world_set_gravity(f->w, g);
+        f->step_status = tb_world_step(f->w, 0.1);
         f->tried_add = 0;
     }
     return TB_OK;
@@ -382,6 +390,9 @@ static void structural_changes_are_refused_while_stepping(void **state)
     assert_int_equal(tb_world_add_force(w, flaky_force, &f, NULL), TB_OK);
     assert_int_equal(tb_world_step(w, 0.01), TB_OK);
     assert_int_equal(f.add_status, TB_ERR_BUSY);
+    assert_int_equal(f.set_status, TB_ERR_BUSY);
+    assert_int_equal(f.gravity_status, TB_ERR_BUSY);
+    assert_int_equal(f.step_status, TB_ERR_BUSY);
     assert_int_equal(tb_world_particle_count(w), 1);
     assert_int_equal(tb_particle_position(w, tb_world_particle_at(w, 0), x), TB_OK);
     tb_world_destroy(w);
