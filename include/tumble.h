@@ -190,10 +190,122 @@ TB_API tb_status tb_world_add_spring(tb_world *world, const tb_spring_def *def, 
 TB_API tb_status tb_world_remove_spring(tb_world *world, tb_spring_id id);
 TB_API size_t tb_world_spring_count(const tb_world *world);
 
+/* --------------------------------------------------------- mass properties -- */
+/* Mass properties of a rigid body: its mass, centre of mass and principal
+   moments of inertia, and the principal frame. Computed from shapes of
+   uniform density, from point masses, from a closed triangle mesh, or from a
+   full inertia tensor (diagonalised). These functions touch no world: on
+   failure they return TB_ERR_ARGUMENT (tb_mass_mesh also TB_ERR_MEMORY: it
+   sorts edges in scratch from malloc) and, when `message` is not NULL, write
+   a one-line reason into it (TB_MESSAGE_SIZE bytes); *mass is untouched.
+   Diagonalised results list the moments in ascending order with
+   tensor = R(frame) diag(inertia) R(frame)^T, det R = +1 and frame w >= 0;
+   the primitive shapes keep x, y, z order and the identity frame. */
+
+typedef struct tb_mass {
+    double mass;         /* kg, > 0 */
+    double centre[3];    /* m, centre of mass in the shape's own frame */
+    double inertia[3];   /* kg m^2, principal moments about the centre of mass */
+    double frame[4];     /* unit quaternion (w, x, y, z) turning the principal
+                            axes into the shape's frame (identity for the
+                            primitive shapes, whose axes are principal) */
+} tb_mass;
+
+/* Solid sphere of radius r (m) and density rho (kg/m^3). */
+TB_API tb_status tb_mass_sphere(double rho, double radius, tb_mass *mass, char *message);
+/* Solid box with full side lengths size[3] (m), centred, axes along x, y, z. */
+TB_API tb_status tb_mass_box(double rho, const double size[3], tb_mass *mass, char *message);
+/* Solid cylinder of radius r and length l along z, centred. */
+TB_API tb_status tb_mass_cylinder(double rho, double radius, double length, tb_mass *mass, char *message);
+/* Capsule: a cylinder of radius r and length l >= 0 along z with two
+   hemispherical caps (total length l + 2 r), centred; l = 0 is a sphere. */
+TB_API tb_status tb_mass_capsule(double rho, double radius, double length, tb_mass *mass, char *message);
+/* Point masses m_i (kg, > 0) at p_i (3 * count values, m): M = sum m_i,
+   c = sum m_i p_i / M, I = sum m_i (r_i.r_i 1 - r_i r_i^T) with r_i = p_i - c,
+   then diagonalised. Fewer than 3 non-collinear points give a singular
+   tensor and are refused. */
+TB_API tb_status tb_mass_points(size_t count, const double *positions, const double *masses,
+                                tb_mass *mass, char *message);
+/* Closed triangle mesh of uniform density: vertices (3 * vertex_count, m),
+   triangles (3 * triangle_count vertex indices, counter-clockwise seen from
+   outside). Open meshes (an edge not shared by exactly two triangles in
+   opposite directions) and inside-out meshes (negative volume) are refused. */
+TB_API tb_status tb_mass_mesh(double rho, size_t vertex_count, const double *vertices,
+                              size_t triangle_count, const uint32_t *triangles, tb_mass *mass, char *message);
+/* From a mass, a centre of mass and a full symmetric inertia tensor about
+   that centre (row-major 3x3, kg m^2): diagonalised into principal moments
+   and frame. A tensor that is not symmetric positive definite, or whose
+   principal moments break the triangle inequality (I1 + I2 >= I3 for every
+   order), is refused. */
+TB_API tb_status tb_mass_from_tensor(double total_mass, const double centre[3], const double tensor[9],
+                                     tb_mass *mass, char *message);
+/* Scale to a given total mass (kg, finite and > 0), keeping the shape. */
+TB_API tb_status tb_mass_set_total(tb_mass *mass, double total_mass, char *message);
+
+/* --------------------------------------------------------------- bodies -- */
+/* Rigid bodies. State: centre of mass x, orientation q (unit quaternion
+   (w, x, y, z) turning the body's principal axes into the world), linear
+   momentum P and angular momentum L (world frame, about the centre of mass):
+     v = P / M,  w = R diag(1/I) R^T L,  dx/dt = v,  dq/dt = (0, w) q / 2,
+     dP/dt = f,  dL/dt = tau.
+   Keeping L (not w) as state means a torque-free body keeps L exactly and
+   every rotation error lives in the orientation. Positions and orientations
+   read back are those of the centre of mass and the principal axes. */
+
+typedef struct tb_body_def {
+    double position[3];         /* m: where the shape's frame origin goes */
+    double orientation[4];      /* unit quaternion (w, x, y, z): world from shape
+                                   frame; default identity */
+    double velocity[3];         /* m/s, of the centre of mass */
+    double angular_velocity[3]; /* rad/s, world frame */
+    tb_mass mass;               /* default: 1 kg solid sphere of radius 0.5 m */
+    double linear_damping;      /* 1/s: dP/dt gains -c P; default 0 */
+    double angular_damping;     /* 1/s: dL/dt gains -c L; default 0 */
+} tb_body_def;
+
+TB_API tb_body_def tb_default_body_def(void);
+/* The body's centre of mass goes to position + R(orientation) mass.centre
+   and its principal axes to orientation * mass.frame. Refused: non-finite
+   values, a quaternion whose norm is not 1 within 1e-6 (it is then
+   normalised exactly), mass or moments that are not finite and > 0, moments
+   that break the triangle inequality, negative damping. */
+TB_API tb_status tb_world_add_body(tb_world *world, const tb_body_def *def, tb_body_id *id);
+TB_API tb_status tb_world_remove_body(tb_world *world, tb_body_id id);
+
+TB_API tb_status tb_body_position(const tb_world *world, tb_body_id id, double position[3]);
+TB_API tb_status tb_body_orientation(const tb_world *world, tb_body_id id, double orientation[4]);
+TB_API tb_status tb_body_velocity(const tb_world *world, tb_body_id id, double velocity[3]);
+TB_API tb_status tb_body_angular_velocity(const tb_world *world, tb_body_id id, double angular_velocity[3]);
+/* Linear momentum P (kg m/s) and angular momentum L about the centre of
+   mass (kg m^2/s), world frame. Either pointer may be NULL. */
+TB_API tb_status tb_body_momentum(const tb_world *world, tb_body_id id, double linear[3], double angular[3]);
+TB_API tb_status tb_body_mass(const tb_world *world, tb_body_id id, double *mass, double inertia[3]);
+TB_API tb_status tb_body_set_position(tb_world *world, tb_body_id id, const double position[3]);
+TB_API tb_status tb_body_set_orientation(tb_world *world, tb_body_id id, const double orientation[4]);
+TB_API tb_status tb_body_set_velocity(tb_world *world, tb_body_id id, const double velocity[3]);
+TB_API tb_status tb_body_set_angular_velocity(tb_world *world, tb_body_id id, const double angular_velocity[3]);
+
+/* Forces and torques held for the next step, then cleared (as in ODE): a
+   force f (N) at a world point p (m) also adds the torque (p - x) x f; at a
+   point given in the body's principal frame, p = x + R p_body. A torque is
+   in N m, world frame. */
+TB_API tb_status tb_body_apply_force(tb_world *world, tb_body_id id, const double force[3], const double point[3]);
+TB_API tb_status tb_body_apply_force_at_body_point(tb_world *world, tb_body_id id, const double force[3],
+                                                   const double body_point[3]);
+TB_API tb_status tb_body_apply_torque(tb_world *world, tb_body_id id, const double torque[3]);
+
+TB_API size_t tb_world_body_count(const tb_world *world);
+/* Flat arrays in slot order: 3 * count centres of mass (m), 4 * count
+   orientations (w, x, y, z). */
+TB_API const double *tb_world_body_positions(const tb_world *world);
+TB_API const double *tb_world_body_orientations(const tb_world *world);
+TB_API tb_body_id tb_world_body_at(const tb_world *world, size_t slot);
+
 /* ---------------------------------------------------------- user forces -- */
 
-/* Arguments of a force callback: add forces (N) on the particles. It is
-   called once per force evaluation with whole arrays, never per particle.
+/* Arguments of a force callback: add forces (N) on the particles, forces
+   and torques on the bodies. It is called once per force evaluation with
+   whole arrays, never per object.
    The state it sees may be an intermediate stage of the integrator. */
 typedef struct tb_force_args {
     double time;                /* s */
@@ -202,6 +314,14 @@ typedef struct tb_force_args {
     const double *velocities;   /* 3 * count, m/s */
     const double *masses;       /* count, kg (0 for pinned) */
     double *forces;             /* 3 * count, N: add to it */
+    size_t body_count;
+    const double *body_positions;        /* 3 * body_count, m, centres of mass */
+    const double *body_orientations;     /* 4 * body_count, (w, x, y, z) */
+    const double *body_velocities;       /* 3 * body_count, m/s */
+    const double *body_angular_velocities; /* 3 * body_count, rad/s, world */
+    const double *body_masses;           /* body_count, kg */
+    double *body_forces;        /* 3 * body_count, N at the centre of mass: add to it */
+    double *body_torques;       /* 3 * body_count, N m, world frame: add to it */
     char *message;              /* TB_MESSAGE_SIZE bytes */
 } tb_force_args;
 typedef tb_status tb_force_fn(const tb_force_args *args, void *user);
@@ -212,7 +332,8 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
 /* ---------------------------------------------------------- diagnostics -- */
 
 typedef struct tb_energy {
-    double kinetic;          /* J, sum of m v^2 / 2 */
+    double kinetic;          /* J, translational: sum of m v^2 / 2 */
+    double rotational;       /* J, bodies: sum of L . w / 2 */
     double gravity;          /* J, sum of -m g . x (zero at the origin) */
     double spring;           /* J, sum of k (|d| - rest)^2 / 2 */
     double total;            /* J */
@@ -221,6 +342,9 @@ typedef struct tb_energy {
 TB_API tb_energy tb_world_energy(const tb_world *world);
 /* Total linear momentum, kg m/s. */
 TB_API void tb_world_momentum(const tb_world *world, double momentum[3]);
+/* Total angular momentum about the world origin, kg m^2/s:
+   sum m x x v over particles, sum (x x P + L) over bodies. */
+TB_API void tb_world_angular_momentum(const tb_world *world, double angular[3]);
 
 #ifdef __cplusplus
 }

@@ -18,9 +18,9 @@
 
 #define WORLD_MT "tumble.world"
 
-enum handle_kind { H_PARTICLE, H_TRACER, H_SPRING, H_FIELD, H_FORCE, H_KINDS };
+enum handle_kind { H_PARTICLE, H_TRACER, H_SPRING, H_FIELD, H_FORCE, H_BODY, H_KINDS };
 static const char *const handle_mt[H_KINDS] = {
-    "tumble.particle", "tumble.tracer", "tumble.spring", "tumble.field", "tumble.force"
+    "tumble.particle", "tumble.tracer", "tumble.spring", "tumble.field", "tumble.force", "tumble.body"
 };
 
 typedef struct lua_world {
@@ -272,6 +272,126 @@ static int tracer_set_pos(lua_State *L)
     return 0;
 }
 
+static tb_body_id body_id(const lua_handle *h)
+{
+    tb_body_id id;
+    id.index1 = h->index1;
+    id.generation = h->generation;
+    return id;
+}
+
+static int body_get(lua_State *L, tb_status (*get)(const tb_world *, tb_body_id, double[3]), const char *fname)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    double v[3];
+    if (get(lw->world, body_id(h), v) != TB_OK)
+        return fail(L, lw, fname);
+    return push_vec3(L, v);
+}
+
+static int body_set(lua_State *L, tb_status (*set)(tb_world *, tb_body_id, const double[3]), const char *fname)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    double v[3];
+    vec3_args(L, 2, fname, v);
+    if (set(lw->world, body_id(h), v) != TB_OK)
+        return fail(L, lw, fname);
+    return 0;
+}
+
+static int body_pos(lua_State *L) { return body_get(L, tb_body_position, "body:pos"); }
+static int body_vel(lua_State *L) { return body_get(L, tb_body_velocity, "body:vel"); }
+static int body_omega(lua_State *L) { return body_get(L, tb_body_angular_velocity, "body:omega"); }
+static int body_set_pos(lua_State *L) { return body_set(L, tb_body_set_position, "body:set_pos"); }
+static int body_set_vel(lua_State *L) { return body_set(L, tb_body_set_velocity, "body:set_vel"); }
+static int body_set_omega(lua_State *L) { return body_set(L, tb_body_set_angular_velocity, "body:set_omega"); }
+static int body_torque(lua_State *L) { return body_set(L, tb_body_apply_torque, "body:torque"); }
+
+static int body_rot(lua_State *L)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    double q[4];
+    int k;
+    if (tb_body_orientation(lw->world, body_id(h), q) != TB_OK)
+        return fail(L, lw, "body:rot");
+    for (k = 0; k < 4; ++k)
+        lua_pushnumber(L, q[k]);
+    return 4;
+}
+
+static void read_quat(lua_State *L, int idx, const char *fname, double q[4])
+{
+    int k;
+    if (lua_type(L, idx) != LUA_TTABLE)
+        luaL_error(L, "%s: the orientation must be a table {w, x, y, z}", fname);
+    for (k = 0; k < 4; ++k) {
+        int isnum;
+        lua_rawgeti(L, idx, k + 1);
+        q[k] = lua_tonumberx(L, -1, &isnum);
+        if (!isnum)
+            luaL_error(L, "%s: the orientation must be a table {w, x, y, z} of numbers", fname);
+        lua_pop(L, 1);
+    }
+}
+
+static int body_set_rot(lua_State *L)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    double q[4];
+    read_quat(L, 2, "body:set_rot", q);
+    if (tb_body_set_orientation(lw->world, body_id(h), q) != TB_OK)
+        return fail(L, lw, "body:set_rot");
+    return 0;
+}
+
+static int body_momentum(lua_State *L)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    double p[3], l[3];
+    if (tb_body_momentum(lw->world, body_id(h), p, l) != TB_OK)
+        return fail(L, lw, "body:momentum");
+    push_vec3(L, p);
+    push_vec3(L, l);
+    return 6;
+}
+
+static int body_mass(lua_State *L)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    double m, I[3];
+    if (tb_body_mass(lw->world, body_id(h), &m, I) != TB_OK)
+        return fail(L, lw, "body:mass");
+    lua_pushnumber(L, m);
+    return 1 + push_vec3(L, I);
+}
+
+/* body:push(force, point): a force (N, world) at a world point, held for the
+   next step; body:push_local(force, body_point) takes the point in the
+   body's principal frame. */
+static int body_push_with(lua_State *L, int local, const char *fname)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    double f[3], p[3];
+    tb_status st;
+    read_vec3(L, 2, fname, "force", f);
+    read_vec3(L, 3, fname, "point", p);
+    st = local ? tb_body_apply_force_at_body_point(lw->world, body_id(h), f, p)
+               : tb_body_apply_force(lw->world, body_id(h), f, p);
+    if (st != TB_OK)
+        return fail(L, lw, fname);
+    return 0;
+}
+
+static int body_push(lua_State *L) { return body_push_with(L, 0, "body:push"); }
+static int body_push_local(lua_State *L) { return body_push_with(L, 1, "body:push_local"); }
+
 /* Forget a Lua callback of the world at world_idx: function and record. */
 static void forget_callback(lua_State *L, int world_idx, int key)
 {
@@ -304,6 +424,8 @@ static int handle_remove(lua_State *L)
         id.index1 = h->index1;
         id.generation = h->generation;
         st = tb_world_remove_spring(lw->world, id);
+    } else if (k == H_BODY) {
+        st = tb_world_remove_body(lw->world, body_id(h));
     } else if (k == H_FIELD) {
         tb_field_id id;
         id.index1 = h->index1;
@@ -364,6 +486,13 @@ static const luaL_Reg tracer_methods[] = {
     { "pos", tracer_pos }, { "set_pos", tracer_set_pos },
     { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
 };
+static const luaL_Reg body_methods[] = {
+    { "pos", body_pos }, { "rot", body_rot }, { "vel", body_vel }, { "omega", body_omega },
+    { "momentum", body_momentum }, { "mass", body_mass },
+    { "set_pos", body_set_pos }, { "set_rot", body_set_rot }, { "set_vel", body_set_vel },
+    { "set_omega", body_set_omega }, { "push", body_push }, { "push_local", body_push_local },
+    { "torque", body_torque }, { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
+};
 static const luaL_Reg plain_methods[] = {
     { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
 };
@@ -411,8 +540,9 @@ typedef struct force_call { lua_callback *cb; const tb_force_args *args; } force
 typedef struct field_call { lua_callback *cb; const tb_field_args *args; } field_call;
 
 /* Protected body of a Lua force: (call record, the world's table).
-   fn(t, state, forces): state = {n, pos, vel, mass} flat arrays, forces a
-   flat array of 3n zeros to add to. */
+   fn(t, state, forces, body_forces, body_torques): state = {n, pos, vel,
+   mass, bodies = {n, pos, rot, vel, omega, mass}} in flat arrays; forces,
+   body_forces and body_torques flat arrays of zeros to add to. */
 static int force_body(lua_State *L)
 {
     force_call *c = lua_touserdata(L, 1);
@@ -428,10 +558,29 @@ static int force_body(lua_State *L)
     fill(L, scratch_table(L, state, "vel"), a->velocities, 3 * a->count);
     fill(L, scratch_table(L, state, "mass"), a->masses, a->count);
     lua_settop(L, state);
+    {
+        int bodies = scratch_table(L, state, "bodies");
+        lua_pushinteger(L, (lua_Integer)a->body_count);
+        lua_setfield(L, bodies, "n");
+        fill(L, scratch_table(L, bodies, "pos"), a->body_positions, 3 * a->body_count);
+        fill(L, scratch_table(L, bodies, "rot"), a->body_orientations, 4 * a->body_count);
+        fill(L, scratch_table(L, bodies, "vel"), a->body_velocities, 3 * a->body_count);
+        fill(L, scratch_table(L, bodies, "omega"), a->body_angular_velocities, 3 * a->body_count);
+        fill(L, scratch_table(L, bodies, "mass"), a->body_masses, a->body_count);
+        lua_settop(L, state);
+    }
     fill(L, scratch_table(L, t, "force_out"), NULL, 3 * a->count);
-    lua_call(L, 3, 0);
+    fill(L, scratch_table(L, t, "body_force_out"), NULL, 3 * a->body_count);
+    fill(L, scratch_table(L, t, "body_torque_out"), NULL, 3 * a->body_count);
+    lua_call(L, 5, 0);
     lua_getfield(L, t, "force_out");
     add_back(L, lua_gettop(L), a->forces, 3 * a->count, "forces");
+    if (a->body_count) {
+        lua_getfield(L, t, "body_force_out");
+        add_back(L, lua_gettop(L), a->body_forces, 3 * a->body_count, "body_forces");
+        lua_getfield(L, t, "body_torque_out");
+        add_back(L, lua_gettop(L), a->body_torques, 3 * a->body_count, "body_torques");
+    }
     return 0;
 }
 
@@ -588,10 +737,10 @@ static int world_tostring(lua_State *L)
     if (!lw->world)
         lua_pushliteral(L, "tumble.world (closed)");
     else
-        lua_pushfstring(L, "tumble.world (%s, %d particles, %d tracers, %d springs, t = %f s)",
+        lua_pushfstring(L, "tumble.world (%s, %d particles, %d tracers, %d springs, %d bodies, t = %f s)",
                         tb_world_integrator(lw->world), (int)tb_world_particle_count(lw->world),
                         (int)tb_world_tracer_count(lw->world), (int)tb_world_spring_count(lw->world),
-                        tb_world_time(lw->world));
+                        (int)tb_world_body_count(lw->world), tb_world_time(lw->world));
     return 1;
 }
 
@@ -623,6 +772,142 @@ static int world_tracer(lua_State *L)
     if (tb_world_add_tracer(lw->world, &def, &id) != TB_OK)
         return fail(L, lw, "world:tracer");
     push_handle(L, 1, H_TRACER, id.index1, id.generation, 0);
+    return 1;
+}
+
+/* Mass properties from a body definition table: `inertia = {I1, I2, I3}`
+   (principal moments, with `mass`), or one shape (`sphere = r`,
+   `box = {x, y, z}`, `cylinder = {r, l}`, `capsule = {r, l}`,
+   `points = {{x, y, z, m}, ...}`, `mesh = {vertices = {...}, triangles =
+   {...}}` with 1-based indices) with `density` or `mass`. */
+static void read_mass(lua_State *L, int idx, tb_mass *m)
+{
+    static const char *const shapes[] = { "sphere", "box", "cylinder", "capsule", "points", "mesh", "inertia" };
+    const char *fname = "world:body";
+    char message[TB_MESSAGE_SIZE];
+    double density = 1, total = 0, I[3], v[3];
+    int has_density = opt_number(L, idx, "density", fname, &density);
+    int has_mass = opt_number(L, idx, "mass", fname, &total);
+    int k, found = -1, top = lua_gettop(L);
+    tb_status st = TB_OK;
+    for (k = 0; k < 7; ++k) {
+        if (lua_getfield(L, idx, shapes[k]) != LUA_TNIL) {
+            if (found >= 0)
+                luaL_error(L, "%s: give one shape, not both '%s' and '%s'", fname, shapes[found], shapes[k]);
+            found = k;
+        }
+        lua_pop(L, 1);
+    }
+    if (has_density && has_mass)
+        luaL_error(L, "%s: give 'density' or 'mass', not both", fname);
+    if (found < 0) { /* the default body, perhaps with another mass */
+        tb_body_def d = tb_default_body_def();
+        *m = d.mass;
+        if (has_density)
+            luaL_error(L, "%s: 'density' needs a shape", fname);
+    } else if (found == 6) {
+        lua_getfield(L, idx, "inertia");
+        read_vec3(L, lua_gettop(L), fname, "inertia", I);
+        if (has_density)
+            luaL_error(L, "%s: 'inertia' goes with 'mass', not 'density'", fname);
+        memset(m, 0, sizeof *m);
+        m->mass = has_mass ? total : 1;
+        memcpy(m->inertia, I, sizeof I);
+        m->frame[0] = 1;
+        has_mass = 0;
+    } else {
+        lua_getfield(L, idx, shapes[found]);
+        if (found == 0) {
+            st = tb_mass_sphere(density, luaL_checknumber(L, -1), m, message);
+        } else if (found == 1) {
+            read_vec3(L, lua_gettop(L), fname, "box", v);
+            st = tb_mass_box(density, v, m, message);
+        } else if (found == 2 || found == 3) {
+            double r, l;
+            lua_rawgeti(L, -1, 1);
+            lua_rawgeti(L, -2, 2);
+            r = luaL_checknumber(L, -2);
+            l = luaL_checknumber(L, -1);
+            lua_pop(L, 2);
+            st = found == 2 ? tb_mass_cylinder(density, r, l, m, message) : tb_mass_capsule(density, r, l, m, message);
+        } else if (found == 4) {
+            size_t n = lua_rawlen(L, -1), i;
+            double *pos = lua_newuserdatauv(L, 4 * n * sizeof(double) + 1, 0), *mass = pos + 3 * n;
+            for (i = 0; i < n; ++i) {
+                int j;
+                lua_rawgeti(L, -2, (lua_Integer)i + 1);
+                if (lua_type(L, -1) != LUA_TTABLE)
+                    luaL_error(L, "%s: points must be {{x, y, z, m}, ...}", fname);
+                for (j = 0; j < 4; ++j) {
+                    lua_rawgeti(L, -1, j + 1);
+                    *(j < 3 ? &pos[3 * i + j] : &mass[i]) = luaL_checknumber(L, -1);
+                    lua_pop(L, 1);
+                }
+                lua_pop(L, 1);
+            }
+            st = tb_mass_points(n, pos, mass, m, message);
+        } else {
+            int mesh = lua_gettop(L);
+            size_t nv, nt, i;
+            double *vertices;
+            uint32_t *triangles;
+            lua_getfield(L, mesh, "vertices");
+            lua_getfield(L, mesh, "triangles");
+            if (!lua_istable(L, -2) || !lua_istable(L, -1))
+                luaL_error(L, "%s: mesh needs 'vertices' (flat x, y, z) and 'triangles' (flat 1-based indices)", fname);
+            nv = lua_rawlen(L, -2);
+            nt = lua_rawlen(L, -1);
+            if (nv % 3 || nt % 3)
+                luaL_error(L, "%s: mesh vertices and triangles must come in threes", fname);
+            vertices = lua_newuserdatauv(L, nv * sizeof(double) + 1, 0);
+            triangles = lua_newuserdatauv(L, nt * sizeof(uint32_t) + 1, 0);
+            for (i = 0; i < nv; ++i) {
+                lua_rawgeti(L, mesh + 1, (lua_Integer)i + 1);
+                vertices[i] = luaL_checknumber(L, -1);
+                lua_pop(L, 1);
+            }
+            for (i = 0; i < nt; ++i) {
+                lua_Integer index;
+                lua_rawgeti(L, mesh + 2, (lua_Integer)i + 1);
+                index = luaL_checkinteger(L, -1);
+                if (index < 1 || (size_t)index > nv / 3)
+                    luaL_error(L, "%s: mesh triangle index %d is out of range", fname, (int)index);
+                triangles[i] = (uint32_t)(index - 1);
+                lua_pop(L, 1);
+            }
+            st = tb_mass_mesh(density, nv / 3, vertices, nt / 3, triangles, m, message);
+        }
+        if (st != TB_OK)
+            luaL_error(L, "%s: %s", fname, message);
+    }
+    if (has_mass && tb_mass_set_total(m, total, message) != TB_OK)
+        luaL_error(L, "%s: %s", fname, message);
+    lua_settop(L, top);
+}
+
+static const char *const body_options[] = {
+    "pos", "rot", "vel", "omega", "mass", "density", "inertia", "sphere", "box", "cylinder", "capsule",
+    "points", "mesh", "linear_damping", "angular_damping", NULL
+};
+
+static int world_body(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    tb_body_def def = tb_default_body_def();
+    tb_body_id id;
+    check_options(L, 2, "world:body", body_options);
+    read_mass(L, 2, &def.mass);
+    opt_vec3(L, 2, "pos", "world:body", def.position);
+    opt_vec3(L, 2, "vel", "world:body", def.velocity);
+    opt_vec3(L, 2, "omega", "world:body", def.angular_velocity);
+    if (lua_getfield(L, 2, "rot") != LUA_TNIL)
+        read_quat(L, lua_gettop(L), "world:body", def.orientation);
+    lua_pop(L, 1);
+    opt_number(L, 2, "linear_damping", "world:body", &def.linear_damping);
+    opt_number(L, 2, "angular_damping", "world:body", &def.angular_damping);
+    if (tb_world_add_body(lw->world, &def, &id) != TB_OK)
+        return fail(L, lw, "world:body");
+    push_handle(L, 1, H_BODY, id.index1, id.generation, 0);
     return 1;
 }
 
@@ -776,9 +1061,11 @@ static int world_set_gravity(lua_State *L)
 static int world_energy(lua_State *L)
 {
     tb_energy e = tb_world_energy(to_world(L, 1)->world);
-    lua_createtable(L, 0, 4);
+    lua_createtable(L, 0, 5);
     lua_pushnumber(L, e.kinetic);
     lua_setfield(L, -2, "kinetic");
+    lua_pushnumber(L, e.rotational);
+    lua_setfield(L, -2, "rotational");
     lua_pushnumber(L, e.gravity);
     lua_setfield(L, -2, "gravity");
     lua_pushnumber(L, e.spring);
@@ -795,17 +1082,27 @@ static int world_momentum(lua_State *L)
     return push_vec3(L, p);
 }
 
+static int world_angular_momentum(lua_State *L)
+{
+    double l[3];
+    tb_world_angular_momentum(to_world(L, 1)->world, l);
+    return push_vec3(L, l);
+}
+
+/* particles, tracers, springs, bodies */
 static int world_counts(lua_State *L)
 {
     tb_world *w = to_world(L, 1)->world;
     lua_pushinteger(L, (lua_Integer)tb_world_particle_count(w));
     lua_pushinteger(L, (lua_Integer)tb_world_tracer_count(w));
     lua_pushinteger(L, (lua_Integer)tb_world_spring_count(w));
-    return 3;
+    lua_pushinteger(L, (lua_Integer)tb_world_body_count(w));
+    return 4;
 }
 
 static const luaL_Reg world_methods[] = {
     { "particle", world_particle }, { "tracer", world_tracer }, { "spring", world_spring },
+    { "body", world_body }, { "angular_momentum", world_angular_momentum },
     { "drag", world_drag }, { "field", world_field }, { "force", world_force },
     { "step", world_step }, { "time", world_time }, { "dt", world_dt }, { "set_dt", world_set_dt },
     { "integrator", world_integrator }, { "set_integrator", world_set_integrator },
@@ -841,7 +1138,7 @@ int luaopen_tumble(lua_State *L)
 {
     static const luaL_Reg funcs[] = { { "world", world_new }, { "integrators", integrators }, { NULL, NULL } };
     static const luaL_Reg *const kind_methods[H_KINDS] = {
-        particle_methods, tracer_methods, plain_methods, plain_methods, plain_methods
+        particle_methods, tracer_methods, plain_methods, plain_methods, plain_methods, body_methods
     };
     int k;
     new_metatable(L, WORLD_MT, world_methods);

@@ -32,14 +32,18 @@ static const char usage[] =
     "                     every step)\n"
     "  --quiet            print no summary\n"
     "\n"
-    "Output: header t,kind,id,x,y,z,vx,vy,vz then one row per object per\n"
-    "recorded step, numbers as %%.17g. kind is particle or tracer; id is the\n"
-    "object's id index (as in handle:id()); a tracer's velocity is the field\n"
-    "velocity at its position. Steps are recorded at t = 0, every\n"
-    "record_every seconds (rounded to whole steps), and at the end.\n"
+    "Output: header t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz then one row\n"
+    "per object per recorded step, numbers as %%.17g. kind is particle, tracer\n"
+    "or body; id is the object's id index (as in handle:id()); a tracer's\n"
+    "velocity is the field velocity at its position. For bodies x is the\n"
+    "centre of mass, q the orientation (world from principal axes) and w the\n"
+    "angular velocity in the world frame; the last seven fields are empty for\n"
+    "particles and tracers. Steps are recorded at t = 0, every record_every\n"
+    "seconds (rounded to whole steps), and at the end.\n"
     "\n"
     "Summary (stdout): steps, simulated time, wall time, and the relative\n"
-    "energy drift (E_end - E_start) / |E_start| of the particles.\n"
+    "energy drift (E_end - E_start) / |E_start| of the particles and bodies\n"
+    "(kinetic, rotational, gravitational and spring energy).\n"
     "Exit status: 0 on success, 1 when the scene or the run fails, 2 for a\n"
     "bad command line.\n";
 
@@ -208,7 +212,7 @@ static long record(FILE *f, lua_State *L, int world_idx, tb_world *w, double **t
         x = tb_world_tracer_positions(w);
         for (i = 0; i < n; ++i, ++rows) {
             const double *p = x + 3 * i, *v = *tracer_vel + 3 * i;
-            fprintf(f, "%.17g,tracer,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", t,
+            fprintf(f, "%.17g,tracer,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,,,,,,,\n", t,
                     (unsigned)tb_world_tracer_at(w, i).index1, p[0], p[1], p[2], v[0], v[1], v[2]);
         }
     }
@@ -217,9 +221,21 @@ static long record(FILE *f, lua_State *L, int world_idx, tb_world *w, double **t
         const double *x = tb_world_particle_positions(w), *vel = tb_world_particle_velocities(w);
         for (i = 0; i < n; ++i, ++rows) {
             const double *p = x + 3 * i, *v = vel + 3 * i;
-            fprintf(f, "%.17g,particle,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", t,
+            fprintf(f, "%.17g,particle,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,,,,,,,\n", t,
                     (unsigned)tb_world_particle_at(w, i).index1, p[0], p[1], p[2], v[0], v[1], v[2]);
         }
+    }
+    n = tb_world_body_count(w);
+    for (i = 0; i < n; ++i, ++rows) {
+        tb_body_id id = tb_world_body_at(w, i);
+        double x[3], q[4], v[3], om[3];
+        tb_body_position(w, id, x);
+        tb_body_orientation(w, id, q);
+        tb_body_velocity(w, id, v);
+        tb_body_angular_velocity(w, id, om);
+        fprintf(f, "%.17g,body,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
+                t, (unsigned)id.index1, x[0], x[1], x[2], v[0], v[1], v[2], q[0], q[1], q[2], q[3], om[0], om[1],
+                om[2]);
     }
     return rows;
 }
@@ -304,7 +320,7 @@ static int run(lua_State *L, const options *o)
     f = fopen(part_path, "w");
     if (!f)
         return die(1, "cannot write '%s'", part_path);
-    fprintf(f, "t,kind,id,x,y,z,vx,vy,vz\n");
+    fprintf(f, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n");
 
     e0 = tb_world_energy(w);
     t0 = now();
@@ -338,8 +354,8 @@ static int run(lua_State *L, const options *o)
     if (!o->quiet) {
         printf("scene       %s\n", o->scene);
         printf("integrator  %s, dt %.6g s\n", tb_world_integrator(w), dt);
-        printf("objects     %zu particles, %zu tracers, %zu springs\n", tb_world_particle_count(w),
-               tb_world_tracer_count(w), tb_world_spring_count(w));
+        printf("objects     %zu particles, %zu tracers, %zu springs, %zu bodies\n", tb_world_particle_count(w),
+               tb_world_tracer_count(w), tb_world_spring_count(w), tb_world_body_count(w));
         printf("steps       %ld, simulated %.6g s, wall %.3f ms (%.3g us/step)\n", steps, tb_world_time(w),
                1e3 * wall, steps ? 1e6 * wall / (double)steps : 0.0);
         if (e0.total != 0)

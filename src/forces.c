@@ -29,7 +29,7 @@ tb_status tb_world_remove_force(tb_world *w, tb_force_id id)
     return st;
 }
 
-tb_status tb__user_forces(tb_world *w, double t, const double *pos, const double *vel, double *force)
+tb_status tb__user_forces(tb_world *w, double t, const double *y, const double *seen)
 {
     size_t k;
     for (k = 0; k < w->forces.count; ++k) {
@@ -40,10 +40,18 @@ tb_status tb__user_forces(tb_world *w, double t, const double *pos, const double
         message[0] = 0;
         args.time = t;
         args.count = w->particle_count;
-        args.positions = pos;
-        args.velocities = vel;
+        args.positions = y + w->off[TB__PARTICLE_POS];
+        args.velocities = seen + w->off[TB__PARTICLE_VEL];
         args.masses = w->mass;
-        args.forces = force;
+        args.forces = w->force;
+        args.body_count = w->body_count;
+        args.body_positions = y + w->off[TB__BODY_POS];
+        args.body_orientations = y + w->off[TB__BODY_ROT];
+        args.body_velocities = w->body_motion;
+        args.body_angular_velocities = w->body_motion ? w->body_motion + 3 * w->body_count : NULL;
+        args.body_masses = w->body_mass;
+        args.body_forces = w->body_force;
+        args.body_torques = w->body_force ? w->body_force + 3 * w->body_count : NULL;
         args.message = message;
         st = f->fn(&args, f->user);
         if (st != TB_OK)
@@ -51,4 +59,25 @@ tb_status tb__user_forces(tb_world *w, double t, const double *pos, const double
                             message[0] ? message : tb_status_name(st));
     }
     return TB_OK;
+}
+
+/* Springs and callbacks are the forces that couple objects or that tumble
+   cannot see inside; they are evaluated once for all objects before any
+   kick. Local forces (gravity, drag, damping) are added inside the kicks. */
+tb_status tb__global_forces(tb_world *w, double t, const double *y, const double *seen)
+{
+    const int callbacks = w->forces.count > 0;
+    w->force_ready = w->spring_count > 0 || callbacks;
+    if (!w->force_ready)
+        return TB_OK;
+    if (w->particle_count)
+        memset(w->force, 0, 3 * w->particle_count * sizeof(double));
+    if (w->body_count) {
+        memset(w->body_force, 0, 6 * w->body_count * sizeof(double));
+        if (callbacks)
+            tb__body_motion(w, y, seen);
+    }
+    if (w->spring_count)
+        tb__spring_forces(w, y + w->off[TB__PARTICLE_POS], seen + w->off[TB__PARTICLE_VEL], w->force);
+    return callbacks ? tb__user_forces(w, t, y, seen) : TB_OK;
 }

@@ -39,7 +39,7 @@ static tb_status grow(tb_world *w)
        be laid out for more particles than the arrays hold, never fewer. */
     if ((st = tb__ids_reserve(w, &w->particle_ids, cap)) != TB_OK)
         return st;
-    if ((st = tb__state_resize(w, w->tracer_cap, cap)) != TB_OK)
+    if ((st = tb__state_resize(w, TB__PARTICLES, cap)) != TB_OK)
         return st;
     if ((st = tb__grow(w, arrays, sizes, 3, w->particle_count, w->particle_cap, cap)) != TB_OK)
         return st;
@@ -63,8 +63,8 @@ tb_status tb_world_add_particle(tb_world *w, const tb_particle_def *def, tb_part
     if (w->particle_count == w->particle_cap && (st = grow(w)) != TB_OK)
         return st;
     slot = (uint32_t)w->particle_count++;
-    memcpy(w->y + w->off_particle_pos + 3 * slot, def->position, 3 * sizeof(double));
-    memcpy(w->y + w->off_particle_vel + 3 * slot, def->velocity, 3 * sizeof(double));
+    memcpy(w->y + w->off[TB__PARTICLE_POS] + 3 * slot, def->position, 3 * sizeof(double));
+    memcpy(w->y + w->off[TB__PARTICLE_VEL] + 3 * slot, def->velocity, 3 * sizeof(double));
     w->mass[slot] = def->pinned ? 0 : def->mass;
     w->inv_mass[slot] = def->pinned ? 0 : 1 / def->mass;
     tb__ids_acquire(&w->particle_ids, slot, &made.index1, &made.generation);
@@ -84,8 +84,8 @@ tb_status tb_world_remove_particle(tb_world *w, tb_particle_id id)
         return st;
     tb__springs_detach(w, slot);
     last = (uint32_t)w->particle_count - 1;
-    pos = w->y + w->off_particle_pos;
-    vel = w->y + w->off_particle_vel;
+    pos = w->y + w->off[TB__PARTICLE_POS];
+    vel = w->y + w->off[TB__PARTICLE_VEL];
     if (slot != last) {
         memcpy(pos + 3 * slot, pos + 3 * last, 3 * sizeof(double));
         memcpy(vel + 3 * slot, vel + 3 * last, 3 * sizeof(double));
@@ -124,22 +124,22 @@ static tb_status set3(tb_world *w, tb_particle_id id, size_t offset, const doubl
 
 tb_status tb_particle_position(const tb_world *w, tb_particle_id id, double position[3])
 {
-    return get3(w, id, w->off_particle_pos, position);
+    return get3(w, id, w->off[TB__PARTICLE_POS], position);
 }
 
 tb_status tb_particle_velocity(const tb_world *w, tb_particle_id id, double velocity[3])
 {
-    return get3(w, id, w->off_particle_vel, velocity);
+    return get3(w, id, w->off[TB__PARTICLE_VEL], velocity);
 }
 
 tb_status tb_particle_set_position(tb_world *w, tb_particle_id id, const double position[3])
 {
-    return set3(w, id, w->off_particle_pos, position, "position");
+    return set3(w, id, w->off[TB__PARTICLE_POS], position, "position");
 }
 
 tb_status tb_particle_set_velocity(tb_world *w, tb_particle_id id, const double velocity[3])
 {
-    return set3(w, id, w->off_particle_vel, velocity, "velocity");
+    return set3(w, id, w->off[TB__PARTICLE_VEL], velocity, "velocity");
 }
 
 tb_status tb_particle_mass(const tb_world *w, tb_particle_id id, double *mass)
@@ -158,12 +158,12 @@ size_t tb_world_particle_count(const tb_world *w)
 
 const double *tb_world_particle_positions(const tb_world *w)
 {
-    return w->y ? w->y + w->off_particle_pos : NULL;
+    return w->y ? w->y + w->off[TB__PARTICLE_POS] : NULL;
 }
 
 const double *tb_world_particle_velocities(const tb_world *w)
 {
-    return w->y ? w->y + w->off_particle_vel : NULL;
+    return w->y ? w->y + w->off[TB__PARTICLE_VEL] : NULL;
 }
 
 const double *tb_world_particle_masses(const tb_world *w)
@@ -180,16 +180,6 @@ tb_particle_id tb_world_particle_at(const tb_world *w, size_t slot)
 }
 
 /* ------------------------------------------------------------ stepping -- */
-
-tb_status tb__particle_global_forces(tb_world *w, double t, const double *pos, const double *vel, int *any)
-{
-    *any = w->spring_count > 0 || w->forces.count > 0;
-    if (!*any)
-        return TB_OK;
-    memset(w->force, 0, 3 * w->particle_count * sizeof(double));
-    tb__spring_forces(w, pos, vel, w->force);
-    return tb__user_forces(w, t, pos, vel, w->force);
-}
 
 /* Acceleration of particles [b, e) from the global forces `f` (or none) and
    the local ones, gravity and drag: a = (f + m g - (c1 + c2 |v|) v) / m,
@@ -224,42 +214,22 @@ static void accelerate(const tb_world *w, size_t b, size_t e, const double *f, c
     }
 }
 
-tb_status tb__particle_derive(tb_world *w, double t, const double *y, double *dy)
+void tb__particle_derive(tb_world *w, const double *y, double *dy)
 {
-    const double *pos = y + w->off_particle_pos, *vel = y + w->off_particle_vel;
-    int any;
-    tb_status st = tb__particle_global_forces(w, t, pos, vel, &any);
-    if (st != TB_OK)
-        return st;
-    memcpy(dy + w->off_particle_pos, vel, 3 * w->particle_count * sizeof(double));
-    accelerate(w, 0, w->particle_count, any ? w->force : NULL, vel, dy + w->off_particle_vel, 1, 0);
-    return TB_OK;
-}
-
-tb_status tb__particle_prepare(tb_world *w, double t, const double *velocity)
-{
-    w->kick_velocity = velocity;
-    return tb__particle_global_forces(w, t, w->y + w->off_particle_pos,
-                                      velocity ? velocity : w->y + w->off_particle_vel, &w->force_ready);
+    const double *vel = y + w->off[TB__PARTICLE_VEL];
+    memcpy(dy + w->off[TB__PARTICLE_POS], vel, 3 * w->particle_count * sizeof(double));
+    accelerate(w, 0, w->particle_count, w->force_ready ? w->force : NULL, vel, dy + w->off[TB__PARTICLE_VEL], 1, 0);
 }
 
 int tb__particle_velocity_dependent(const tb_world *w)
 {
     size_t s;
-    if (w->linear_drag != 0 || w->quadratic_drag != 0 || w->forces.count)
+    if (w->particle_count && (w->linear_drag != 0 || w->quadratic_drag != 0))
         return 1;
     for (s = 0; s < w->spring_count; ++s)
         if (w->spring_c[s] != 0)
             return 1;
     return 0;
-}
-
-void tb__particle_extrapolate_velocity(const tb_world *w, double *saved)
-{
-    const double *v = w->y + w->off_particle_vel;
-    size_t i;
-    for (i = 0; i < 3 * w->particle_count; ++i)
-        saved[i] = 2 * v[i] - saved[i];
 }
 
 /* The common case of a sweep, where a scene has only the local forces
@@ -292,9 +262,9 @@ static void kick_drift_local(double *restrict x, double *restrict v, const doubl
 
 void tb__particle_sweep(tb_world *w, const tb__split_op *ops, int n)
 {
-    double *pos = w->y + w->off_particle_pos, *vel = w->y + w->off_particle_vel;
+    double *pos = w->y + w->off[TB__PARTICLE_POS], *vel = w->y + w->off[TB__PARTICLE_VEL];
     const double *f = w->force_ready ? w->force : NULL;
-    const double *seen = w->kick_velocity ? w->kick_velocity : vel;
+    const double *seen = w->kick_seen ? w->kick_seen + w->off[TB__PARTICLE_VEL] : vel;
     size_t b, i;
     int k;
     if (!f && w->quadratic_drag == 0 && seen == vel && !ops[0].drift && (n == 1 || (n == 2 && ops[1].drift))) {

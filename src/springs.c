@@ -33,7 +33,7 @@ tb_status tb_world_add_spring(tb_world *w, const tb_spring_def *def, tb_spring_i
 {
     tb_status st;
     uint32_t a, b = TB__ANCHOR, s;
-    const double *pos = w->y ? w->y + w->off_particle_pos : NULL;
+    const double *pos = w->y ? w->y + w->off[TB__PARTICLE_POS] : NULL;
     const double *pb;
     tb_spring_id made;
     if ((st = tb__check_busy(w, "add a spring")) != TB_OK)
@@ -177,7 +177,7 @@ void tb__spring_forces(const tb_world *w, const double *pos, const double *vel, 
 
 double tb__spring_energy(const tb_world *w)
 {
-    const double *pos = w->y + w->off_particle_pos;
+    const double *pos = w->y + w->off[TB__PARTICLE_POS];
     double e = 0;
     size_t s;
     for (s = 0; s < w->spring_count; ++s) {

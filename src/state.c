@@ -3,19 +3,32 @@
 
 #include <string.h>
 
-/* The used parts of y: (offset, length) in doubles. */
-static int segments(const tb_world *w, size_t off[3], size_t len[3])
+static const struct { enum tb__tier tier; size_t width; } quantities[TB__QUANTITY_COUNT] = {
+#define TB__ROW(name, tier, width) { tier, width },
+    TB__QUANTITIES(TB__ROW)
+#undef TB__ROW
+};
+
+static size_t count_of(const tb_world *w, enum tb__tier tier)
 {
-    int n = 0;
-    if (w->tracer_count) {
-        off[n] = w->off_tracer_pos;
-        len[n++] = 3 * w->tracer_count;
-    }
-    if (w->particle_count) {
-        off[n] = w->off_particle_pos;
-        len[n++] = 3 * w->particle_count;
-        off[n] = w->off_particle_vel;
-        len[n++] = 3 * w->particle_count;
+    return tier == TB__TRACERS ? w->tracer_count : tier == TB__PARTICLES ? w->particle_count : w->body_count;
+}
+
+static size_t cap_of(const tb_world *w, enum tb__tier tier)
+{
+    return tier == TB__TRACERS ? w->tracer_cap : tier == TB__PARTICLES ? w->particle_cap : w->body_cap;
+}
+
+/* The used parts of y: (offset, length) in doubles. */
+static int segments(const tb_world *w, size_t off[TB__QUANTITY_COUNT], size_t len[TB__QUANTITY_COUNT])
+{
+    int k, n = 0;
+    for (k = 0; k < TB__QUANTITY_COUNT; ++k) {
+        size_t used = quantities[k].width * count_of(w, quantities[k].tier);
+        if (used) {
+            off[n] = w->off[k];
+            len[n++] = used;
+        }
     }
     return n;
 }
@@ -28,25 +41,28 @@ static void free_scratch(tb_world *w)
     w->scratch_count = 0;
 }
 
-tb_status tb__state_resize(tb_world *w, size_t tracer_cap, size_t particle_cap)
+tb_status tb__state_resize(tb_world *w, enum tb__tier tier, size_t cap)
 {
-    size_t size = 3 * tracer_cap + 6 * particle_cap;
-    double *y = tb__alloc(w, NULL, 0, size * sizeof(double));
+    size_t off[TB__QUANTITY_COUNT], size = 0;
+    double *y;
+    int k;
+    for (k = 0; k < TB__QUANTITY_COUNT; ++k) {
+        off[k] = size;
+        size += quantities[k].width * (quantities[k].tier == tier ? cap : cap_of(w, quantities[k].tier));
+    }
+    y = tb__alloc(w, NULL, 0, size * sizeof(double));
     if (!y)
         return tb__fail(w, TB_ERR_MEMORY, "out of memory for a state of %zu doubles", size);
     if (w->y) {
-        memcpy(y, w->y + w->off_tracer_pos, 3 * w->tracer_count * sizeof(double));
-        memcpy(y + 3 * tracer_cap, w->y + w->off_particle_pos, 3 * w->particle_count * sizeof(double));
-        memcpy(y + 3 * tracer_cap + 3 * particle_cap, w->y + w->off_particle_vel,
-               3 * w->particle_count * sizeof(double));
+        for (k = 0; k < TB__QUANTITY_COUNT; ++k)
+            memcpy(y + off[k], w->y + w->off[k],
+                   quantities[k].width * count_of(w, quantities[k].tier) * sizeof(double));
         free_scratch(w);
         tb__alloc(w, w->y, w->y_size * sizeof(double), 0);
     }
     w->y = y;
     w->y_size = size;
-    w->off_tracer_pos = 0;
-    w->off_particle_pos = 3 * tracer_cap;
-    w->off_particle_vel = 3 * tracer_cap + 3 * particle_cap;
+    memcpy(w->off, off, sizeof off);
     return TB_OK;
 }
 
@@ -71,7 +87,7 @@ double *tb__scratch_vector(tb_world *w, size_t k)
 
 void tb__state_axpy(const tb_world *w, double *out, const double *base, double a, const double *dir)
 {
-    size_t off[3], len[3], i;
+    size_t off[TB__QUANTITY_COUNT], len[TB__QUANTITY_COUNT], i;
     int s, n = segments(w, off, len);
     for (s = 0; s < n; ++s) {
         double *o = out + off[s];
@@ -83,7 +99,7 @@ void tb__state_axpy(const tb_world *w, double *out, const double *base, double a
 
 void tb__state_copy(const tb_world *w, double *out, const double *in)
 {
-    size_t off[3], len[3];
+    size_t off[TB__QUANTITY_COUNT], len[TB__QUANTITY_COUNT];
     int s, n = segments(w, off, len);
     for (s = 0; s < n; ++s)
         memcpy(out + off[s], in + off[s], len[s] * sizeof(double));

@@ -34,12 +34,12 @@ tb_status tb_world_add_tracer(tb_world *w, const tb_tracer_def *def, tb_tracer_i
         size_t cap = w->tracer_cap ? 2 * w->tracer_cap : 8;
         if ((st = tb__ids_reserve(w, &w->tracer_ids, cap)) != TB_OK)
             return st;
-        if ((st = tb__state_resize(w, cap, w->particle_cap)) != TB_OK)
+        if ((st = tb__state_resize(w, TB__TRACERS, cap)) != TB_OK)
             return st;
         w->tracer_cap = cap;
     }
     slot = (uint32_t)w->tracer_count++;
-    memcpy(w->y + w->off_tracer_pos + 3 * slot, def->position, 3 * sizeof(double));
+    memcpy(w->y + w->off[TB__TRACER_POS] + 3 * slot, def->position, 3 * sizeof(double));
     {
         tb_tracer_id made;
         tb__ids_acquire(&w->tracer_ids, slot, &made.index1, &made.generation);
@@ -59,7 +59,7 @@ tb_status tb_world_remove_tracer(tb_world *w, tb_tracer_id id)
     if ((st = find(w, id, &slot)) != TB_OK)
         return st;
     last = (uint32_t)w->tracer_count - 1;
-    pos = w->y + w->off_tracer_pos;
+    pos = w->y + w->off[TB__TRACER_POS];
     if (slot != last) {
         memcpy(pos + 3 * slot, pos + 3 * last, 3 * sizeof(double));
         tb__ids_move(&w->tracer_ids, last, slot);
@@ -74,7 +74,7 @@ tb_status tb_tracer_position(const tb_world *w, tb_tracer_id id, double position
     uint32_t slot;
     tb_status st = find(w, id, &slot);
     if (st == TB_OK)
-        memcpy(position, w->y + w->off_tracer_pos + 3 * slot, 3 * sizeof(double));
+        memcpy(position, w->y + w->off[TB__TRACER_POS] + 3 * slot, 3 * sizeof(double));
     return st;
 }
 
@@ -88,7 +88,7 @@ tb_status tb_tracer_set_position(tb_world *w, tb_tracer_id id, const double posi
         return st;
     if (!tb__finite3(position))
         return tb__fail(w, TB_ERR_ARGUMENT, "tracer position must be finite");
-    memcpy(w->y + w->off_tracer_pos + 3 * slot, position, 3 * sizeof(double));
+    memcpy(w->y + w->off[TB__TRACER_POS] + 3 * slot, position, 3 * sizeof(double));
     return TB_OK;
 }
 
@@ -99,7 +99,7 @@ size_t tb_world_tracer_count(const tb_world *w)
 
 const double *tb_world_tracer_positions(const tb_world *w)
 {
-    return w->y ? w->y + w->off_tracer_pos : NULL;
+    return w->y ? w->y + w->off[TB__TRACER_POS] : NULL;
 }
 
 tb_tracer_id tb_world_tracer_at(const tb_world *w, size_t slot)
@@ -116,12 +116,12 @@ tb_status tb_world_tracer_velocities(tb_world *w, double *velocities)
     if ((st = tb__check_busy(w, "evaluate tracer velocities")) != TB_OK)
         return st;
     w->stepping = 1; /* callbacks may not add or remove objects meanwhile */
-    st = tb__field_velocities(w, w->time, w->tracer_count, w->y + w->off_tracer_pos, velocities);
+    st = tb__field_velocities(w, w->time, w->tracer_count, w->y + w->off[TB__TRACER_POS], velocities);
     w->stepping = 0;
     return st;
 }
 
 tb_status tb__tracer_derive(tb_world *w, double t, const double *y, double *dy)
 {
-    return tb__field_velocities(w, t, w->tracer_count, y + w->off_tracer_pos, dy + w->off_tracer_pos);
+    return tb__field_velocities(w, t, w->tracer_count, y + w->off[TB__TRACER_POS], dy + w->off[TB__TRACER_POS]);
 }

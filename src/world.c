@@ -71,6 +71,7 @@ void tb_world_destroy(tb_world *w)
         tb__alloc(w, w->scratch, w->scratch_count * w->y_size * sizeof(double), 0);
     if (w->y)
         tb__alloc(w, w->y, w->y_size * sizeof(double), 0);
+    tb__bodies_free(w);
     arrays[0] = (void **)&w->mass;
     arrays[1] = (void **)&w->inv_mass;
     arrays[2] = (void **)&w->force;
@@ -151,11 +152,53 @@ const char *tb_world_integrator(const tb_world *w)
 tb_status tb__derive(tb_world *w, double t, const double *y, double *dy)
 {
     tb_status st = TB_OK;
-    if (w->tracer_count)
-        st = tb__tracer_derive(w, t, y, dy);
-    if (st == TB_OK && w->particle_count)
-        st = tb__particle_derive(w, t, y, dy);
-    return st;
+    if (w->tracer_count && (st = tb__tracer_derive(w, t, y, dy)) != TB_OK)
+        return st;
+    if ((st = tb__global_forces(w, t, y, y)) != TB_OK)
+        return st;
+    if (w->particle_count)
+        tb__particle_derive(w, y, dy);
+    if (w->body_count)
+        tb__body_derive(w, y, dy);
+    return TB_OK;
+}
+
+void tb__project(tb_world *w, double *y)
+{
+    if (w->body_count)
+        tb__body_project(w, y);
+}
+
+tb_status tb__split_prepare(tb_world *w, double t, const double *seen)
+{
+    w->kick_seen = seen;
+    return tb__global_forces(w, t, w->y, seen ? seen : w->y);
+}
+
+void tb__split_sweep(tb_world *w, const tb__split_op *ops, int n)
+{
+    if (w->particle_count)
+        tb__particle_sweep(w, ops, n);
+    if (w->body_count)
+        tb__body_sweep(w, ops, n);
+}
+
+int tb__split_velocity_dependent(const tb_world *w)
+{
+    return w->forces.count > 0 || tb__particle_velocity_dependent(w) || tb__body_velocity_dependent(w);
+}
+
+void tb__split_extrapolate(const tb_world *w, double *saved)
+{
+    static const enum tb__quantity rates[] = { TB__PARTICLE_VEL, TB__BODY_MOM, TB__BODY_ANG };
+    const size_t counts[] = { w->particle_count, w->body_count, w->body_count };
+    size_t k, i;
+    for (k = 0; k < 3; ++k) {
+        double *s = saved + w->off[rates[k]];
+        const double *v = w->y + w->off[rates[k]];
+        for (i = 0; i < 3 * counts[k]; ++i)
+            s[i] = 2 * v[i] - s[i];
+    }
 }
 
 /* A step can fail inside a callback. Methods that write the state only after
@@ -187,6 +230,8 @@ tb_status tb_world_step(tb_world *w, double h)
             tb__state_copy(w, w->y, saved);
         return st;
     }
+    if (w->body_count) /* held forces last one step, as in ODE */
+        memset(w->body_applied, 0, 6 * w->body_count * sizeof(double));
     {   /* compensated sum: t after n steps of h is n h to the last bit */
         const double add = h - w->time_carry, sum = w->time + add;
         w->time_carry = (sum - w->time) - add;

@@ -1,10 +1,9 @@
 /* world.h: the inside of a world, shared by the core's files (not public).
 
    The mutable state of a world is one vector of doubles, y, cut into flat
-   arrays per quantity:
+   arrays per quantity, in the order of TB__QUANTITIES below:
 
-       y = [ tracer positions | particle positions | particle velocities ]
-             3 * tracer_cap      3 * particle_cap     3 * particle_cap
+       y = [ tracer pos | particle pos | particle vel | body pos | body q | body P | body L ]
 
    Each array is sized by its tier's capacity, so adding an object moves
    nothing until a capacity doubles. Generic integrators (Euler, RK4) treat y
@@ -17,6 +16,27 @@
 
 #include "tumble.h"
 #include <stdarg.h>
+
+/* The tiers of objects, and the arrays of the state vector y: name, tier,
+   doubles per object. This one list drives the layout, resizing and copying
+   of y (state.c). */
+enum tb__tier { TB__TRACERS, TB__PARTICLES, TB__BODIES, TB__TIERS };
+
+#define TB__QUANTITIES(X)                                                                  \
+    X(TRACER_POS, TB__TRACERS, 3)   /* m */                                              \
+    X(PARTICLE_POS, TB__PARTICLES, 3) /* m */                                            \
+    X(PARTICLE_VEL, TB__PARTICLES, 3) /* m/s */                                          \
+    X(BODY_POS, TB__BODIES, 3)      /* m, centre of mass */                              \
+    X(BODY_ROT, TB__BODIES, 4)      /* unit quaternion (w, x, y, z), world from principal axes */ \
+    X(BODY_MOM, TB__BODIES, 3)      /* kg m/s, linear momentum P */                      \
+    X(BODY_ANG, TB__BODIES, 3)      /* kg m^2/s, angular momentum L about the centre, world frame */
+
+enum tb__quantity {
+#define TB__ENUM(name, tier, width) TB__##name,
+    TB__QUANTITIES(TB__ENUM)
+#undef TB__ENUM
+    TB__QUANTITY_COUNT
+};
 
 /* ---- ids.c: generation-checked id tables, one per kind of object ------- */
 typedef struct tb__ids {
@@ -79,7 +99,7 @@ struct tb_world {
     /* state vector and the offsets of its arrays (in doubles) */
     double *y;
     size_t y_size;
-    size_t off_tracer_pos, off_particle_pos, off_particle_vel;
+    size_t off[TB__QUANTITY_COUNT]; /* where each array starts in y */
 
     /* scratch for integrators: scratch_count vectors of y_size doubles */
     double *scratch;
@@ -94,10 +114,11 @@ struct tb_world {
     double *mass;          /* [particle_cap] kg, 0 when pinned */
     double *inv_mass;      /* [particle_cap] 1/kg, 0 when pinned */
     double *force;         /* [3 * particle_cap] N, forces that are not local */
-    int force_ready;       /* w->force holds this evaluation's global forces */
-    const double *kick_velocity; /* [3 * particle_count] the velocities that
-                              velocity-dependent forces of the next kicks see;
-                              NULL: the current ones */
+    int force_ready;       /* w->force and w->body_force hold this evaluation's
+                              global forces */
+    const double *kick_seen; /* a state vector whose velocities and momenta
+                              the velocity-dependent forces of the next kicks
+                              see; NULL: the current ones */
     tb__ids particle_ids;
 
     /* springs: endpoints are particle slots, kept right on swap-remove */
@@ -109,6 +130,21 @@ struct tb_world {
     double *spring_c;      /* [spring_cap] N s/m */
     double *spring_rest;   /* [spring_cap] m */
     tb__ids spring_ids;
+
+    /* rigid bodies: constants, held user forces, callback forces */
+    size_t body_count, body_cap;
+    double *body_mass;        /* [body_cap] kg */
+    double *body_inv_mass;    /* [body_cap] 1/kg */
+    double *body_inertia;     /* [3 * body_cap] kg m^2, principal moments */
+    double *body_inv_inertia; /* [3 * body_cap] 1/(kg m^2) */
+    double *body_damping;     /* [2 * body_cap] 1/s: linear, angular */
+    double *body_applied;     /* [6 * body_cap] N, N m: force and torque held
+                                 for the next step (tb_body_apply_*) */
+    double *body_force;       /* [6 * body_cap] N, N m: callback force and
+                                 torque of this evaluation */
+    double *body_motion;      /* [6 * body_cap] m/s, rad/s: v and w shown to
+                                 callbacks */
+    tb__ids body_ids;
 
     /* velocity fields for tracers (tb__field), user forces (tb__force) */
     tb__list fields;
@@ -148,43 +184,65 @@ void tb__list_free(tb_world *w, tb__list *list);
 #define TB__LIST_AT(list, type, i) ((type *)(void *)((list)->items + (i) * (list)->item_size))
 
 /* ---- state.c: the state vector ----------------------------------------- */
-tb_status tb__state_resize(tb_world *w, size_t tracer_cap, size_t particle_cap);
+/* Lay y out for `cap` objects of `tier`, the other tiers keeping theirs. */
+tb_status tb__state_resize(tb_world *w, enum tb__tier tier, size_t cap);
 tb_status tb__state_scratch(tb_world *w, size_t count);
 double *tb__scratch_vector(tb_world *w, size_t k);
 /* out = base + a * dir over the used part of the state. out may be base. */
 void tb__state_axpy(const tb_world *w, double *out, const double *base, double a, const double *dir);
 void tb__state_copy(const tb_world *w, double *out, const double *in);
 
-/* ---- stepping primitives (tracers.c, particles.c) ---------------------- */
+/* ---- stepping primitives (world.c over tracers.c, particles.c, bodies.c) -- */
+/* The methods use only these; each tier supplies its part. */
+
 /* dy = F(t, y), the whole state's derivative. */
 tb_status tb__derive(tb_world *w, double t, const double *y, double *dy);
+/* Put y back on its constraints after a generic stage (unit quaternions). */
+void tb__project(tb_world *w, double *y);
+
+/* Split methods: kicks and drifts. tb__split_prepare evaluates the forces
+   that are not local to one object (springs, callbacks) at the current
+   positions, with velocities and momenta taken from `seen` (a state vector,
+   or NULL for the current state); the kicks of tb__split_sweep add the local
+   forces (gravity, drag, damping, held forces), also seeing `seen`. */
+typedef enum tb__rotation_kind { TB__ROTATE_FROZEN, TB__ROTATE_SPLIT2, TB__ROTATE_ACCURATE } tb__rotation_kind;
+typedef struct tb__split_op {
+    int drift;             /* 0: kick, 1: drift */
+    double h;              /* s */
+    tb__rotation_kind rotation; /* how a drift turns anisotropic bodies */
+} tb__split_op;
+tb_status tb__split_prepare(tb_world *w, double t, const double *seen);
+void tb__split_sweep(tb_world *w, const tb__split_op *ops, int n);
+/* Whether any force depends on velocity (drag, damping, callbacks). */
+int tb__split_velocity_dependent(const tb_world *w);
+/* saved = 2 y - saved on the velocities and momenta: with saved = y_n and
+   the current state after a half kick, this predicts the end-of-step ones. */
+void tb__split_extrapolate(const tb_world *w, double *saved);
+
+/* ---- the tiers' parts ----------------------------------------------------- */
 tb_status tb__tracer_derive(tb_world *w, double t, const double *y, double *dy);
-tb_status tb__particle_derive(tb_world *w, double t, const double *y, double *dy);
-/* The forces that are not local to one particle (springs, callbacks) at the
-   state (pos, vel), into w->force. Sets *any to whether there were any. */
-tb_status tb__particle_global_forces(tb_world *w, double t, const double *pos,
-                                     const double *vel, int *any);
-
-/* Split methods: a list of kicks and drifts swept over the particles in
-   blocks that stay in cache. Kicks use w->force (see tb__particle_prepare)
-   plus the local forces (gravity, drag) at the moment of the kick. */
-typedef struct tb__split_op { int drift; double h; } tb__split_op;
-/* velocity: what damping and drag see, in this evaluation and the kicks
-   after it (3 * particle_count values); NULL: the current velocities. */
-tb_status tb__particle_prepare(tb_world *w, double t, const double *velocity);
-/* Whether any force depends on velocity (drag, spring damping, callbacks). */
-int tb__particle_velocity_dependent(const tb_world *w);
-/* saved = 2 v - saved on the particle velocities: with saved = v_n and the
-   current v = v_n + h/2 a_n, this predicts v_{n+1} = v_n + h a_n. */
-void tb__particle_extrapolate_velocity(const tb_world *w, double *saved);
+void tb__particle_derive(tb_world *w, const double *y, double *dy);
 void tb__particle_sweep(tb_world *w, const tb__split_op *ops, int n);
-
+int tb__particle_velocity_dependent(const tb_world *w);
+void tb__body_derive(tb_world *w, const double *y, double *dy);
+void tb__body_sweep(tb_world *w, const tb__split_op *ops, int n);
+int tb__body_velocity_dependent(const tb_world *w);
+void tb__body_project(tb_world *w, double *y);
+/* v and w of every body of state y into w->body_motion, for callbacks. */
+void tb__body_motion(tb_world *w, const double *y, const double *seen);
+void tb__bodies_free(tb_world *w);
+/* Add the bodies' energies and momenta (about the origin) to the totals. */
+void tb__body_energy(const tb_world *w, tb_energy *e);
+void tb__body_momenta(const tb_world *w, double linear[3], double angular[3]);
+/* Forces not local to one object at positions from y, velocities from seen,
+   into w->force (particles) and w->body_force (bodies). */
+tb_status tb__global_forces(tb_world *w, double t, const double *y, const double *seen);
 /* ---- springs.c, forces.c, fields.c ------------------------------------- */
 void tb__spring_forces(const tb_world *w, const double *pos, const double *vel, double *force);
 void tb__springs_detach(tb_world *w, uint32_t slot);
 void tb__springs_move(tb_world *w, uint32_t from, uint32_t to);
 double tb__spring_energy(const tb_world *w);
-tb_status tb__user_forces(tb_world *w, double t, const double *pos, const double *vel, double *force);
+tb_status tb__user_forces(tb_world *w, double t, const double *y, const double *seen);
 tb_status tb__field_velocities(tb_world *w, double t, size_t n, const double *pos, double *vel);
 void tb__springs_free(tb_world *w);
 

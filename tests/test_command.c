@@ -88,9 +88,11 @@ static double number(const char *field, const char *what)
     return v;
 }
 
-/* Parse a trajectory: header, then rows of 9 fields. Returns the row count
-   and the last row's numbers in last[] (t, id, x, y, z, vx, vy, vz). */
-static long parse_csv(const char *path, const char *kind, double last[8])
+/* Parse a trajectory: header, then rows of 16 fields, the last 7 empty for
+   particles and tracers. Returns the row count and the last row's numbers
+   in last[] (t, id, x, y, z, vx, vy, vz, then qw, qx, qy, qz, wx, wy, wz for
+   bodies). */
+static long parse_csv(const char *path, const char *kind, double last[15])
 {
     FILE *f = fopen(path, "r");
     char line[1024];
@@ -98,15 +100,30 @@ static long parse_csv(const char *path, const char *kind, double last[8])
     double t_prev = -1;
     assert_non_null(f);
     assert_non_null(fgets(line, sizeof line, f));
-    assert_string_equal(line, "t,kind,id,x,y,z,vx,vy,vz\n");
+    assert_string_equal(line, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n");
     while (fgets(line, sizeof line, f)) {
-        char *fields[9], *save = NULL, *p = line;
-        int n = 0, k;
+        char *fields[16], *p = line;
+        int n = 0, k, body;
         line[strcspn(line, "\n")] = 0;
-        while (n < 9 && (fields[n] = strtok_r(p, ",", &save)) != NULL)
-            ++n, p = NULL;
-        if (n != 9 || strtok_r(NULL, ",", &save))
-            fail_msg("row %ld has %d fields, not 9", rows + 1, n);
+        /* split on every comma: empty fields count */
+        fields[n++] = p;
+        while ((p = strchr(p, ',')) != NULL) {
+            *p++ = 0;
+            if (n == 16) {
+                n = 17; /* too many */
+                break;
+            }
+            fields[n++] = p;
+        }
+        if (n != 16)
+            fail_msg("row %ld has %d fields, not 16", rows + 1, n);
+        body = !strcmp(fields[1], "body");
+        for (k = 9; k < 16; ++k)
+            if (!body && fields[k][0])
+                fail_msg("row %ld: field %d should be empty for a %s", rows + 1, k + 1, fields[1]);
+        if (body)
+            for (k = 9; k < 16; ++k)
+                last[k - 1] = number(fields[k], "a body field");
         if (strcmp(fields[1], kind))
             fail_msg("row %ld has kind '%s', expected '%s'", rows + 1, fields[1], kind);
         last[0] = number(fields[0], "t");
@@ -123,7 +140,7 @@ static long parse_csv(const char *path, const char *kind, double last[8])
 }
 
 /* Run a shipped scene and check its CSV: rows = objects x recorded steps. */
-static long run_scene(const char *scene, const char *kind, long objects, long records, double last[8])
+static long run_scene(const char *scene, const char *kind, long objects, long records, double last[15])
 {
     char args[1024], csv[1024];
     long rows;
@@ -146,7 +163,7 @@ static long run_scene(const char *scene, const char *kind, long objects, long re
    here; the bound is 1e-4 m so only a wrong model could fail it). */
 static void projectile_scene(void **state)
 {
-    double last[8], t, k = 0.05, gk = -9.81 / 0.05, x, z;
+    double last[15], t, k = 0.05, gk = -9.81 / 0.05, x, z;
     (void)state;
     run_scene("projectile", "particle", 1, 76, last); /* t = 0, 1/30 ... 2.5 */
     t = last[0];
@@ -159,7 +176,7 @@ static void projectile_scene(void **state)
 
 static void vortex_scene(void **state)
 {
-    double last[8];
+    double last[15];
     (void)state;
     run_scene("vortex", "tracer", 12, 161, last); /* 8 s every 1/20 s */
     /* tracer 12 started at radius 3: RK4 keeps it to 1e-8 over two turns */
@@ -170,23 +187,58 @@ static void vortex_scene(void **state)
 
 static void oscillator_scene(void **state)
 {
-    double last[8];
+    double last[15];
     (void)state;
     run_scene("oscillator", "particle", 1, 501, last);
 }
 
 static void rope_scene(void **state)
 {
-    double last[8];
+    double last[15];
     (void)state;
     run_scene("rope", "particle", 20, 91, last);
 }
 
 static void cloth_scene(void **state)
 {
-    double last[8];
+    double last[15];
     (void)state;
     run_scene("cloth", "particle", 225, 92, last); /* every 33 steps of 1 ms, and the end */
+}
+
+/* Bodies: rows carry orientation and angular velocity. The flip conserves
+   |L| = |I w| (world frame) along the whole run; checked on the last row
+   through w and q: L_b = I R^T w. */
+static void flip_scene(void **state)
+{
+    double last[15];
+    (void)state;
+    run_scene("flip", "body", 1, 601, last); /* 20 s every 1/30 s */
+    assert_rel(hypot(hypot(last[8], last[9]), hypot(last[10], last[11])), 1, 1e-12); /* unit q */
+}
+
+static void top_scene(void **state)
+{
+    double last[15];
+    (void)state;
+    run_scene("top", "body", 1, 601, last);
+}
+
+static void tumbling_box_scene(void **state)
+{
+    double last[15];
+    (void)state;
+    run_scene("tumbling_box", "body", 1, 79, last);
+    /* the centre of mass flies on a parabola: z(1.3) = 1 + 6 t - g t^2 / 2 */
+    assert_rel(last[4], 1 + 6 * 1.3 - 9.81 * 1.3 * 1.3 / 2, 1e-12);
+}
+
+static void push_scene(void **state)
+{
+    double last[15];
+    (void)state;
+    run_scene("push", "body", 1, 181, last);
+    assert_true(last[14] > 0); /* the thruster spun it up about +z */
 }
 
 static void broken_script_names_its_line(void **state)
@@ -262,7 +314,7 @@ static void bad_arguments_are_refused(void **state)
 static void overrides_and_help(void **state)
 {
     char args[2048], csv[1024];
-    double last[8];
+    double last[15];
     (void)state;
     snprintf(args, sizeof args, "run '%s/projectile.lua' --integrator rk4 --dt 0.01 --until 1 --every 0.5 "
              "--out over.csv", SCENES_DIR);
@@ -283,6 +335,10 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(oscillator_scene),
     cmocka_unit_test(rope_scene),
     cmocka_unit_test(cloth_scene),
+    cmocka_unit_test(flip_scene),
+    cmocka_unit_test(top_scene),
+    cmocka_unit_test(tumbling_box_scene),
+    cmocka_unit_test(push_scene),
     cmocka_unit_test(broken_script_names_its_line),
     cmocka_unit_test(failure_mid_run_leaves_no_file),
     cmocka_unit_test(bad_arguments_are_refused),

@@ -1,0 +1,623 @@
+/* bodies.c: rigid bodies. State (x, q, P, L) lives in the world's state
+   vector; mass, principal moments, damping and held forces beside it. This
+   file adds, reads and removes bodies, and supplies the body tier's part of
+   the stepping primitives: derive, kick and drift, projection. */
+#include "world.h"
+#include "rotation.h"
+
+#include <math.h>
+#include <string.h>
+
+/* ---- small quaternion and matrix helpers (q = (w, x, y, z)) -------------- */
+
+/* Rotation matrix (row-major) of a unit quaternion. */
+static void matrix_of(const double q[4], double R[9])
+{
+    const double w = q[0], x = q[1], y = q[2], z = q[3];
+    R[0] = 1 - 2 * (y * y + z * z);
+    R[1] = 2 * (x * y - w * z);
+    R[2] = 2 * (x * z + w * y);
+    R[3] = 2 * (x * y + w * z);
+    R[4] = 1 - 2 * (x * x + z * z);
+    R[5] = 2 * (y * z - w * x);
+    R[6] = 2 * (x * z - w * y);
+    R[7] = 2 * (y * z + w * x);
+    R[8] = 1 - 2 * (x * x + y * y);
+}
+
+static void mul(const double R[9], const double v[3], double out[3])
+{
+    out[0] = R[0] * v[0] + R[1] * v[1] + R[2] * v[2];
+    out[1] = R[3] * v[0] + R[4] * v[1] + R[5] * v[2];
+    out[2] = R[6] * v[0] + R[7] * v[1] + R[8] * v[2];
+}
+
+static void mul_transposed(const double R[9], const double v[3], double out[3])
+{
+    out[0] = R[0] * v[0] + R[3] * v[1] + R[6] * v[2];
+    out[1] = R[1] * v[0] + R[4] * v[1] + R[7] * v[2];
+    out[2] = R[2] * v[0] + R[5] * v[1] + R[8] * v[2];
+}
+
+static void quat_mul(const double a[4], const double b[4], double out[4])
+{
+    double r[4];
+    r[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+    r[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+    r[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+    r[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+    memcpy(out, r, sizeof r);
+}
+
+static void normalise(double q[4])
+{
+    const double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    q[0] /= n, q[1] /= n, q[2] /= n, q[3] /= n;
+}
+
+/* w = R diag(scale) R^T v: with scale = 1/I it turns L into w, with I the
+   other way. `q` need not be exactly unit (RK stages): it is normalised. */
+static void through_inertia(const double q[4], const double scale[3], const double v[3], double out[3])
+{
+    double u[4], R[9], b[3];
+    memcpy(u, q, sizeof u);
+    normalise(u);
+    matrix_of(u, R);
+    mul_transposed(R, v, b);
+    b[0] *= scale[0], b[1] *= scale[1], b[2] *= scale[2];
+    mul(R, b, out);
+}
+
+static void cross(const double a[3], const double b[3], double out[3])
+{
+    double r[3];
+    r[0] = a[1] * b[2] - a[2] * b[1];
+    r[1] = a[2] * b[0] - a[0] * b[2];
+    r[2] = a[0] * b[1] - a[1] * b[0];
+    memcpy(out, r, sizeof r);
+}
+
+static int isotropic(const double inv_inertia[3])
+{
+    return inv_inertia[0] == inv_inertia[1] && inv_inertia[1] == inv_inertia[2];
+}
+
+/* ---- definitions and validation ------------------------------------------ */
+
+tb_body_def tb_default_body_def(void)
+{
+    tb_body_def def;
+    memset(&def, 0, sizeof def);
+    def.orientation[0] = 1;
+    def.mass.mass = 1;
+    def.mass.inertia[0] = def.mass.inertia[1] = def.mass.inertia[2] = 0.1; /* 2/5 m r^2, r = 0.5 m */
+    def.mass.frame[0] = 1;
+    return def;
+}
+
+static int finite_n(const double *v, int n)
+{
+    int i;
+    for (i = 0; i < n; ++i)
+        if (!isfinite(v[i]))
+            return 0;
+    return 1;
+}
+
+/* A quaternion that is unit within 1e-6 (users type them by hand). */
+static tb_status check_unit(tb_world *w, const double q[4], const char *what)
+{
+    double n;
+    if (!finite_n(q, 4))
+        return tb__fail(w, TB_ERR_ARGUMENT, "%s must be finite", what);
+    n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(fabs(n - 1) <= 1e-6))
+        return tb__fail(w, TB_ERR_ARGUMENT, "%s must be a unit quaternion (w, x, y, z); its norm is %g", what, n);
+    return TB_OK;
+}
+
+static tb_status check_mass(tb_world *w, const tb_mass *m)
+{
+    const double *I = m->inertia;
+    tb_status st;
+    if (!(isfinite(m->mass) && m->mass > 0))
+        return tb__fail(w, TB_ERR_ARGUMENT, "body mass must be finite and > 0 (got %g)", m->mass);
+    if (!finite_n(I, 3) || !(I[0] > 0 && I[1] > 0 && I[2] > 0))
+        return tb__fail(w, TB_ERR_ARGUMENT, "body moments of inertia must be finite and > 0 (got %g, %g, %g)",
+                        I[0], I[1], I[2]);
+    /* A real mass distribution has I1 + I2 >= I3 for every order (equality
+       for a flat plate); allow rounding. */
+    if (I[0] + I[1] < I[2] * (1 - 1e-12) || I[1] + I[2] < I[0] * (1 - 1e-12) || I[0] + I[2] < I[1] * (1 - 1e-12))
+        return tb__fail(w, TB_ERR_ARGUMENT,
+                        "body moments of inertia %g, %g, %g break the triangle inequality: no body has them",
+                        I[0], I[1], I[2]);
+    if (!tb__finite3(m->centre))
+        return tb__fail(w, TB_ERR_ARGUMENT, "body centre of mass must be finite");
+    if ((st = check_unit(w, m->frame, "body mass frame")) != TB_OK)
+        return st;
+    return TB_OK;
+}
+
+static tb_status check_def(tb_world *w, const tb_body_def *def)
+{
+    tb_status st;
+    if (!def)
+        return tb__fail(w, TB_ERR_ARGUMENT, "body definition must not be NULL");
+    if (!tb__finite3(def->position) || !tb__finite3(def->velocity) || !tb__finite3(def->angular_velocity))
+        return tb__fail(w, TB_ERR_ARGUMENT, "body position, velocity and angular velocity must be finite");
+    if ((st = check_unit(w, def->orientation, "body orientation")) != TB_OK)
+        return st;
+    if ((st = check_mass(w, &def->mass)) != TB_OK)
+        return st;
+    if (!(isfinite(def->linear_damping) && def->linear_damping >= 0) ||
+        !(isfinite(def->angular_damping) && def->angular_damping >= 0))
+        return tb__fail(w, TB_ERR_ARGUMENT, "body damping must be finite and >= 0");
+    return TB_OK;
+}
+
+/* ---- adding and removing ----------------------------------------------------- */
+
+#define BODY_ARRAYS 8
+static void arrays_of(tb_world *w, void **arrays[BODY_ARRAYS], size_t sizes[BODY_ARRAYS])
+{
+    arrays[0] = (void **)&w->body_mass;        sizes[0] = sizeof(double);
+    arrays[1] = (void **)&w->body_inv_mass;    sizes[1] = sizeof(double);
+    arrays[2] = (void **)&w->body_inertia;     sizes[2] = 3 * sizeof(double);
+    arrays[3] = (void **)&w->body_inv_inertia; sizes[3] = 3 * sizeof(double);
+    arrays[4] = (void **)&w->body_damping;     sizes[4] = 2 * sizeof(double);
+    arrays[5] = (void **)&w->body_applied;     sizes[5] = 6 * sizeof(double);
+    arrays[6] = (void **)&w->body_force;       sizes[6] = 6 * sizeof(double);
+    arrays[7] = (void **)&w->body_motion;      sizes[7] = 6 * sizeof(double);
+}
+
+static tb_status grow(tb_world *w)
+{
+    size_t cap = w->body_cap ? 2 * w->body_cap : 8;
+    void **arrays[BODY_ARRAYS];
+    size_t sizes[BODY_ARRAYS];
+    tb_status st;
+    arrays_of(w, arrays, sizes);
+    if ((st = tb__ids_reserve(w, &w->body_ids, cap)) != TB_OK)
+        return st;
+    if ((st = tb__state_resize(w, TB__BODIES, cap)) != TB_OK)
+        return st;
+    if ((st = tb__grow(w, arrays, sizes, BODY_ARRAYS, w->body_count, w->body_cap, cap)) != TB_OK)
+        return st;
+    w->body_cap = cap;
+    return TB_OK;
+}
+
+void tb__bodies_free(tb_world *w)
+{
+    void **arrays[BODY_ARRAYS];
+    size_t sizes[BODY_ARRAYS];
+    arrays_of(w, arrays, sizes);
+    tb__free_arrays(w, arrays, sizes, BODY_ARRAYS, w->body_cap);
+    tb__ids_free(w, &w->body_ids);
+    w->body_count = w->body_cap = 0;
+}
+
+static double *at(const tb_world *w, enum tb__quantity q, size_t width, uint32_t slot)
+{
+    return w->y + w->off[q] + width * slot;
+}
+
+tb_status tb_world_add_body(tb_world *w, const tb_body_def *def, tb_body_id *id)
+{
+    tb_status st;
+    uint32_t s;
+    tb_body_id made;
+    double R[9], c[3], *q;
+    int k;
+    if ((st = tb__check_busy(w, "add a body")) != TB_OK)
+        return st;
+    if ((st = check_def(w, def)) != TB_OK)
+        return st;
+    if (w->body_count == w->body_cap && (st = grow(w)) != TB_OK)
+        return st;
+    s = (uint32_t)w->body_count++;
+    q = at(w, TB__BODY_ROT, 4, s);
+    /* the centre of mass and the principal axes, placed by the shape pose */
+    memcpy(q, def->orientation, 4 * sizeof(double));
+    normalise(q);
+    matrix_of(q, R);
+    mul(R, def->mass.centre, c);
+    for (k = 0; k < 3; ++k)
+        at(w, TB__BODY_POS, 3, s)[k] = def->position[k] + c[k];
+    {
+        double frame[4];
+        memcpy(frame, def->mass.frame, sizeof frame);
+        normalise(frame);
+        quat_mul(q, frame, q);
+        normalise(q);
+    }
+    w->body_mass[s] = def->mass.mass;
+    w->body_inv_mass[s] = 1 / def->mass.mass;
+    for (k = 0; k < 3; ++k) {
+        w->body_inertia[3 * s + k] = def->mass.inertia[k];
+        w->body_inv_inertia[3 * s + k] = 1 / def->mass.inertia[k];
+        at(w, TB__BODY_MOM, 3, s)[k] = def->mass.mass * def->velocity[k];
+    }
+    through_inertia(q, w->body_inertia + 3 * s, def->angular_velocity, at(w, TB__BODY_ANG, 3, s));
+    w->body_damping[2 * s] = def->linear_damping;
+    w->body_damping[2 * s + 1] = def->angular_damping;
+    memset(w->body_applied + 6 * s, 0, 6 * sizeof(double));
+    tb__ids_acquire(&w->body_ids, s, &made.index1, &made.generation);
+    if (id)
+        *id = made;
+    return TB_OK;
+}
+
+static tb_status find(const tb_world *w, tb_body_id id, uint32_t *slot)
+{
+    if (!tb__ids_lookup(&w->body_ids, id.index1, id.generation, slot))
+        return tb__fail((tb_world *)w, TB_ERR_STALE_ID, "body id %u.%u is null, removed or from another world",
+                        id.index1, id.generation);
+    return TB_OK;
+}
+
+tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
+{
+    static const struct { enum tb__quantity q; size_t width; } state[] = {
+        { TB__BODY_POS, 3 }, { TB__BODY_ROT, 4 }, { TB__BODY_MOM, 3 }, { TB__BODY_ANG, 3 }
+    };
+    void **arrays[BODY_ARRAYS];
+    size_t sizes[BODY_ARRAYS], k;
+    uint32_t s, last;
+    tb_status st;
+    if ((st = tb__check_busy(w, "remove a body")) != TB_OK)
+        return st;
+    if ((st = find(w, id, &s)) != TB_OK)
+        return st;
+    last = (uint32_t)w->body_count - 1;
+    if (s != last) {
+        arrays_of(w, arrays, sizes);
+        for (k = 0; k < BODY_ARRAYS; ++k) {
+            unsigned char *base = *arrays[k];
+            memcpy(base + s * sizes[k], base + last * sizes[k], sizes[k]);
+        }
+        for (k = 0; k < sizeof state / sizeof state[0]; ++k)
+            memcpy(at(w, state[k].q, state[k].width, s), at(w, state[k].q, state[k].width, last),
+                   state[k].width * sizeof(double));
+        tb__ids_move(&w->body_ids, last, s);
+    }
+    tb__ids_release(&w->body_ids, id.index1);
+    w->body_count--;
+    return TB_OK;
+}
+
+/* ---- reading and writing ------------------------------------------------------ */
+
+tb_status tb_body_position(const tb_world *w, tb_body_id id, double position[3])
+{
+    uint32_t s;
+    tb_status st = find(w, id, &s);
+    if (st == TB_OK)
+        memcpy(position, at(w, TB__BODY_POS, 3, s), 3 * sizeof(double));
+    return st;
+}
+
+tb_status tb_body_orientation(const tb_world *w, tb_body_id id, double orientation[4])
+{
+    uint32_t s;
+    tb_status st = find(w, id, &s);
+    if (st == TB_OK)
+        memcpy(orientation, at(w, TB__BODY_ROT, 4, s), 4 * sizeof(double));
+    return st;
+}
+
+tb_status tb_body_velocity(const tb_world *w, tb_body_id id, double velocity[3])
+{
+    uint32_t s;
+    tb_status st = find(w, id, &s);
+    int k;
+    if (st == TB_OK)
+        for (k = 0; k < 3; ++k)
+            velocity[k] = at(w, TB__BODY_MOM, 3, s)[k] * w->body_inv_mass[s];
+    return st;
+}
+
+tb_status tb_body_angular_velocity(const tb_world *w, tb_body_id id, double angular_velocity[3])
+{
+    uint32_t s;
+    tb_status st = find(w, id, &s);
+    if (st == TB_OK)
+        through_inertia(at(w, TB__BODY_ROT, 4, s), w->body_inv_inertia + 3 * s, at(w, TB__BODY_ANG, 3, s),
+                        angular_velocity);
+    return st;
+}
+
+tb_status tb_body_momentum(const tb_world *w, tb_body_id id, double linear[3], double angular[3])
+{
+    uint32_t s;
+    tb_status st = find(w, id, &s);
+    if (st == TB_OK && linear)
+        memcpy(linear, at(w, TB__BODY_MOM, 3, s), 3 * sizeof(double));
+    if (st == TB_OK && angular)
+        memcpy(angular, at(w, TB__BODY_ANG, 3, s), 3 * sizeof(double));
+    return st;
+}
+
+tb_status tb_body_mass(const tb_world *w, tb_body_id id, double *mass, double inertia[3])
+{
+    uint32_t s;
+    tb_status st = find(w, id, &s);
+    if (st == TB_OK && mass)
+        *mass = w->body_mass[s];
+    if (st == TB_OK && inertia)
+        memcpy(inertia, w->body_inertia + 3 * s, 3 * sizeof(double));
+    return st;
+}
+
+/* Setters share their checks: the world is not stepping, the id is live and
+   the vector finite. */
+static tb_status writable(tb_world *w, tb_body_id id, const double *v, int n, const char *what, uint32_t *s)
+{
+    tb_status st = tb__check_busy(w, "set a body's state");
+    if (st == TB_OK)
+        st = find(w, id, s);
+    if (st == TB_OK && (!v || !finite_n(v, n)))
+        st = tb__fail(w, TB_ERR_ARGUMENT, "body %s must be finite", what);
+    return st;
+}
+
+tb_status tb_body_set_position(tb_world *w, tb_body_id id, const double position[3])
+{
+    uint32_t s;
+    tb_status st = writable(w, id, position, 3, "position", &s);
+    if (st == TB_OK)
+        memcpy(at(w, TB__BODY_POS, 3, s), position, 3 * sizeof(double));
+    return st;
+}
+
+/* Keeps the angular velocity: L is recomputed for the new orientation. */
+tb_status tb_body_set_orientation(tb_world *w, tb_body_id id, const double orientation[4])
+{
+    uint32_t s;
+    double omega[3], *q;
+    tb_status st = writable(w, id, orientation, 4, "orientation", &s);
+    if (st == TB_OK)
+        st = check_unit(w, orientation, "body orientation");
+    if (st != TB_OK)
+        return st;
+    q = at(w, TB__BODY_ROT, 4, s);
+    through_inertia(q, w->body_inv_inertia + 3 * s, at(w, TB__BODY_ANG, 3, s), omega);
+    memcpy(q, orientation, 4 * sizeof(double));
+    normalise(q);
+    through_inertia(q, w->body_inertia + 3 * s, omega, at(w, TB__BODY_ANG, 3, s));
+    return TB_OK;
+}
+
+tb_status tb_body_set_velocity(tb_world *w, tb_body_id id, const double velocity[3])
+{
+    uint32_t s;
+    int k;
+    tb_status st = writable(w, id, velocity, 3, "velocity", &s);
+    if (st == TB_OK)
+        for (k = 0; k < 3; ++k)
+            at(w, TB__BODY_MOM, 3, s)[k] = w->body_mass[s] * velocity[k];
+    return st;
+}
+
+tb_status tb_body_set_angular_velocity(tb_world *w, tb_body_id id, const double angular_velocity[3])
+{
+    uint32_t s;
+    tb_status st = writable(w, id, angular_velocity, 3, "angular velocity", &s);
+    if (st == TB_OK)
+        through_inertia(at(w, TB__BODY_ROT, 4, s), w->body_inertia + 3 * s, angular_velocity,
+                        at(w, TB__BODY_ANG, 3, s));
+    return st;
+}
+
+static tb_status hold(tb_world *w, tb_body_id id, const double force[3], const double point[3], int body_frame)
+{
+    uint32_t s;
+    double p[3], r[3], tau[3], *held;
+    int k;
+    tb_status st = writable(w, id, force, 3, "force", &s);
+    if (st == TB_OK && (!point || !tb__finite3(point)))
+        st = tb__fail(w, TB_ERR_ARGUMENT, "the point of a force must be finite");
+    if (st != TB_OK)
+        return st;
+    if (body_frame) {
+        double R[9];
+        matrix_of(at(w, TB__BODY_ROT, 4, s), R);
+        mul(R, point, r);
+    } else {
+        for (k = 0; k < 3; ++k)
+            p[k] = point[k], r[k] = p[k] - at(w, TB__BODY_POS, 3, s)[k];
+    }
+    cross(r, force, tau);
+    held = w->body_applied + 6 * s;
+    for (k = 0; k < 3; ++k) {
+        held[k] += force[k];
+        held[3 + k] += tau[k];
+    }
+    return TB_OK;
+}
+
+tb_status tb_body_apply_force(tb_world *w, tb_body_id id, const double force[3], const double point[3])
+{
+    return hold(w, id, force, point, 0);
+}
+
+tb_status tb_body_apply_force_at_body_point(tb_world *w, tb_body_id id, const double force[3],
+                                            const double body_point[3])
+{
+    return hold(w, id, force, body_point, 1);
+}
+
+tb_status tb_body_apply_torque(tb_world *w, tb_body_id id, const double torque[3])
+{
+    uint32_t s;
+    int k;
+    tb_status st = writable(w, id, torque, 3, "torque", &s);
+    if (st == TB_OK)
+        for (k = 0; k < 3; ++k)
+            w->body_applied[6 * s + 3 + k] += torque[k];
+    return st;
+}
+
+size_t tb_world_body_count(const tb_world *w)
+{
+    return w->body_count;
+}
+
+const double *tb_world_body_positions(const tb_world *w)
+{
+    return w->y ? w->y + w->off[TB__BODY_POS] : NULL;
+}
+
+const double *tb_world_body_orientations(const tb_world *w)
+{
+    return w->y ? w->y + w->off[TB__BODY_ROT] : NULL;
+}
+
+tb_body_id tb_world_body_at(const tb_world *w, size_t slot)
+{
+    tb_body_id id = { 0, 0 };
+    if (slot < w->body_count)
+        tb__ids_at(&w->body_ids, (uint32_t)slot, &id.index1, &id.generation);
+    return id;
+}
+
+/* ---- stepping ---------------------------------------------------------------- */
+
+/* dP/dt and dL/dt of body s: gravity, damping (seeing P and L), the forces
+   held by the user and the callbacks' forces of this evaluation. */
+static void rates(const tb_world *w, uint32_t s, const double *P, const double *L, double dP[3], double dL[3])
+{
+    const double m = w->body_mass[s], cl = w->body_damping[2 * s], ca = w->body_damping[2 * s + 1];
+    const double *held = w->body_applied + 6 * s;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        dP[k] = m * w->gravity[k] - cl * P[k] + held[k];
+        dL[k] = held[3 + k] - ca * L[k];
+        if (w->force_ready) {
+            dP[k] += w->body_force[3 * s + k];
+            dL[k] += w->body_force[3 * w->body_count + 3 * s + k];
+        }
+    }
+}
+
+void tb__body_derive(tb_world *w, const double *y, double *dy)
+{
+    const double *x = y + w->off[TB__BODY_POS], *q = y + w->off[TB__BODY_ROT];
+    const double *P = y + w->off[TB__BODY_MOM], *L = y + w->off[TB__BODY_ANG];
+    uint32_t s;
+    (void)x;
+    for (s = 0; s < w->body_count; ++s) {
+        const double *qs = q + 4 * s;
+        double omega[3], *dq = dy + w->off[TB__BODY_ROT] + 4 * s;
+        int k;
+        for (k = 0; k < 3; ++k)
+            dy[w->off[TB__BODY_POS] + 3 * s + k] = P[3 * s + k] * w->body_inv_mass[s];
+        through_inertia(qs, w->body_inv_inertia + 3 * s, L + 3 * s, omega);
+        /* dq/dt = (0, w) q / 2 with w in the world frame */
+        dq[0] = -0.5 * (omega[0] * qs[1] + omega[1] * qs[2] + omega[2] * qs[3]);
+        dq[1] = 0.5 * (omega[0] * qs[0] + omega[1] * qs[3] - omega[2] * qs[2]);
+        dq[2] = 0.5 * (-omega[0] * qs[3] + omega[1] * qs[0] + omega[2] * qs[1]);
+        dq[3] = 0.5 * (omega[0] * qs[2] - omega[1] * qs[1] + omega[2] * qs[0]);
+        rates(w, s, P + 3 * s, L + 3 * s, dy + w->off[TB__BODY_MOM] + 3 * s, dy + w->off[TB__BODY_ANG] + 3 * s);
+    }
+}
+
+void tb__body_sweep(tb_world *w, const tb__split_op *ops, int n)
+{
+    double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
+    double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
+    const double *Pseen = w->kick_seen ? w->kick_seen + w->off[TB__BODY_MOM] : P;
+    const double *Lseen = w->kick_seen ? w->kick_seen + w->off[TB__BODY_ANG] : L;
+    uint32_t s;
+    int i, k;
+    for (s = 0; s < w->body_count; ++s) {
+        const double *inv_inertia = w->body_inv_inertia + 3 * s;
+        for (i = 0; i < n; ++i) {
+            const double h = ops[i].h;
+            if (!ops[i].drift) {
+                double dP[3], dL[3];
+                rates(w, s, Pseen + 3 * s, Lseen + 3 * s, dP, dL);
+                for (k = 0; k < 3; ++k) {
+                    P[3 * s + k] += h * dP[k];
+                    L[3 * s + k] += h * dL[k];
+                }
+                continue;
+            }
+            for (k = 0; k < 3; ++k)
+                x[3 * s + k] += h * P[3 * s + k] * w->body_inv_mass[s];
+            /* an isotropic body turns about a fixed axis: the frozen
+               exponential is exact for it, and the cheapest */
+            if (ops[i].rotation == TB__ROTATE_FROZEN || isotropic(inv_inertia))
+                tb__rotation_frozen(q + 4 * s, L + 3 * s, inv_inertia, h);
+            else if (ops[i].rotation == TB__ROTATE_SPLIT2)
+                tb__rotation_split2(q + 4 * s, L + 3 * s, inv_inertia, h);
+            else
+                tb__rotation_accurate(q + 4 * s, L + 3 * s, inv_inertia, h);
+        }
+    }
+}
+
+int tb__body_velocity_dependent(const tb_world *w)
+{
+    size_t s;
+    for (s = 0; s < 2 * w->body_count; ++s)
+        if (w->body_damping[s] != 0)
+            return 1;
+    return 0;
+}
+
+void tb__body_project(tb_world *w, double *y)
+{
+    double *q = y + w->off[TB__BODY_ROT];
+    size_t s;
+    for (s = 0; s < w->body_count; ++s)
+        normalise(q + 4 * s);
+}
+
+void tb__body_motion(tb_world *w, const double *y, const double *seen)
+{
+    const double *q = y + w->off[TB__BODY_ROT];
+    const double *P = seen + w->off[TB__BODY_MOM], *L = seen + w->off[TB__BODY_ANG];
+    double *v = w->body_motion, *omega = w->body_motion + 3 * w->body_count;
+    size_t s;
+    int k;
+    for (s = 0; s < w->body_count; ++s) {
+        for (k = 0; k < 3; ++k)
+            v[3 * s + k] = P[3 * s + k] * w->body_inv_mass[s];
+        through_inertia(q + 4 * s, w->body_inv_inertia + 3 * s, L + 3 * s, omega + 3 * s);
+    }
+}
+
+/* ---- diagnostics ----------------------------------------------------------------- */
+
+void tb__body_energy(const tb_world *w, tb_energy *e)
+{
+    const double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
+    const double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
+    const double *g = w->gravity;
+    size_t s;
+    for (s = 0; s < w->body_count; ++s) {
+        const double *p = P + 3 * s, *l = L + 3 * s;
+        double omega[3];
+        through_inertia(q + 4 * s, w->body_inv_inertia + 3 * s, l, omega);
+        e->kinetic += 0.5 * (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) * w->body_inv_mass[s];
+        e->rotational += 0.5 * (l[0] * omega[0] + l[1] * omega[1] + l[2] * omega[2]);
+        e->gravity -= w->body_mass[s] * (g[0] * x[3 * s] + g[1] * x[3 * s + 1] + g[2] * x[3 * s + 2]);
+    }
+}
+
+void tb__body_momenta(const tb_world *w, double linear[3], double angular[3])
+{
+    const double *x = w->y + w->off[TB__BODY_POS];
+    const double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
+    size_t s;
+    int k;
+    for (s = 0; s < w->body_count; ++s) {
+        double xp[3];
+        cross(x + 3 * s, P + 3 * s, xp);
+        for (k = 0; k < 3; ++k) {
+            linear[k] += P[3 * s + k];
+            angular[k] += xp[k] + L[3 * s + k];
+        }
+    }
+}
