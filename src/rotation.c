@@ -4,38 +4,57 @@
        T = a |L|^2 / 2 + c_A L_A^2 / 2 + c_B L_B^2 / 2,   c_i = invI_i - a,
    with a the inverse of the middle principal moment, so the middle axis has
    no term of its own. Each piece has an exact flow:
-   - a |L|^2 / 2 rotates the body about the fixed world vector L at the rate
+   - a |L|^2 / 2 turns the body about the fixed world vector L at the rate
      a |L|; it commutes with everything (it leaves L_b alone), so one such
-     rotation by a h |L| serves the whole step whatever the composition;
-   - c_i L_i^2 / 2 rotates the body about its principal axis i at the rate
-     c_i L_b,i, which that rotation does not change.
-   A symmetric composition of the two axis flows is then a Poisson map with
-   bounded energy error, and it is exact whenever one of c_A, c_B vanishes:
-   for every symmetric top and every isotropic body. Fasso (2003) found this
-   splitting more accurate than the three-axis splitting R1 R2 R3 R2 R1;
-   here, on the flip of NOTES.md at h = 1/60, it is 4 times closer to the
-   exact orientation than the best three-axis order at 3 axis rotations a
-   step instead of 5. Measured on that flip (error after 20 s vs the number
-   of axis rotations per step, all with the same exact pieces):
-       Strang A(h/2) B(h) A(h/2)            order 2,  3 rotations, 1.7e-4 rad
-       Yoshida triple jump                  order 4,  7 rotations, 4.1e-7 rad
-       Suzuki 5-stage                       order 4, 11 rotations, 5.9e-9 rad
-       Blanes-Moan S6                       order 4, 13 rotations, 7.5e-10 rad
-       Yoshida 6th order (7 stages)         order 6, 15 rotations, 2.0e-10 rad
-       Kahan-Li 6th order (9 stages)        order 6, 19 rotations, 2.5e-11 rad
-   Which of the two outer axes is A (the one evaluated more often) matters
-   less, but putting the larger |c| on A was better on every body tried (by
-   about 2 times for the 4th-order methods).
+     turn by a h |L| serves the whole step whatever the composition;
+   - c_i L_i^2 / 2 turns the body about its principal axis i at the rate
+     c_i L_b,i, which that turn does not change.
+   A symmetric composition of the two axis flows is a Poisson map (bounded
+   energy error, no drift), time-reversible, keeps |L_b| to rounding, and is
+   exact whenever c_A or c_B vanishes: for every symmetric top and isotropic
+   body. Fasso (2003) found this splitting more accurate than splitting into
+   three axis rotations; on the flip of NOTES.md at h = 1/60 its Strang step
+   is 4 times closer to the exact orientation than the best order of
+   R1 R2 R3 R2 R1 (1.7e-4 against 6.7e-4 rad), with 3 axis turns a step
+   instead of 5. The outer axis with the larger |c| is A, the one turned
+   more often: better than the other way round on every body tried (about 2
+   times for the 4th-order compositions).
+
+   Choosing the accurate method: measured on the flip (h = 1/60, 20 s;
+   orientation error after 20 s, worst relative energy error over the run,
+   ns per step over 1024 bodies on this project's 2-core x86-64, gcc -O2,
+   +-15% run to run), all built from the same exact pieces:
+       composition                      order turns  orientation  energy   ns
+       Strang A(h/2) B(h) A(h/2)          2     3     1.7e-4     6.0e-5    55
+       Strang, two half steps             2     5     4.2e-5     1.5e-5    85
+       Yoshida triple jump                4     7     4.1e-7     3.1e-8   120
+       Yoshida + energy projection        4     7     4.9e-7     1e-14    140
+       Omelyan PEFRL                      4     9     9.3e-9     5.6e-9   150
+       Omelyan PEFRL + energy projection  4     9     1.1e-8     1e-14    200
+       Suzuki 5-stage                     4    11     5.9e-9     7.1e-9   215
+       Blanes-Moan S6 (chosen)            4    13     7.5e-10    1.1e-10  210
+       Yoshida 6th order                  6    15     2.0e-10    7.4e-12   -
+       Kahan-Li 6th order                 6    19     2.5e-11    8.5e-13   -
+   and, not splittings: RK4 on (L_b, q) from each step's L_b = R^T L,
+   1.0e-4 rad at 80 ns; Magnus 4th order with a Taylor L_b and energy
+   projection, 2e-8 rad on the flip but up to 1.5e-4 rad on other bodies
+   and 5e-6 on near-symmetric ones, where the splittings are nearly exact.
+   The cost is the chain of turns: each needs the momentum the previous one
+   left, about 16 ns a turn here, so no composition reaching 1e-6 rad fits
+   in 50 ns. Yoshida + projection meets the flip's targets (1e-6 rad, energy
+   1e-9) at 2/3 of S6's cost but with a margin of 2 and errors up to 1.4e-4
+   rad on other bodies; S6 meets them with margins of 1300 and 9, stays
+   within 2.7e-7 rad on every other body tried (12 random bodies at up to 9
+   rad/s), and unlike a projected method it stays symplectic and
+   time-reversible.
 
    The kernels relabel the body axes so that A, the middle axis and B become
    axes 0, 1, 2 (a permutation P of the body and world axes alike: the
-   relabelled body still obeys the same equations, with q's vector part, L
-   and L_b multiplied by det P when P is odd), so one straight-line body of
-   code serves every order of moments.
-
-   Rotations are computed in the body frame from the body-frame momentum and
-   composed on the right of q (q <- q r); a rotation about a world vector v
-   is the same as one about the body vector R^T v. */
+   relabelled body obeys the same equations, with q's vector part, L and L_b
+   multiplied by det P when P is odd), so one straight-line body of code
+   serves every order of moments. Turns are computed in the body frame from
+   L_b and composed on the right of q (q <- q r); the turn about the world L
+   is composed on the left. */
 #include "rotation.h"
 
 #include <math.h>
@@ -209,9 +228,10 @@ static inline void tb__turn_b(tb__spin *p, double x)
 #define TB__B(p, g, kb) tb__turn_b(p, ((g) * (kb)) * (p)->l2)
 
 /* Any composition A(ga[0]) B(gb[0]) A(ga[1]) ... B(gb[n-2]) A(ga[n-1]) with
-   libm's sin and cos, for turns too large for the polynomials. Slow, and
-   only taken by steps that turn the body by more than about 1/4 rad about an
-   axis in one go (beyond |c| |L| h = 0.5 rad for split2). */
+   libm's sin and cos, for turns too large for the polynomials: taken when
+   max |c| |L| h exceeds 0.25 rad (split2) or 0.57 rad (accurate), that is
+   beyond about 15 or 34 rad/s of relative spin at h = 1/60. Slower (two
+   libm calls a turn), otherwise the same. */
 static void tb__compose_big(tb__spin *p, const double *ga, const double *gb, int n,
                             double ka, double kb)
 {

@@ -285,17 +285,17 @@ static void isotropic_bodies_rotate_exactly(void **state)
    body frame w precesses about e_s at Omega = (I_s - I1)/I1 * w_s. Both
    splitting kernels split T into exactly these two turns, so they follow it
    to rounding whatever the step: small steps and steps beyond the
-   polynomials (0.3 s here turns by more than 1/2 rad per piece). The
-   symmetry axis takes each place in turn, with the two equal moments
-   smaller than the third, to exercise the relabelling's ties. */
-static void check_top(kernel_fn *step, const char *name, int sym, double h, long n)
+   polynomials (at 0.3 s the steps take libm's path). The symmetry axis
+   takes each place in turn, with the third moment larger and smaller than
+   the two equal ones, to exercise the relabelling's ties. */
+static void check_top(kernel_fn *step, const char *name, int sym, double Is, double h, long n)
 {
     double I[3] = { 2, 2, 2 }, w0[3] = { 1.2, -0.7, 0.9 }, q0[4] = { 0.3, 0.8, -0.1, 0.4 };
     double invI[3], L[3], q[4], exact[4], turn[4], axis[3], es[3] = { 0, 0, 0 }, lb[3], w[3];
     const double t = h * n;
     double omega, phase, err_w, err_q, wp0, wq0;
     int o1 = (sym + 1) % 3, o2 = (sym + 2) % 3;
-    I[sym] = 3.5;
+    I[sym] = Is;
     w0[sym] = 4;
     normalize(q0);
     body(I, w0, q0, invI, L);
@@ -323,22 +323,24 @@ static void check_top(kernel_fn *step, const char *name, int sym, double h, long
     wq0 = w0[o1] * sin(phase) + w0[o2] * cos(phase);
     err_w = sqrt((w[o1] - wp0) * (w[o1] - wp0) + (w[o2] - wq0) * (w[o2] - wq0) + (w[sym] - w0[sym]) * (w[sym] - w0[sym]))
             / norm3(w0);
-    print_message("%-8s axis %d h = %.3f: precession %.1f rad, w off by %.2e, q off by %.2e rad\n", name, sym, h,
-                  phase, err_w, err_q);
+    print_message("%-8s I_%d = %.1f h = %.3f: precession %5.1f rad, w off by %.2e, q off by %.2e rad\n", name, sym,
+                  Is, h, phase, err_w, err_q);
     assert_below(err_w, 1e-12);
     assert_below(err_q, 1e-12);
 }
 
 static void symmetric_top_precesses(void **state)
 {
-    int sym;
+    static const double third[2] = { 3.5, 1.0 };
+    int sym, k;
     (void)state;
-    for (sym = 0; sym < 3; ++sym) {
-        check_top(tb__rotation_split2, "split2", sym, 1.0 / 60, 600);
-        check_top(tb__rotation_accurate, "accurate", sym, 1.0 / 60, 600);
-        check_top(tb__rotation_split2, "split2", sym, 0.3, 40);
-        check_top(tb__rotation_accurate, "accurate", sym, 0.3, 40);
-    }
+    for (sym = 0; sym < 3; ++sym)
+        for (k = 0; k < 2; ++k) {
+            check_top(tb__rotation_split2, "split2", sym, third[k], 1.0 / 60, 600);
+            check_top(tb__rotation_accurate, "accurate", sym, third[k], 1.0 / 60, 600);
+            check_top(tb__rotation_split2, "split2", sym, third[k], 0.3, 40);
+            check_top(tb__rotation_accurate, "accurate", sym, third[k], 0.3, 40);
+        }
 }
 
 /* ------------------------------------------------------------- orders -- */
@@ -347,7 +349,9 @@ static void symmetric_top_precesses(void **state)
    at 2^16 steps (0.5 ms; it agrees with 2^17 steps to 7e-14 rad). Each pair
    of step counts sits in its method's asymptotic range with the error far
    above rounding (measured: frozen 1.8e-2 -> 9.2e-3, split2 1.9e-5 ->
-   4.8e-6, accurate 9.0e-10 -> 5.6e-11). */
+   4.8e-6, accurate 9.0e-10 -> 5.6e-11). split2 at 4 -> 8 steps (h = 0.5 and
+   0.25 s, turns beyond the polynomials, so libm's path) must show order 2
+   as well (measured 4.9e-3 -> 1.2e-3). */
 static void check_order(kernel_fn *step, const char *name, long n, double expected)
 {
     const double T = 2, invI[3] = { 1, 0.5, 1.0 / 3 }, lb0[3] = { 2, 3, -1.5 };
@@ -370,6 +374,7 @@ static void orders_are_as_claimed(void **state)
     (void)state;
     check_order(tb__rotation_frozen, "frozen", 512, 1);
     check_order(tb__rotation_split2, "split2", 64, 2);
+    check_order(tb__rotation_split2, "split2", 4, 2);
     check_order(tb__rotation_accurate, "accurate", 32, 4);
 }
 
@@ -553,6 +558,42 @@ static void splitting_is_time_reversible(void **state)
     }
 }
 
+/* Steps too large for the polynomials (the libm path: h = 0.5 s turns the
+   body by about 1 rad about an axis per piece) are still exact rotations:
+   |q| = 1, |L_b| = |L|, a step back undoes a step forward; and accurate at
+   h = 0.5 s is where its order says (measured 3.0e-6 rad after 2 s on the
+   body of orders_are_as_claimed, 2.2e-7 at h = 0.25 s). */
+static void large_steps_stay_exact(void **state)
+{
+    const double invI[3] = { 1, 0.5, 1.0 / 3 }, lb0[3] = { 2, 3, -1.5 };
+    double q0[4] = { 0.9, 0.1, -0.3, 0.2 }, L[3], lb[3], ref[4];
+    int k;
+    (void)state;
+    normalize(q0);
+    rotate(q0, 1, lb0, L);
+    rk4_reference(q0, L, invI, 2, 1L << 16, ref);
+    for (k = 1; k < KERNELS; ++k) {
+        double q[4], worst_q = 0, worst_l = 0;
+        int s;
+        memcpy(q, q0, sizeof q);
+        for (s = 0; s < 4; ++s) {
+            kernels[k].step(q, L, invI, 0.5);
+            rotate(q, -1, L, lb);
+            worst_q = fmax(worst_q, fabs(qnorm(q) - 1));
+            worst_l = fmax(worst_l, fabs(norm3(lb) / norm3(L) - 1));
+        }
+        print_message("%-8s h = 0.5: %.2e rad from the reference after 2 s; | |q| - 1 | %.1e, |L_b| %.1e\n",
+                      kernels[k].name, angle_between(q, ref), worst_q, worst_l);
+        assert_below(worst_q, 1e-15);
+        assert_below(worst_l, 1e-15);
+        if (k == 2)
+            assert_below(angle_between(q, ref), 4e-6);
+        run(kernels[k].step, q, L, invI, -0.5, 4);
+        print_message("%-8s back to the start within %.2e rad\n", kernels[k].name, angle_between(q, q0));
+        assert_below(angle_between(q, q0), 1e-14);
+    }
+}
+
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(reference_converges),
     cmocka_unit_test(isotropic_bodies_rotate_exactly),
@@ -565,6 +606,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(quaternion_stays_unit),
     cmocka_unit_test(axis_order_does_not_matter),
     cmocka_unit_test(splitting_is_time_reversible),
+    cmocka_unit_test(large_steps_stay_exact),
 };
 
 TB_TEST_MAIN(tests)
