@@ -545,9 +545,11 @@ void tb__body_sweep(tb_world *w, const tb__split_op *ops, int n)
             }
             for (k = 0; k < 3; ++k)
                 x[3 * s + k] += h * P[3 * s + k] * w->body_inv_mass[s];
-            /* an isotropic body turns about a fixed axis: the frozen
-               exponential is exact for it, and the cheapest */
-            if (ops[i].rotation == TB__ROTATE_FROZEN || isotropic(inv_inertia))
+            /* an isotropic body turns about a fixed axis, exactly and
+               cheaply, with no gyroscopic work */
+            if (isotropic(inv_inertia))
+                tb__rotation_isotropic(q + 4 * s, L + 3 * s, inv_inertia[0], h);
+            else if (ops[i].rotation == TB__ROTATE_FROZEN)
                 tb__rotation_frozen(q + 4 * s, L + 3 * s, inv_inertia, h);
             else if (ops[i].rotation == TB__ROTATE_SPLIT2)
                 tb__rotation_split2(q + 4 * s, L + 3 * s, inv_inertia, h);

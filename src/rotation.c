@@ -175,6 +175,18 @@ void tb__rotation_frozen(double q[4], const double L[3], const double invI[3], d
     tb__normalize(r, q);
 }
 
+void tb__rotation_isotropic(double q[4], const double L[3], double inv_inertia, double h)
+{
+    double w[3], r[4];
+    const double k = 0.5 * h;
+    w[0] = inv_inertia * L[0];
+    w[1] = inv_inertia * L[1];
+    w[2] = inv_inertia * L[2];
+    tb__half_turn(k * k * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), k, w, r);
+    tb__qmul(r, q, r); /* w is a world vector: turn on the left */
+    tb__normalize(r, q);
+}
+
 /* -------------------------------------------------------------- splitting -- */
 
 /* The state a composition works on: q and L_b in the relabelled axes. */

@@ -31,6 +31,11 @@
    libm beyond |w| h = 0.5 rad. 23 ns (45 ns alone). */
 void tb__rotation_frozen(double q[4], const double L[3], const double invI[3], double h);
 
+/* An isotropic body (I1 = I2 = I3 = 1 / inv_inertia) turns about the fixed
+   world w = L / I: q <- exp(h w / 2) q, exact. It skips the body-frame
+   transform that tb__rotation_frozen needs. */
+void tb__rotation_isotropic(double q[4], const double L[3], double inv_inertia, double h);
+
 /* Order 2: Strang splitting of T into a turn about the world L and turns
    about two principal axes (rotation.c), A(h/2) B(h) A(h/2). A Poisson map:
    energy error bounded with no drift (6.0e-5 on the flip), exact for

@@ -276,6 +276,16 @@ static void isotropic_bodies_rotate_exactly(void **state)
                           kernels[k].name, steps[s], angle_between(q, exact), rate * t);
             assert_below(angle_between(q, exact), 1e-13);
         }
+        {   /* the isotropic kernel, which turns about the world w directly */
+            double q[4];
+            long i;
+            memcpy(q, q0, sizeof q);
+            for (i = 0; i < n; ++i)
+                tb__rotation_isotropic(q, L, invI[0], steps[s]);
+            print_message("%-8s h = %.4f: %.2e rad from the closed form\n", "isotropic", steps[s],
+                          angle_between(q, exact));
+            assert_below(angle_between(q, exact), 1e-13);
+        }
     }
 }
 
