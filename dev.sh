@@ -51,6 +51,8 @@ bench)
     install_missing
     build default
     ./build/default/bench/bench_particles
+    ./build/default/bench/bench_bodies
+    ./build/default/bench/bench_rotation
     ;;
 *)
     sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'
