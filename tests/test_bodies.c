@@ -381,7 +381,43 @@ static void bodies_survive_swap_remove(void **state)
     tb_world_destroy(w);
 }
 
+/* Diagnostics: rotational energy L . w / 2 and angular momentum about the
+   origin, sum (x x P + L) for bodies plus m x x v for particles. In free
+   flight (no gravity, no torque) the total about the origin is conserved:
+   straight lines keep x x P, and L is the state. */
+static void diagnostics_add_up(void **state)
+{
+    const double I[3] = { 1, 2, 3 }, x0[3] = { 1, -2, 0.5 }, v0[3] = { 0.5, 1, -1 }, om[3] = { 2, 0, 0 };
+    tb_world *w = world_with("verlet", 0);
+    tb_particle_def p = tb_default_particle_def();
+    tb_energy e;
+    double l0[3], l[3], expected[3];
+    int i;
+    (void)state;
+    body(w, I, x0, v0, om); /* mass 2, w along a principal axis: L = (2, 0, 0) */
+    p.position[1] = 3;
+    p.velocity[0] = 1;
+    p.mass = 0.5;
+    assert_int_equal(tb_world_add_particle(w, &p, NULL), TB_OK);
+    e = tb_world_energy(w);
+    assert_rel(e.rotational, 0.5 * I[0] * om[0] * om[0], 1e-15);
+    assert_rel(e.kinetic, 0.5 * 2 * (0.25 + 1 + 1) + 0.5 * 0.5 * 1, 1e-15);
+    /* x x P of the body: (1, -2, 0.5) x (1, 2, -2) = (3, 2.5, 4); L = (2, 0, 0);
+       the particle: (0, 3, 0) x (0.5, 0, 0) = (0, 0, -1.5) */
+    expected[0] = 3 + 2, expected[1] = 2.5, expected[2] = 4 - 1.5;
+    tb_world_angular_momentum(w, l0);
+    for (i = 0; i < 3; ++i)
+        assert_rel(l0[i], expected[i], 1e-15);
+    for (i = 0; i < 600; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_world_angular_momentum(w, l);
+    for (i = 0; i < 3; ++i)
+        assert_true(fabs(l[i] - l0[i]) <= 1e-12 * 10);
+    tb_world_destroy(w);
+}
+
 static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(diagnostics_add_up),
     cmocka_unit_test(centre_of_mass_falls_freely),
     cmocka_unit_test(constant_torque_spins_up),
     cmocka_unit_test(symmetric_top_precesses),
