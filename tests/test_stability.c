@@ -1,0 +1,143 @@
+/* test_stability.c: where each method fails. On the undamped oscillator
+   x'' = -w^2 x the stability boundary in h w is found by bisection and
+   compared with theory: explicit Euler is unstable at every step, the
+   split methods at h w = 2, RK4 at 2 sqrt 2. With damping ratio z,
+   symplectic Euler's boundary moves to 2 (sqrt(1 + z^2) - z). */
+#include "test_main.h"
+#include "tumble.h"
+
+#include <math.h>
+#include <string.h>
+
+/* A unit mass on a spring of stiffness w^2 (damping 2 z w) to the origin,
+   rest length 0, no gravity, started at x = 1. */
+static tb_world *oscillator(const char *integrator, double w, double zeta, tb_particle_id *id)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_particle_def p = tb_default_particle_def();
+    tb_spring_def s = tb_default_spring_def();
+    tb_world *world;
+    def.gravity[2] = 0;
+    def.integrator = integrator;
+    assert_int_equal(tb_world_create(&def, &world, NULL, 0), TB_OK);
+    p.position[0] = 1;
+    assert_int_equal(tb_world_add_particle(world, &p, id), TB_OK);
+    s.a = *id;
+    s.stiffness = w * w;
+    s.damping = 2 * zeta * w;
+    s.rest_length = 0;
+    assert_int_equal(tb_world_add_spring(world, &s, NULL), TB_OK);
+    return world;
+}
+
+/* Stable means bounded: over 4000 steps the state never leaves a box 1e3
+   times its start. Just inside a boundary the stable orbits stay within a
+   factor ~1 / sqrt(1 - (h w / limit)^2) (about 22 at 0.1 % inside), and just
+   outside the growth per step is at least 1 + O(sqrt(0.1 %)) for the split
+   methods and ~1.007 for RK4, so 4000 steps settle either case to 0.1 %. */
+static int stable(const char *integrator, double hw, double zeta)
+{
+    const double w = 3;
+    tb_particle_id id;
+    tb_world *world = oscillator(integrator, w, zeta, &id);
+    int i, ok = 1;
+    for (i = 0; i < 4000 && ok; ++i) {
+        double x[3], v[3];
+        assert_int_equal(tb_world_step(world, hw / w), TB_OK);
+        tb_particle_position(world, id, x);
+        tb_particle_velocity(world, id, v);
+        ok = fabs(x[0]) < 1e3 && fabs(v[0]) < 1e3 * w;
+    }
+    tb_world_destroy(world);
+    return ok;
+}
+
+/* Bisect h w between a stable lo and an unstable hi to 1e-5 relative. */
+static double boundary(const char *integrator, double lo, double hi, double zeta)
+{
+    assert_true(stable(integrator, lo, zeta));
+    assert_false(stable(integrator, hi, zeta));
+    while (hi - lo > 1e-5 * lo) {
+        const double mid = 0.5 * (lo + hi);
+        if (stable(integrator, mid, zeta))
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+static void check_boundary(const char *integrator, double theory, double zeta)
+{
+    const double found = boundary(integrator, 0.5 * theory, 1.5 * theory, zeta);
+    print_message("%-17s zeta %.2f: boundary h w = %.5f, theory %.5f (%+.3f %%)\n", integrator, zeta, found, theory,
+                  100 * (found / theory - 1));
+    assert_rel(found, theory, 0.01);
+}
+
+static void symplectic_euler_boundary_is_2(void **state)
+{
+    (void)state;
+    check_boundary("symplectic_euler", 2, 0);
+}
+
+static void verlet_boundary_is_2(void **state)
+{
+    (void)state;
+    check_boundary("verlet", 2, 0);
+}
+
+static void rk4_boundary_is_2_sqrt_2(void **state)
+{
+    (void)state;
+    check_boundary("rk4", 2 * sqrt(2), 0);
+}
+
+/* Explicit Euler has no boundary: at any h w, every step multiplies
+   v^2 + w^2 x^2 by exactly 1 + (h w)^2, so it grows without bound even at
+   h w = 1e-3 (shown here over enough steps to grow by e). */
+static void euler_is_unstable_at_every_step(void **state)
+{
+    const double steps[] = { 1e-3, 1e-2, 0.1, 1 };
+    size_t k;
+    (void)state;
+    for (k = 0; k < sizeof steps / sizeof steps[0]; ++k) {
+        const double hw = steps[k], w = 3;
+        const long n = (long)ceil(1 / log1p(hw * hw)); /* (1 + (hw)^2)^n >= e */
+        tb_particle_id id;
+        tb_world *world = oscillator("euler", w, 0, &id);
+        double e0 = tb_world_energy(world).total, e;
+        long i;
+        for (i = 0; i < n; ++i)
+            assert_int_equal(tb_world_step(world, hw / w), TB_OK);
+        e = tb_world_energy(world).total;
+        print_message("euler h w = %g: energy x%.6f after %ld steps (theory x%.6f)\n", hw, e / e0, n,
+                      pow(1 + hw * hw, (double)n));
+        assert_rel(e / e0, pow(1 + hw * hw, (double)n), 1e-9);
+        assert_true(e / e0 >= exp(1) * (1 - 1e-9));
+        tb_world_destroy(world);
+    }
+}
+
+/* Damping shrinks symplectic Euler's stable range: with the damping force
+   taken at the start of the step the characteristic polynomial gives
+   h w < 2 (sqrt(1 + z^2) - z). */
+static void damped_symplectic_euler_boundary(void **state)
+{
+    const double zetas[] = { 0.1, 0.5, 1.0 };
+    size_t k;
+    (void)state;
+    for (k = 0; k < sizeof zetas / sizeof zetas[0]; ++k) {
+        const double z = zetas[k];
+        check_boundary("symplectic_euler", 2 * (sqrt(1 + z * z) - z), z);
+    }
+}
+
+static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(symplectic_euler_boundary_is_2),
+    cmocka_unit_test(verlet_boundary_is_2),
+    cmocka_unit_test(rk4_boundary_is_2_sqrt_2),
+    cmocka_unit_test(euler_is_unstable_at_every_step),
+    cmocka_unit_test(damped_symplectic_euler_boundary),
+};
+TB_TEST_MAIN(tests)
