@@ -5,6 +5,7 @@
 #   ./dev.sh test    install what is missing, build, run the whole test suite
 #   ./dev.sh asan    the same suite built with AddressSanitizer + UBSan
 #   ./dev.sh bench   build and run the benchmarks (not part of the tests)
+#   ./dev.sh charts  rerun the work-precision benchmark and redraw docs/charts
 #
 # Warnings are errors when CI is set (CI=true), as in .ci/run.
 set -euo pipefail
@@ -54,8 +55,15 @@ bench)
     ./build/default/bench/bench_bodies
     ./build/default/bench/bench_rotation
     ;;
+charts)
+    install_missing
+    build default
+    mkdir -p bench/out
+    ./build/default/bench/bench_workprecision bench/out
+    gnuplot bench/workprecision.gp
+    ;;
 *)
-    sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'
+    sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'
     exit 2
     ;;
 esac
