@@ -241,6 +241,27 @@ static void push_scene(void **state)
     assert_true(last[14] > 0); /* the thruster spun it up about +z */
 }
 
+/* The reference scenes of the work-precision benchmark run as scenes too. */
+static void reference_scenes_run(void **state)
+{
+    static const char *const names[] = { "oscillator", "damped", "kepler", "vortex", "projectile",
+                                         "chain", "cloth", "flip", "top" };
+    size_t k;
+    (void)state;
+    for (k = 0; k < sizeof names / sizeof names[0]; ++k) {
+        char args[1024], csv[1024];
+        double last[15];
+        snprintf(args, sizeof args, "run '%s/reference/%s.lua' --out ref.csv --quiet", SCENES_DIR, names[k]);
+        if (tumble(args) != 0)
+            fail_msg("reference scene %s failed: %s", names[k], err_text);
+        work_path(csv, sizeof csv, "ref.csv");
+        assert_true(parse_csv(csv, !strcmp(names[k], "vortex") ? "tracer"
+                                   : !strcmp(names[k], "flip") || !strcmp(names[k], "top") ? "body"
+                                                                                            : "particle",
+                              last) > 0);
+    }
+}
+
 static void broken_script_names_its_line(void **state)
 {
     char csv[1024];
@@ -339,6 +360,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(top_scene),
     cmocka_unit_test(tumbling_box_scene),
     cmocka_unit_test(push_scene),
+    cmocka_unit_test(reference_scenes_run),
     cmocka_unit_test(broken_script_names_its_line),
     cmocka_unit_test(failure_mid_run_leaves_no_file),
     cmocka_unit_test(bad_arguments_are_refused),
