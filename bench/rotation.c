@@ -17,9 +17,10 @@
    - orientation: angle of q_ref^-1 q after 20 s, 2 atan2(|v|, |w|), against
      RK4 at h/64 whose convergence is printed first.
    - ns/step: one body stepped 1200 times in a row (each step waits for the
-     last: latency), median of REPEATS runs; and, for the kernels and RK4,
-     ns per body-step over 1024 independent bodies (what a world's loop over
-     its bodies pays), also a median. */
+     last: latency), median of REPEATS runs; for the kernels and RK4, ns per
+     body-step over 1024 independent bodies one call per body, also a
+     median; and for tumble's kernels, ns per body-step over the same bodies
+     in lanes, TB__LANES at a time, as a world steps them (rotation.h). */
 #define _POSIX_C_SOURCE 200809L
 
 #include "rotation.h"
@@ -176,7 +177,7 @@ static void rk4_fixed_l(double q[4], const double L[3], const double invI[3], do
 
 typedef struct result {
     const char *name;
-    double l_drift, e_end, e_worst, angle, ns, ns_many;
+    double l_drift, e_end, e_worst, angle, ns, ns_many, ns_lanes;
 } result;
 
 static void flip_state(double invI[3], double L[3], double q[4])
@@ -204,9 +205,38 @@ static void many_states(double *q, double *L, double *invI)
 
 typedef void kernel_fn(double q[4], const double L[3], const double invI[3], double h);
 
-static void run_kernel(result *r, kernel_fn *step, const double ref[4])
+/* The bodies b < BODIES through a kernel in lanes, as the world does: the
+   frozen kernel straight on the arrays, the splitting kernels (accurate 0
+   or 1) loaded into lanes in their frames and stored back. */
+static void step_lanes(int kernel, double *q, const double *L, const double *invI, const tb__split_frame *frames,
+                       double h)
+{
+    int b, i;
+    for (b = 0; b < BODIES; b += TB__LANES) {
+        tb__spin_lanes p;
+        if (kernel == 0) {
+            tb__frozen_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, TB__LANES);
+            continue;
+        }
+        p.h = h;
+        for (i = 0; i < TB__LANES; ++i)
+            if (!tb__spin_load(&p, i, q + 4 * (b + i), L + 3 * (b + i), &frames[b + i], h * h, kernel == 2)) {
+                fprintf(stderr, "bench_rotation: a flip body is beyond the lanes' polynomials\n");
+                exit(EXIT_FAILURE);
+            }
+        if (kernel == 2)
+            tb__accurate_lanes(&p, TB__LANES);
+        else
+            tb__split2_lanes(&p, TB__LANES);
+        for (i = 0; i < TB__LANES; ++i)
+            tb__spin_store(&p, i, &frames[b + i], q + 4 * (b + i));
+    }
+}
+
+static void run_kernel(result *r, kernel_fn *step, int lanes, const double ref[4])
 {
     static double qs[4 * BODIES], Ls[3 * BODIES], Is[3 * BODIES];
+    static tb__split_frame frames[BODIES];
     double invI[3], L[3], q[4], lb[3], e0, e = 0, ns[REPEATS], many[REPEATS];
     long s;
     int k, b;
@@ -242,6 +272,20 @@ static void run_kernel(result *r, kernel_fn *step, const double ref[4])
     }
     sink = sink + qs[0];
     r->ns_many = median(many, REPEATS);
+    r->ns_lanes = -1;
+    if (lanes < 0)
+        return;
+    many_states(qs, Ls, Is);
+    for (b = 0; b < BODIES; ++b)
+        tb__split_frame_of(Is + 3 * b, &frames[b]);
+    for (k = 0; k < REPEATS; ++k) {
+        const double t0 = seconds();
+        for (s = 0; s < 4; ++s)
+            step_lanes(lanes, qs, Ls, Is, frames, H);
+        many[k] = 1e9 * (seconds() - t0) / (4.0 * BODIES);
+    }
+    sink = sink + qs[0];
+    r->ns_lanes = median(many, REPEATS);
 }
 
 static void run_rk4_carried(result *r, const double ref[4])
@@ -283,6 +327,7 @@ static void run_rk4_carried(result *r, const double ref[4])
     }
     sink = sink + qs[0];
     r->ns_many = median(many, REPEATS);
+    r->ns_lanes = -1;
 }
 
 static void rk4_fixed_l_kernel(double q[4], const double L[3], const double invI[3], double h)
@@ -350,7 +395,7 @@ static void run_ode(result *r, const double ref[4])
         dWorldDestroy(world);
     }
     r->ns = median(ns, REPEATS);
-    r->ns_many = -1;
+    r->ns_many = r->ns_lanes = -1;
 }
 
 /* ----------------------------------------------------------------- main -- */
@@ -403,29 +448,33 @@ int main(void)
     printf("reference: RK4 on (L_b, q) at h/64; it differs from h/32 by %.1e rad\n\n", angle_between(ref, half));
 
     r[n].name = "tumble frozen (order 1)";
-    run_kernel(&r[n++], tb__rotation_frozen, ref);
+    run_kernel(&r[n++], tb__rotation_frozen, 0, ref);
     r[n].name = "tumble split2 (order 2)";
-    run_kernel(&r[n++], tb__rotation_split2, ref);
+    run_kernel(&r[n++], tb__rotation_split2, 1, ref);
     r[n].name = "tumble accurate (order 4)";
-    run_kernel(&r[n++], tb__rotation_accurate, ref);
+    run_kernel(&r[n++], tb__rotation_accurate, 2, ref);
     r[n].name = "RK4 on (L_b, q), MuJoCo-like";
     run_rk4_carried(&r[n++], ref);
     r[n].name = "RK4 on q, world L fixed";
-    run_kernel(&r[n++], rk4_fixed_l_kernel, ref);
+    run_kernel(&r[n++], rk4_fixed_l_kernel, -1, ref);
     r[n].name = "ODE dWorldStep";
     run_ode(&r[n++], ref);
 
-    printf("%-30s %10s %10s %10s %12s %9s %12s\n", "method", "|L| drift", "E drift", "E worst", "orientation",
-           "ns/step", "ns/body-step");
-    printf("%-30s %10s %10s %10s %12s %9s %12s\n", "", "(worst)", "(at 20 s)", "", "(rad)", "(1 body)",
-           "(1024 bodies)");
+    printf("%-30s %10s %10s %10s %12s %9s %13s %9s\n", "method", "|L| drift", "E drift", "E worst", "orientation",
+           "ns/step", "ns/body-step", "in lanes");
+    printf("%-30s %10s %10s %10s %12s %9s %13s %9s\n", "", "(worst)", "(at 20 s)", "", "(rad)", "(1 body)",
+           "(1024 bodies)", "(1024)");
     for (i = 0; i < n; ++i) {
         printf("%-30s %10.1e %10.1e %10.1e %12.1e %9.1f ", r[i].name, r[i].l_drift, r[i].e_end, r[i].e_worst,
                r[i].angle, r[i].ns);
         if (r[i].ns_many >= 0)
-            printf("%12.1f\n", r[i].ns_many);
+            printf("%13.1f ", r[i].ns_many);
         else
-            printf("%12s\n", "-");
+            printf("%13s ", "-");
+        if (r[i].ns_lanes >= 0)
+            printf("%9.1f\n", r[i].ns_lanes);
+        else
+            printf("%9s\n", "-");
     }
     printf("\nmedians of %d repeats; tumble's targets for its best method: |L| drift <= 1e-12, energy drift\n"
            "<= 1e-9, orientation <= 1e-6 rad, <= 50 ns per step\n", REPEATS);

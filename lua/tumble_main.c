@@ -41,9 +41,12 @@ static const char usage[] =
     "particles and tracers. Steps are recorded at t = 0, every record_every\n"
     "seconds (rounded to whole steps), and at the end.\n"
     "\n"
-    "Summary (stdout): steps, simulated time, wall time, and the relative\n"
-    "energy drift (E_end - E_start) / |E_start| of the particles and bodies\n"
-    "(kinetic, rotational, gravitational and spring energy).\n"
+    "Before the run the stability advisor estimates the largest stable step\n"
+    "of the integrator (stiffest spring mode, drag) and warns on stderr when\n"
+    "dt exceeds it, suggesting a step or an integrator.\n"
+    "Summary (stdout): steps, simulated time, wall time, the advisor's\n"
+    "verdict and the relative energy drift (E_end - E_start) / |E_start| of\n"
+    "the particles and bodies (kinetic, rotational, gravitational, spring).\n"
     "Exit status: 0 on success, 1 when the scene or the run fails, 2 for a\n"
     "bad command line.\n";
 
@@ -272,7 +275,8 @@ static int run(lua_State *L, const options *o)
     tb_energy e0, e1;
     double dt, duration, every, t0, wall, *tracer_vel = NULL;
     long steps, step, every_steps, rows = 0, r;
-    int scene_idx, world_idx, bad = 0;
+    int scene_idx, world_idx, bad = 0, have_advice;
+    tb_advice advice;
     FILE *f;
 
     text = slurp(o->scene, &size);
@@ -317,6 +321,10 @@ static int run(lua_State *L, const options *o)
     else
         default_out(o->scene, out_path, sizeof out_path);
     snprintf(part_path, sizeof part_path, "%s.part", out_path);
+    /* Before running: would this step blow up? Warn, but run as asked. */
+    have_advice = tb_world_advise(w, dt, &advice) == TB_OK;
+    if (have_advice && advice.exceeded)
+        fprintf(stderr, "tumble: warning: %s\n", advice.text);
     f = fopen(part_path, "w");
     if (!f)
         return die(1, "cannot write '%s'", part_path);
@@ -363,6 +371,8 @@ static int run(lua_State *L, const options *o)
                    (e1.total - e0.total) / fabs(e0.total));
         else
             printf("energy      %.9g J -> %.9g J, relative drift n/a (starts at 0)\n", e0.total, e1.total);
+        if (have_advice)
+            printf("stability   %s\n", advice.text);
         printf("wrote       %s (%ld rows)\n", out_path, rows);
     }
     return 0;

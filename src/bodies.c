@@ -1,85 +1,22 @@
 /* bodies.c: rigid bodies. State (x, q, P, L) lives in the world's state
    vector; mass, principal moments, damping and held forces beside it. This
-   file adds, reads and removes bodies, and supplies the body tier's part of
-   the stepping primitives: derive, kick and drift, projection. */
+   file adds, reads, changes and removes bodies and applies forces to them;
+   body_step.c moves them. */
 #include "world.h"
-#include "rotation.h"
+#include "body_math.h"
 
 #include <math.h>
 #include <string.h>
 
-/* ---- small quaternion and matrix helpers (q = (w, x, y, z)) -------------- */
-
-/* Rotation matrix (row-major) of a unit quaternion. */
-static void matrix_of(const double q[4], double R[9])
+/* L = I w for body s at its orientation. A zero comes out as +0, as it
+   does in P: every update keeps it so (x + y is -0 only when both are),
+   which lets the kicks leave alone the components no force reaches and
+   still give the bits of P + h 0 and L + h 0. */
+static void set_spin(tb_world *w, uint32_t s, const double omega[3])
 {
-    const double w = q[0], x = q[1], y = q[2], z = q[3];
-    R[0] = 1 - 2 * (y * y + z * z);
-    R[1] = 2 * (x * y - w * z);
-    R[2] = 2 * (x * z + w * y);
-    R[3] = 2 * (x * y + w * z);
-    R[4] = 1 - 2 * (x * x + z * z);
-    R[5] = 2 * (y * z - w * x);
-    R[6] = 2 * (x * z - w * y);
-    R[7] = 2 * (y * z + w * x);
-    R[8] = 1 - 2 * (x * x + y * y);
-}
-
-static void mul(const double R[9], const double v[3], double out[3])
-{
-    out[0] = R[0] * v[0] + R[1] * v[1] + R[2] * v[2];
-    out[1] = R[3] * v[0] + R[4] * v[1] + R[5] * v[2];
-    out[2] = R[6] * v[0] + R[7] * v[1] + R[8] * v[2];
-}
-
-static void mul_transposed(const double R[9], const double v[3], double out[3])
-{
-    out[0] = R[0] * v[0] + R[3] * v[1] + R[6] * v[2];
-    out[1] = R[1] * v[0] + R[4] * v[1] + R[7] * v[2];
-    out[2] = R[2] * v[0] + R[5] * v[1] + R[8] * v[2];
-}
-
-static void quat_mul(const double a[4], const double b[4], double out[4])
-{
-    double r[4];
-    r[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-    r[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-    r[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-    r[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
-    memcpy(out, r, sizeof r);
-}
-
-static void normalise(double q[4])
-{
-    const double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    q[0] /= n, q[1] /= n, q[2] /= n, q[3] /= n;
-}
-
-/* w = R diag(scale) R^T v: with scale = 1/I it turns L into w, with I the
-   other way. `q` need not be exactly unit (RK stages): it is normalised. */
-static void through_inertia(const double q[4], const double scale[3], const double v[3], double out[3])
-{
-    double u[4], R[9], b[3];
-    memcpy(u, q, sizeof u);
-    normalise(u);
-    matrix_of(u, R);
-    mul_transposed(R, v, b);
-    b[0] *= scale[0], b[1] *= scale[1], b[2] *= scale[2];
-    mul(R, b, out);
-}
-
-static void cross(const double a[3], const double b[3], double out[3])
-{
-    double r[3];
-    r[0] = a[1] * b[2] - a[2] * b[1];
-    r[1] = a[2] * b[0] - a[0] * b[2];
-    r[2] = a[0] * b[1] - a[1] * b[0];
-    memcpy(out, r, sizeof r);
-}
-
-static int isotropic(const double inv_inertia[3])
-{
-    return inv_inertia[0] == inv_inertia[1] && inv_inertia[1] == inv_inertia[2];
+    double *L = w->y + w->off[TB__BODY_ANG] + 3 * s;
+    through_inertia(w->y + w->off[TB__BODY_ROT] + 4 * s, w->body_inertia + 3 * s, omega, L);
+    L[0] += 0.0, L[1] += 0.0, L[2] += 0.0;
 }
 
 /* ---- definitions and validation ------------------------------------------ */
@@ -157,7 +94,7 @@ static tb_status check_def(tb_world *w, const tb_body_def *def)
 
 /* ---- adding and removing ----------------------------------------------------- */
 
-#define BODY_ARRAYS 8
+#define BODY_ARRAYS 9
 static void arrays_of(tb_world *w, void **arrays[BODY_ARRAYS], size_t sizes[BODY_ARRAYS])
 {
     arrays[0] = (void **)&w->body_mass;        sizes[0] = sizeof(double);
@@ -168,6 +105,7 @@ static void arrays_of(tb_world *w, void **arrays[BODY_ARRAYS], size_t sizes[BODY
     arrays[5] = (void **)&w->body_applied;     sizes[5] = 6 * sizeof(double);
     arrays[6] = (void **)&w->body_force;       sizes[6] = 6 * sizeof(double);
     arrays[7] = (void **)&w->body_motion;      sizes[7] = 6 * sizeof(double);
+    arrays[8] = (void **)&w->body_frame;       sizes[8] = sizeof(tb__split_frame);
 }
 
 static tb_status grow(tb_world *w)
@@ -194,7 +132,8 @@ void tb__bodies_free(tb_world *w)
     arrays_of(w, arrays, sizes);
     tb__free_arrays(w, arrays, sizes, BODY_ARRAYS, w->body_cap);
     tb__ids_free(w, &w->body_ids);
-    w->body_count = w->body_cap = 0;
+    w->body_count = w->body_cap = w->body_damped = w->body_isotropic = 0;
+    w->body_held = 0;
 }
 
 static double *at(const tb_world *w, enum tb__quantity q, size_t width, uint32_t slot)
@@ -236,11 +175,14 @@ tb_status tb_world_add_body(tb_world *w, const tb_body_def *def, tb_body_id *id)
     for (k = 0; k < 3; ++k) {
         w->body_inertia[3 * s + k] = def->mass.inertia[k];
         w->body_inv_inertia[3 * s + k] = 1 / def->mass.inertia[k];
-        at(w, TB__BODY_MOM, 3, s)[k] = def->mass.mass * def->velocity[k];
+        at(w, TB__BODY_MOM, 3, s)[k] = def->mass.mass * def->velocity[k] + 0.0; /* +0: see set_spin */
     }
-    through_inertia(q, w->body_inertia + 3 * s, def->angular_velocity, at(w, TB__BODY_ANG, 3, s));
+    set_spin(w, s, def->angular_velocity);
+    tb__split_frame_of(w->body_inv_inertia + 3 * s, &w->body_frame[s]);
+    w->body_isotropic += w->body_frame[s].isotropic;
     w->body_damping[2 * s] = def->linear_damping;
     w->body_damping[2 * s + 1] = def->angular_damping;
+    w->body_damped += def->linear_damping != 0 || def->angular_damping != 0;
     memset(w->body_applied + 6 * s, 0, 6 * sizeof(double));
     tb__ids_acquire(&w->body_ids, s, &made.index1, &made.generation);
     if (id)
@@ -270,6 +212,8 @@ tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
     if ((st = find(w, id, &s)) != TB_OK)
         return st;
     last = (uint32_t)w->body_count - 1;
+    w->body_damped -= w->body_damping[2 * s] != 0 || w->body_damping[2 * s + 1] != 0;
+    w->body_isotropic -= w->body_frame[s].isotropic;
     if (s != last) {
         arrays_of(w, arrays, sizes);
         for (k = 0; k < BODY_ARRAYS; ++k) {
@@ -384,7 +328,7 @@ tb_status tb_body_set_orientation(tb_world *w, tb_body_id id, const double orien
     through_inertia(q, w->body_inv_inertia + 3 * s, at(w, TB__BODY_ANG, 3, s), omega);
     memcpy(q, orientation, 4 * sizeof(double));
     normalise(q);
-    through_inertia(q, w->body_inertia + 3 * s, omega, at(w, TB__BODY_ANG, 3, s));
+    set_spin(w, s, omega);
     return TB_OK;
 }
 
@@ -395,7 +339,7 @@ tb_status tb_body_set_velocity(tb_world *w, tb_body_id id, const double velocity
     tb_status st = writable(w, id, velocity, 3, "velocity", &s);
     if (st == TB_OK)
         for (k = 0; k < 3; ++k)
-            at(w, TB__BODY_MOM, 3, s)[k] = w->body_mass[s] * velocity[k];
+            at(w, TB__BODY_MOM, 3, s)[k] = w->body_mass[s] * velocity[k] + 0.0; /* +0: see set_spin */
     return st;
 }
 
@@ -404,8 +348,7 @@ tb_status tb_body_set_angular_velocity(tb_world *w, tb_body_id id, const double 
     uint32_t s;
     tb_status st = writable(w, id, angular_velocity, 3, "angular velocity", &s);
     if (st == TB_OK)
-        through_inertia(at(w, TB__BODY_ROT, 4, s), w->body_inertia + 3 * s, angular_velocity,
-                        at(w, TB__BODY_ANG, 3, s));
+        set_spin(w, s, angular_velocity);
     return st;
 }
 
@@ -433,6 +376,7 @@ static tb_status hold(tb_world *w, tb_body_id id, const double force[3], const d
         held[k] += force[k];
         held[3 + k] += tau[k];
     }
+    w->body_held = 1;
     return TB_OK;
 }
 
@@ -452,9 +396,11 @@ tb_status tb_body_apply_torque(tb_world *w, tb_body_id id, const double torque[3
     uint32_t s;
     int k;
     tb_status st = writable(w, id, torque, 3, "torque", &s);
-    if (st == TB_OK)
+    if (st == TB_OK) {
         for (k = 0; k < 3; ++k)
             w->body_applied[6 * s + 3 + k] += torque[k];
+        w->body_held = 1;
+    }
     return st;
 }
 
@@ -479,115 +425,6 @@ tb_body_id tb_world_body_at(const tb_world *w, size_t slot)
     if (slot < w->body_count)
         tb__ids_at(&w->body_ids, (uint32_t)slot, &id.index1, &id.generation);
     return id;
-}
-
-/* ---- stepping ---------------------------------------------------------------- */
-
-/* dP/dt and dL/dt of body s: gravity, damping (seeing P and L), the forces
-   held by the user and the callbacks' forces of this evaluation. */
-static void rates(const tb_world *w, uint32_t s, const double *P, const double *L, double dP[3], double dL[3])
-{
-    const double m = w->body_mass[s], cl = w->body_damping[2 * s], ca = w->body_damping[2 * s + 1];
-    const double *held = w->body_applied + 6 * s;
-    int k;
-    for (k = 0; k < 3; ++k) {
-        dP[k] = m * w->gravity[k] - cl * P[k] + held[k];
-        dL[k] = held[3 + k] - ca * L[k];
-        if (w->force_ready) {
-            dP[k] += w->body_force[3 * s + k];
-            dL[k] += w->body_force[3 * w->body_count + 3 * s + k];
-        }
-    }
-}
-
-void tb__body_derive(tb_world *w, const double *y, double *dy)
-{
-    const double *x = y + w->off[TB__BODY_POS], *q = y + w->off[TB__BODY_ROT];
-    const double *P = y + w->off[TB__BODY_MOM], *L = y + w->off[TB__BODY_ANG];
-    uint32_t s;
-    (void)x;
-    for (s = 0; s < w->body_count; ++s) {
-        const double *qs = q + 4 * s;
-        double omega[3], *dq = dy + w->off[TB__BODY_ROT] + 4 * s;
-        int k;
-        for (k = 0; k < 3; ++k)
-            dy[w->off[TB__BODY_POS] + 3 * s + k] = P[3 * s + k] * w->body_inv_mass[s];
-        through_inertia(qs, w->body_inv_inertia + 3 * s, L + 3 * s, omega);
-        /* dq/dt = (0, w) q / 2 with w in the world frame */
-        dq[0] = -0.5 * (omega[0] * qs[1] + omega[1] * qs[2] + omega[2] * qs[3]);
-        dq[1] = 0.5 * (omega[0] * qs[0] + omega[1] * qs[3] - omega[2] * qs[2]);
-        dq[2] = 0.5 * (-omega[0] * qs[3] + omega[1] * qs[0] + omega[2] * qs[1]);
-        dq[3] = 0.5 * (omega[0] * qs[2] - omega[1] * qs[1] + omega[2] * qs[0]);
-        rates(w, s, P + 3 * s, L + 3 * s, dy + w->off[TB__BODY_MOM] + 3 * s, dy + w->off[TB__BODY_ANG] + 3 * s);
-    }
-}
-
-void tb__body_sweep(tb_world *w, const tb__split_op *ops, int n)
-{
-    double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
-    double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
-    const double *Pseen = w->kick_seen ? w->kick_seen + w->off[TB__BODY_MOM] : P;
-    const double *Lseen = w->kick_seen ? w->kick_seen + w->off[TB__BODY_ANG] : L;
-    uint32_t s;
-    int i, k;
-    for (s = 0; s < w->body_count; ++s) {
-        const double *inv_inertia = w->body_inv_inertia + 3 * s;
-        for (i = 0; i < n; ++i) {
-            const double h = ops[i].h;
-            if (!ops[i].drift) {
-                double dP[3], dL[3];
-                rates(w, s, Pseen + 3 * s, Lseen + 3 * s, dP, dL);
-                for (k = 0; k < 3; ++k) {
-                    P[3 * s + k] += h * dP[k];
-                    L[3 * s + k] += h * dL[k];
-                }
-                continue;
-            }
-            for (k = 0; k < 3; ++k)
-                x[3 * s + k] += h * P[3 * s + k] * w->body_inv_mass[s];
-            /* an isotropic body turns about a fixed axis, exactly and
-               cheaply, with no gyroscopic work */
-            if (isotropic(inv_inertia))
-                tb__rotation_isotropic(q + 4 * s, L + 3 * s, inv_inertia[0], h);
-            else if (ops[i].rotation == TB__ROTATE_FROZEN)
-                tb__rotation_frozen(q + 4 * s, L + 3 * s, inv_inertia, h);
-            else if (ops[i].rotation == TB__ROTATE_SPLIT2)
-                tb__rotation_split2(q + 4 * s, L + 3 * s, inv_inertia, h);
-            else
-                tb__rotation_accurate(q + 4 * s, L + 3 * s, inv_inertia, h);
-        }
-    }
-}
-
-int tb__body_velocity_dependent(const tb_world *w)
-{
-    size_t s;
-    for (s = 0; s < 2 * w->body_count; ++s)
-        if (w->body_damping[s] != 0)
-            return 1;
-    return 0;
-}
-
-void tb__body_project(tb_world *w, double *y)
-{
-    double *q = y + w->off[TB__BODY_ROT];
-    size_t s;
-    for (s = 0; s < w->body_count; ++s)
-        normalise(q + 4 * s);
-}
-
-void tb__body_motion(tb_world *w, const double *y, const double *seen)
-{
-    const double *q = y + w->off[TB__BODY_ROT];
-    const double *P = seen + w->off[TB__BODY_MOM], *L = seen + w->off[TB__BODY_ANG];
-    double *v = w->body_motion, *omega = w->body_motion + 3 * w->body_count;
-    size_t s;
-    int k;
-    for (s = 0; s < w->body_count; ++s) {
-        for (k = 0; k < 3; ++k)
-            v[3 * s + k] = P[3 * s + k] * w->body_inv_mass[s];
-        through_inertia(q + 4 * s, w->body_inv_inertia + 3 * s, L + 3 * s, omega + 3 * s);
-    }
 }
 
 /* ---- diagnostics ----------------------------------------------------------------- */

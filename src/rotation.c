@@ -39,9 +39,12 @@
    1.0e-4 rad at 80 ns; Magnus 4th order with a Taylor L_b and energy
    projection, 2e-8 rad on the flip but up to 1.5e-4 rad on other bodies
    and 5e-6 on near-symmetric ones, where the splittings are nearly exact.
-   The cost is the chain of turns: each needs the momentum the previous one
-   left, about 16 ns a turn here, so no composition reaching 1e-6 rad fits
-   in 50 ns. Yoshida + projection meets the flip's targets (1e-6 rad, energy
+   (The ns column is for one body alone, then latency-bound.) For one body
+   the cost is the chain of turns: each needs the momentum the previous one
+   left, about 16 ns a turn here. In lanes (below) the turns of 8 bodies
+   overlap and a turn costs about 4 ns a body with SSE2: S6 about 56 ns, a
+   body's floor at about 47 floating-point operations a turn, two per
+   instruction. Yoshida + projection meets the flip's targets (1e-6 rad, energy
    1e-9) at 2/3 of S6's cost but with a margin of 2 and errors up to 1.4e-4
    rad on other bodies; S6 meets them with margins of 1300 and 9, stays
    within 2.7e-7 rad on every other body tried (12 random bodies at up to 9
@@ -101,19 +104,24 @@ static void tb__half_turn_big(double u, double k, const double v[3], double r[4]
     r[3] = f * v[2];
 }
 
-static inline void tb__half_turn(double u, double k, const double v[3], double r[4])
+/* The polynomial path of tb__half_turn, u <= 1/16. */
+static inline void tb__turn_poly(double u, double k, const double v[3], double r[4])
 {
     double sinc, c;
-    if (u > TB__SMALL_WHOLE * TB__SMALL_WHOLE) {
-        tb__half_turn_big(u, k, v, r);
-        return;
-    }
     tb__sinc_cos4(u, &sinc, &c);
     sinc *= k;
     r[0] = c;
     r[1] = sinc * v[0];
     r[2] = sinc * v[1];
     r[3] = sinc * v[2];
+}
+
+static inline void tb__half_turn(double u, double k, const double v[3], double r[4])
+{
+    if (u > TB__SMALL_WHOLE * TB__SMALL_WHOLE)
+        tb__half_turn_big(u, k, v, r);
+    else
+        tb__turn_poly(u, k, v, r);
 }
 
 /* ------------------------------------------------------ quaternion algebra -- */
@@ -148,234 +156,152 @@ static inline void tb__qmul(const double a[4], const double b[4], double out[4])
    for 1/sqrt, 1 - e/2, then leaves 3 e^2 / 8, far below rounding. A q
    further off (e > 1e-8, say from a caller that does not keep it unit) gets
    the full division by its norm. */
-static inline void tb__normalize(const double in[4], double q[4])
+static inline double tb__norm2(const double q[4])
 {
-    const double n2 = in[0] * in[0] + in[1] * in[1] + in[2] * in[2] + in[3] * in[3];
-    const double f = fabs(n2 - 1) <= 1e-8 ? 1.5 - 0.5 * n2 : 1 / sqrt(n2);
+    return q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+}
+
+static inline void tb__scale(const double in[4], double f, double q[4])
+{
     q[0] = in[0] * f;
     q[1] = in[1] * f;
     q[2] = in[2] * f;
     q[3] = in[3] * f;
 }
 
-/* ----------------------------------------------------------------- frozen -- */
+static inline void tb__normalize(const double in[4], double q[4])
+{
+    const double n2 = tb__norm2(in);
+    tb__scale(in, fabs(n2 - 1) <= 1e-8 ? 1.5 - 0.5 * n2 : 1 / sqrt(n2), q);
+}
+
+/* The lanes take the Newton step without looking: they only hold unit q
+   (rotation.h), which the exact turns keep within a few rounding errors, so
+   tb__normalize would take it too. */
+
+static inline void tb__newton(const double in[4], double q[4])
+{
+    tb__scale(in, 1.5 - 0.5 * tb__norm2(in), q);
+}
+
+/* -------------------------------------------------- frozen and isotropic -- */
 
 /* q <- q exp(h w_b / 2), the same rotation as exp(h w / 2) q with the world
    w = R w_b, without going back to the world frame. */
-void tb__rotation_frozen(double q[4], const double L[3], const double invI[3], double h)
+static inline double tb__frozen_turn(const double q[4], const double L[3], const double invI[3], double k,
+                                     double w[3])
 {
-    double lb[3], w[3], r[4];
-    const double k = 0.5 * h;
+    double lb[3];
     tb__to_body(q, L, lb);
     w[0] = invI[0] * lb[0];
     w[1] = invI[1] * lb[1];
     w[2] = invI[2] * lb[2];
-    tb__half_turn(k * k * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), k, w, r);
+    return k * k * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+}
+
+void tb__rotation_frozen(double q[4], const double L[3], const double invI[3], double h)
+{
+    double w[3], r[4];
+    const double k = 0.5 * h;
+    tb__half_turn(tb__frozen_turn(q, L, invI, k, w), k, w, r);
     tb__qmul(q, r, r);
     tb__normalize(r, q);
+}
+
+static inline double tb__isotropic_turn(const double L[3], double inv_inertia, double k, double w[3])
+{
+    w[0] = inv_inertia * L[0];
+    w[1] = inv_inertia * L[1];
+    w[2] = inv_inertia * L[2];
+    return k * k * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
 }
 
 void tb__rotation_isotropic(double q[4], const double L[3], double inv_inertia, double h)
 {
     double w[3], r[4];
     const double k = 0.5 * h;
-    w[0] = inv_inertia * L[0];
-    w[1] = inv_inertia * L[1];
-    w[2] = inv_inertia * L[2];
-    tb__half_turn(k * k * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), k, w, r);
+    tb__half_turn(tb__isotropic_turn(L, inv_inertia, k, w), k, w, r);
     tb__qmul(r, q, r); /* w is a world vector: turn on the left */
     tb__normalize(r, q);
 }
 
-/* -------------------------------------------------------------- splitting -- */
+/* In lanes, in two passes: the turns r, and whether each is within the
+   polynomial (u <= 1/16), then, if all are, q <- r q (or q r) with the
+   Newton step; otherwise the block goes through the one-body kernel, which
+   takes the same path for the lanes within the polynomial. */
+typedef struct tb__turn_lanes {
+    double w[TB__LANES], x[TB__LANES], y[TB__LANES], z[TB__LANES], u[TB__LANES];
+} tb__turn_lanes;
 
-/* The state a composition works on: q and L_b in the relabelled axes. */
-typedef struct tb__spin {
-    double w, x, y, z;  /* q */
-    double l0, l1, l2;  /* L_b, kg m^2/s */
-} tb__spin;
-
-/* Turn the body by the angle 2 x about (relabelled) axis 0, for |x| <=
-   TB__SMALL_HALF: q <- q (c, s e0) with (c, s) = (cos x, sin x), and
-   L_b <- R_0(2x)^T L_b. `last` skips L_b, which the final turn of a step
-   leaves unused. */
-static inline void tb__turn_a(tb__spin *p, double x, int last)
-{
-    const double w = p->w, x0 = p->x, y = p->y, z = p->z;
-    double s, c;
-    tb__sincos8(x, &s, &c);
-    p->w = w * c - x0 * s;
-    p->x = x0 * c + w * s;
-    p->y = y * c + z * s;
-    p->z = z * c - y * s;
-    if (!last) {
-        const double C = 1 - 2 * s * s, S = 2 * s * c, l1 = p->l1, l2 = p->l2;
-        p->l1 = C * l1 + S * l2;
-        p->l2 = C * l2 - S * l1;
-    }
-}
-
-/* The same about (relabelled) axis 2: q <- q (c, s e2). */
-static inline void tb__turn_b(tb__spin *p, double x)
-{
-    const double w = p->w, x0 = p->x, y = p->y, z = p->z;
-    double s, c, C, S, l0, l1;
-    tb__sincos8(x, &s, &c);
-    p->w = w * c - z * s;
-    p->x = x0 * c + y * s;
-    p->y = y * c - x0 * s;
-    p->z = z * c + w * s;
-    C = 1 - 2 * s * s;
-    S = 2 * s * c;
-    l0 = p->l0;
-    l1 = p->l1;
-    p->l0 = C * l0 + S * l1;
-    p->l1 = C * l1 - S * l0;
-}
-
-/* The exact flow of c_A L_A^2 / 2 over the time g h is a turn about axis A
-   by g h c_A L_A: with ka = h c_A / 2 the half angle is g ka L_A. */
-#define TB__A(p, g, ka) tb__turn_a(p, ((g) * (ka)) * (p)->l0, 0)
-#define TB__A_LAST(p, g, ka) tb__turn_a(p, ((g) * (ka)) * (p)->l0, 1)
-#define TB__B(p, g, kb) tb__turn_b(p, ((g) * (kb)) * (p)->l2)
-
-/* Any composition A(ga[0]) B(gb[0]) A(ga[1]) ... B(gb[n-2]) A(ga[n-1]) with
-   libm's sin and cos, for turns too large for the polynomials: taken when
-   max |c| |L| h exceeds 0.25 rad (split2) or 0.57 rad (accurate), that is
-   beyond about 15 or 34 rad/s of relative spin at h = 1/60. Slower (two
-   libm calls a turn), otherwise the same. */
-static void tb__compose_big(tb__spin *p, const double *ga, const double *gb, int n,
-                            double ka, double kb)
-{
-    int i;
-    for (i = 0; i < n; ++i) {
-        double w = p->w, x0 = p->x, y = p->y, z = p->z, x, s, c, C, S, l0, l1, l2;
-        x = ga[i] * ka * p->l0;
-        s = sin(x);
-        c = cos(x);
-        p->w = w * c - x0 * s;
-        p->x = x0 * c + w * s;
-        p->y = y * c + z * s;
-        p->z = z * c - y * s;
-        C = 1 - 2 * s * s;
-        S = 2 * s * c;
-        l1 = p->l1;
-        l2 = p->l2;
-        p->l1 = C * l1 + S * l2;
-        p->l2 = C * l2 - S * l1;
-        if (i == n - 1)
-            break;
-        w = p->w, x0 = p->x, y = p->y, z = p->z;
-        x = gb[i] * kb * p->l2;
-        s = sin(x);
-        c = cos(x);
-        p->w = w * c - z * s;
-        p->x = x0 * c + y * s;
-        p->y = y * c - x0 * s;
-        p->z = z * c + w * s;
-        C = 1 - 2 * s * s;
-        S = 2 * s * c;
-        l0 = p->l0;
-        l1 = p->l1;
-        p->l0 = C * l0 + S * l1;
-        p->l1 = C * l1 - S * l0;
-    }
-}
-
-/* What a splitting kernel needs besides the composition itself. */
-typedef struct tb__frame {
-    int ax[3];      /* relabelled axis n is the body's axis ax[n] */
-    double sign;    /* det P: -1 when the relabelling is an odd permutation */
-    double ka, kb;  /* h c_A / 2, h c_B / 2: half angle per unit momentum of a full step */
-    int fast;       /* every turn of the composition is small enough for tb__sincos8 */
-} tb__frame;
-
-/* Relabel (A, middle, B) -> (0, 1, 2), turn q about the world L by a h |L|,
-   and load the relabelled q and L_b. `reach` bounds the composition's
-   coefficients g (|angle| <= reach |h c| |L_b,i|) for the choice of the
-   polynomial path; the check uses |L| >= |L_b,i|, so it needs no sqrt. */
-static void tb__split_begin(tb__frame *f, tb__spin *p, const double q[4], const double L[3],
-                            const double invI[3], double h, double reach)
-{
-    double lb[3], r[4], a, ca, cb, bound;
-    int m, up, down;
-    /* the middle moment (ties: any of the equal ones) */
-    if ((invI[0] <= invI[1] && invI[1] <= invI[2]) || (invI[2] <= invI[1] && invI[1] <= invI[0]))
-        m = 1;
-    else if ((invI[1] <= invI[0] && invI[0] <= invI[2]) || (invI[2] <= invI[0] && invI[0] <= invI[1]))
-        m = 0;
-    else
-        m = 2;
-    a = invI[m];
-    up = m == 2 ? 0 : m + 1;
-    down = m == 0 ? 2 : m - 1;
-    /* A = the outer axis with the larger |c|. (up, m, down) is an odd
-       permutation of (0, 1, 2) for every m, (down, m, up) an even one. */
-    if (fabs(invI[up] - a) > fabs(invI[down] - a)) {
-        f->ax[0] = up;
-        f->ax[2] = down;
-        f->sign = -1;
-    } else {
-        f->ax[0] = down;
-        f->ax[2] = up;
-        f->sign = 1;
-    }
-    f->ax[1] = m;
-    ca = invI[f->ax[0]] - a;
-    cb = invI[f->ax[2]] - a;
-    f->ka = 0.5 * h * ca;
-    f->kb = 0.5 * h * cb;
-    bound = 0.5 * reach * h * (fabs(ca) > fabs(cb) ? ca : cb); /* |c_A| >= |c_B| but for rounding */
-    f->fast = bound * bound * (L[0] * L[0] + L[1] * L[1] + L[2] * L[2])
-              <= TB__SMALL_HALF * TB__SMALL_HALF;
-
-    /* L_b from the q of the start: the turn about L leaves it unchanged */
-    tb__to_body(q, L, lb);
-    {
-        const double k = 0.5 * a * h;
-        tb__half_turn(k * k * (L[0] * L[0] + L[1] * L[1] + L[2] * L[2]), k, L, r);
-        tb__qmul(r, q, r); /* world frame: on the left */
-    }
-    p->w = r[0];
-    p->x = f->sign * r[1 + f->ax[0]];
-    p->y = f->sign * r[1 + f->ax[1]];
-    p->z = f->sign * r[1 + f->ax[2]];
-    p->l0 = f->sign * lb[f->ax[0]];
-    p->l1 = f->sign * lb[f->ax[1]];
-    p->l2 = f->sign * lb[f->ax[2]];
-}
-
-static void tb__split_end(const tb__frame *f, const tb__spin *p, double q[4])
+static inline void tb__turn_put(tb__turn_lanes *t, int i, double u, double k, const double w[3])
 {
     double r[4];
-    r[0] = p->w;
-    r[1 + f->ax[0]] = f->sign * p->x;
-    r[1 + f->ax[1]] = f->sign * p->y;
-    r[1 + f->ax[2]] = f->sign * p->z;
-    tb__normalize(r, q);
+    tb__turn_poly(u, k, w, r);
+    t->w[i] = r[0];
+    t->x[i] = r[1];
+    t->y[i] = r[2];
+    t->z[i] = r[3];
+    t->u[i] = u;
 }
 
-/* ----------------------------------------------------------------- split2 -- */
-
-static const double tb__strang_a[2] = { 0.5, 0.5 };
-static const double tb__strang_b[1] = { 1.0 };
-
-void tb__rotation_split2(double q[4], const double L[3], const double invI[3], double h)
+static inline int tb__turns_small(const tb__turn_lanes *t)
 {
-    tb__frame f;
-    tb__spin p;
-    tb__split_begin(&f, &p, q, L, invI, h, 1.0);
-    if (f.fast) {
-        TB__A(&p, 0.5, f.ka);
-        TB__B(&p, 1.0, f.kb);
-        TB__A_LAST(&p, 0.5, f.ka);
-    } else {
-        tb__compose_big(&p, tb__strang_a, tb__strang_b, 2, f.ka, f.kb);
-    }
-    tb__split_end(&f, &p, q);
+    int i;
+    for (i = 0; i < TB__LANES; ++i)
+        if (!(t->u[i] <= TB__SMALL_WHOLE * TB__SMALL_WHOLE))
+            return 0;
+    return 1;
 }
 
-/* --------------------------------------------------------------- accurate -- */
+void tb__isotropic_lanes(double *restrict q, const double *restrict L, const double *restrict invI, double h, int n)
+{
+    const double k = 0.5 * h;
+    int i;
+    if (n == TB__LANES) {
+        tb__turn_lanes t;
+        for (i = 0; i < TB__LANES; ++i) {
+            double w[3];
+            tb__turn_put(&t, i, tb__isotropic_turn(L + 3 * i, invI[3 * i], k, w), k, w);
+        }
+        if (tb__turns_small(&t)) {
+            for (i = 0; i < TB__LANES; ++i) {
+                double r[4];
+                r[0] = t.w[i], r[1] = t.x[i], r[2] = t.y[i], r[3] = t.z[i];
+                tb__qmul(r, q + 4 * i, r);
+                tb__newton(r, q + 4 * i);
+            }
+            return;
+        }
+    }
+    for (i = 0; i < n; ++i)
+        tb__rotation_isotropic(q + 4 * i, L + 3 * i, invI[3 * i], h);
+}
+
+void tb__frozen_lanes(double *restrict q, const double *restrict L, const double *restrict invI, double h, int n)
+{
+    const double k = 0.5 * h;
+    int i;
+    if (n == TB__LANES) {
+        tb__turn_lanes t;
+        for (i = 0; i < TB__LANES; ++i) {
+            double w[3];
+            tb__turn_put(&t, i, tb__frozen_turn(q + 4 * i, L + 3 * i, invI + 3 * i, k, w), k, w);
+        }
+        if (tb__turns_small(&t)) {
+            for (i = 0; i < TB__LANES; ++i) {
+                double r[4];
+                r[0] = t.w[i], r[1] = t.x[i], r[2] = t.y[i], r[3] = t.z[i];
+                tb__qmul(q + 4 * i, r, r);
+                tb__newton(r, q + 4 * i);
+            }
+            return;
+        }
+    }
+    for (i = 0; i < n; ++i)
+        tb__rotation_frozen(q + 4 * i, L + 3 * i, invI + 3 * i, h);
+}
+
+/* -------------------------------------------------------------- splitting -- */
 
 /* Blanes and Moan, "Practical symplectic partitioned Runge-Kutta and
    Runge-Kutta-Nystrom methods", J. Comput. Appl. Math. 142 (2002), table 2,
@@ -394,32 +320,355 @@ void tb__rotation_split2(double q[4], const double L[3], const double invI[3], d
 #define TB__BM_B3 (0.5 - TB__BM_B1 - TB__BM_B2)
 #define TB__BM_REACH 0.44
 
+/* (h |L|)^2 <= 1 / rate^2 keeps every half angle, rate h |L| at most, in
+   range. */
+static double tb__reach2(double rate)
+{
+    return rate > 0 ? 1 / (rate * rate) : HUGE_VAL;
+}
+
+/* The middle moment, the relabelling and the rates: fixed by the moments. */
+void tb__split_frame_of(const double invI[3], tb__split_frame *f)
+{
+    double a;
+    int m, up, down, A, B;
+    /* the middle moment (ties: any of the equal ones) */
+    if ((invI[0] <= invI[1] && invI[1] <= invI[2]) || (invI[2] <= invI[1] && invI[1] <= invI[0]))
+        m = 1;
+    else if ((invI[1] <= invI[0] && invI[0] <= invI[2]) || (invI[2] <= invI[0] && invI[0] <= invI[1]))
+        m = 0;
+    else
+        m = 2;
+    a = invI[m];
+    up = m == 2 ? 0 : m + 1;
+    down = m == 0 ? 2 : m - 1;
+    /* A = the outer axis with the larger |c|. (up, m, down) is an odd
+       permutation of (0, 1, 2) for every m, (down, m, up) an even one. */
+    if (fabs(invI[up] - a) > fabs(invI[down] - a)) {
+        A = up, B = down;
+        f->sign = -1;
+    } else {
+        A = down, B = up;
+        f->sign = 1;
+    }
+    f->ax[0] = (unsigned char)A;
+    f->ax[1] = (unsigned char)m;
+    f->ax[2] = (unsigned char)B;
+    f->a = a;
+    f->ca = invI[A] - a;
+    f->cb = invI[B] - a;
+    f->isotropic = invI[0] == invI[1] && invI[1] == invI[2];
+    /* the half angle of the turn about L, a h |L| / 2, within tb__turn_poly;
+       those of the axis turns, at most reach |ca| h |L| / 2, within
+       tb__sincos8 (|ca| >= |cb|, |L_b,i| <= |L|) */
+    f->reach2[0] = tb__reach2(fmax(0.5 * a / TB__SMALL_WHOLE, 0.5 * fabs(f->ca) / TB__SMALL_HALF));
+    f->reach2[1] = tb__reach2(fmax(0.5 * a / TB__SMALL_WHOLE, 0.5 * TB__BM_REACH * fabs(f->ca) / TB__SMALL_HALF));
+}
+
+
+/* The state a composition works on: q and L_b in the relabelled axes. */
+typedef struct tb__spin {
+    double w, x, y, z;  /* q */
+    double l0, l1, l2;  /* L_b, kg m^2/s */
+} tb__spin;
+
+/* Turn the body by the angle 2 x about (relabelled) axis 0, given s = sin x
+   and c = cos x: q <- q (c, s e0), and L_b <- R_0(2x)^T L_b. `last` skips
+   L_b, which the final turn of a step leaves unused. */
+TB__LANE void tb__turn_a(tb__spin *p, double s, double c, int last)
+{
+    const double w = p->w, x0 = p->x, y = p->y, z = p->z;
+    p->w = w * c - x0 * s;
+    p->x = x0 * c + w * s;
+    p->y = y * c + z * s;
+    p->z = z * c - y * s;
+    if (!last) {
+        const double C = 1 - 2 * s * s, S = 2 * s * c, l1 = p->l1, l2 = p->l2;
+        p->l1 = C * l1 + S * l2;
+        p->l2 = C * l2 - S * l1;
+    }
+}
+
+/* The same about (relabelled) axis 2: q <- q (c, s e2). */
+TB__LANE void tb__turn_b(tb__spin *p, double s, double c)
+{
+    const double w = p->w, x0 = p->x, y = p->y, z = p->z;
+    const double C = 1 - 2 * s * s, S = 2 * s * c, l0 = p->l0, l1 = p->l1;
+    p->w = w * c - z * s;
+    p->x = x0 * c + y * s;
+    p->y = y * c - x0 * s;
+    p->z = z * c + w * s;
+    p->l0 = C * l0 + S * l1;
+    p->l1 = C * l1 - S * l0;
+}
+
+/* The exact flow of c_A L_A^2 / 2 over the time g h is a turn about axis A
+   by g h c_A L_A: with ka = h c_A / 2 the half angle is g ka L_A. In lanes
+   every half angle is within TB__SMALL_HALF (tb__spin_load saw to it). */
+TB__LANE void tb__a(tb__spin *p, double g, double ka, int last)
+{
+    double s, c;
+    tb__sincos8((g * ka) * p->l0, &s, &c);
+    tb__turn_a(p, s, c, last);
+}
+
+TB__LANE void tb__b(tb__spin *p, double g, double kb)
+{
+    double s, c;
+    tb__sincos8((g * kb) * p->l2, &s, &c);
+    tb__turn_b(p, s, c);
+}
+
+/* A composition in lanes runs piece by piece: each piece is one loop over
+   all lanes (GCC vectorises the fixed-length one; the other serves a
+   partial block with the same arithmetic), so the lanes' chains of
+   dependent turns overlap instead of one waiting for the last: a whole
+   composition per loop iteration would be too long for the processor to
+   look past. Between pieces the lanes stay in L1. */
+#define TB__EACH_LANE(i, n, lane)                          \
+    do {                                                   \
+        if ((n) == TB__LANES)                              \
+            for ((i) = 0; (i) < TB__LANES; ++(i)) {        \
+                lane;                                      \
+            }                                              \
+        else                                               \
+            for ((i) = 0; (i) < (n); ++(i)) {              \
+                lane;                                      \
+            }                                              \
+    } while (0)
+
+TB__LANE void tb__spin_get(const tb__spin_lanes *lanes, int i, tb__spin *p)
+{
+    p->w = lanes->w[i], p->x = lanes->x[i], p->y = lanes->y[i], p->z = lanes->z[i];
+    p->l0 = lanes->l0[i], p->l1 = lanes->l1[i], p->l2 = lanes->l2[i];
+}
+
+TB__LANE void tb__spin_put(tb__spin_lanes *lanes, int i, const tb__spin *p)
+{
+    lanes->w[i] = p->w, lanes->x[i] = p->x, lanes->y[i] = p->y, lanes->z[i] = p->z;
+    lanes->l0[i] = p->l0, lanes->l1[i] = p->l1, lanes->l2[i] = p->l2;
+}
+
+/* Lane i's L_b from its q and L (which it replaces), and its q turned about
+   the world L by the angle a h |L| (that turn leaves L_b unchanged). */
+TB__LANE void tb__lane_begin(tb__spin_lanes *lanes, int i)
+{
+    double q[4], L[3], lb[3], r[4];
+    const double h = lanes->h, k = 0.5 * h * lanes->a[i];
+    lanes->ka[i] = 0.5 * h * lanes->ca[i];
+    lanes->kb[i] = 0.5 * h * lanes->cb[i];
+    q[0] = lanes->w[i], q[1] = lanes->x[i], q[2] = lanes->y[i], q[3] = lanes->z[i];
+    L[0] = lanes->l0[i], L[1] = lanes->l1[i], L[2] = lanes->l2[i];
+    tb__to_body(q, L, lb);
+    tb__turn_poly(k * k * (L[0] * L[0] + L[1] * L[1] + L[2] * L[2]), k, L, r);
+    tb__qmul(r, q, r); /* world frame: on the left */
+    lanes->w[i] = r[0], lanes->x[i] = r[1], lanes->y[i] = r[2], lanes->z[i] = r[3];
+    lanes->l0[i] = lb[0], lanes->l1[i] = lb[1], lanes->l2[i] = lb[2];
+}
+
+TB__LANE void tb__lane_a(tb__spin_lanes *lanes, int i, double g, int last)
+{
+    tb__spin p;
+    tb__spin_get(lanes, i, &p);
+    tb__a(&p, g, lanes->ka[i], last);
+    tb__spin_put(lanes, i, &p);
+}
+
+TB__LANE void tb__lane_b(tb__spin_lanes *lanes, int i, double g)
+{
+    tb__spin p;
+    tb__spin_get(lanes, i, &p);
+    tb__b(&p, g, lanes->kb[i]);
+    tb__spin_put(lanes, i, &p);
+}
+
+TB__LANE void tb__lane_end(tb__spin_lanes *lanes, int i)
+{
+    double q[4];
+    q[0] = lanes->w[i], q[1] = lanes->x[i], q[2] = lanes->y[i], q[3] = lanes->z[i];
+    tb__newton(q, q);
+    lanes->w[i] = q[0], lanes->x[i] = q[1], lanes->y[i] = q[2], lanes->z[i] = q[3];
+}
+
+static void tb__lanes_begin(tb__spin_lanes *restrict p, int n)
+{
+    int i;
+    TB__EACH_LANE(i, n, tb__lane_begin(p, i));
+}
+
+static void tb__lanes_a_last(tb__spin_lanes *restrict p, int n, double g)
+{
+    int i;
+    TB__EACH_LANE(i, n, tb__lane_a(p, i, g, 1));
+}
+
+/* One loop a turn. (Two turns a loop halve the loads and stores between
+   turns, but double the chain of an iteration: 15% slower, measured.) */
+static void tb__lanes_a(tb__spin_lanes *restrict p, int n, double g)
+{
+    int i;
+    TB__EACH_LANE(i, n, tb__lane_a(p, i, g, 0));
+}
+
+static void tb__lanes_b(tb__spin_lanes *restrict p, int n, double g)
+{
+    int i;
+    TB__EACH_LANE(i, n, tb__lane_b(p, i, g));
+}
+
+static void tb__lanes_end(tb__spin_lanes *restrict p, int n)
+{
+    int i;
+    TB__EACH_LANE(i, n, tb__lane_end(p, i));
+}
+
+/* Any composition A(ga[0]) B(gb[0]) A(ga[1]) ... B(gb[n-2]) A(ga[n-1]) of
+   one body that the lanes cannot take: turns beyond the polynomials (taken
+   when max |c| |L| h exceeds 0.25 rad for split2, 0.57 rad for accurate,
+   that is beyond about 15 or 34 rad/s of relative spin at h = 1/60), or a
+   q off unit length. Slower (libm for the large turns), otherwise the
+   same. */
+static void tb__sincos_any(double x, double *s, double *c)
+{
+    if (fabs(x) <= TB__SMALL_HALF) {
+        tb__sincos8(x, s, c);
+    } else {
+        *s = sin(x);
+        *c = cos(x);
+    }
+}
+
+static void tb__split_any(double q[4], const double L[3], const tb__split_frame *f, double h, const double *ga,
+                          const double *gb, int n)
+{
+    const double sign = f->sign, ka = 0.5 * h * f->ca, kb = 0.5 * h * f->cb, k = 0.5 * h * f->a;
+    double r[4], lb[3], Lr[3], qr[4];
+    tb__spin p;
+    int i;
+    qr[0] = q[0];
+    for (i = 0; i < 3; ++i) {
+        qr[1 + i] = sign * q[1 + f->ax[i]];
+        Lr[i] = sign * L[f->ax[i]];
+    }
+    tb__to_body(qr, Lr, lb);
+    tb__half_turn(k * k * (Lr[0] * Lr[0] + Lr[1] * Lr[1] + Lr[2] * Lr[2]), k, Lr, r);
+    tb__qmul(r, qr, r);
+    p.w = r[0], p.x = r[1], p.y = r[2], p.z = r[3];
+    p.l0 = lb[0], p.l1 = lb[1], p.l2 = lb[2];
+    for (i = 0; i < n; ++i) {
+        double s, c;
+        tb__sincos_any(ga[i] * ka * p.l0, &s, &c);
+        tb__turn_a(&p, s, c, i == n - 1);
+        if (i == n - 1)
+            break;
+        tb__sincos_any(gb[i] * kb * p.l2, &s, &c);
+        tb__turn_b(&p, s, c);
+    }
+    r[0] = p.w;
+    r[1 + f->ax[0]] = sign * p.x;
+    r[1 + f->ax[1]] = sign * p.y;
+    r[1 + f->ax[2]] = sign * p.z;
+    tb__normalize(r, q);
+}
+
+/* ----------------------------------------------------------------- split2 -- */
+
+/* The compositions, as sequences of pieces: over lanes, or for one body in
+   lane 0 with no loop around each piece (the same arithmetic). */
+#define TB__SPLIT2(begin, a, b, a_last, end) \
+    do {                                    \
+        begin;                              \
+        a(0.5);                             \
+        b(1.0);                             \
+        a_last(0.5);                        \
+        end;                                \
+    } while (0)
+
+#define TB__ACCURATE(begin, a, b, a_last, end)                          \
+    do {                                                                \
+        begin;                                                          \
+        a(TB__BM_A1), b(TB__BM_B1), a(TB__BM_A2), b(TB__BM_B2);         \
+        a(TB__BM_A3), b(TB__BM_B3), a(TB__BM_A4), b(TB__BM_B3);         \
+        a(TB__BM_A3), b(TB__BM_B2), a(TB__BM_A2), b(TB__BM_B1);         \
+        a_last(TB__BM_A1);                                              \
+        end;                                                            \
+    } while (0)
+
+#define TB__LANES_A(g) tb__lanes_a(p, n, g)
+#define TB__LANES_B(g) tb__lanes_b(p, n, g)
+#define TB__LANES_A_LAST(g) tb__lanes_a_last(p, n, g)
+#define TB__ONE_A(g) tb__lane_a(p, 0, g, 0)
+#define TB__ONE_B(g) tb__lane_b(p, 0, g)
+#define TB__ONE_A_LAST(g) tb__lane_a(p, 0, g, 1)
+
+void tb__split2_lanes(tb__spin_lanes *p, int n)
+{
+    TB__SPLIT2(tb__lanes_begin(p, n), TB__LANES_A, TB__LANES_B, TB__LANES_A_LAST, tb__lanes_end(p, n));
+}
+
+static void tb__split2_one(tb__spin_lanes *p)
+{
+    TB__SPLIT2(tb__lane_begin(p, 0), TB__ONE_A, TB__ONE_B, TB__ONE_A_LAST, tb__lane_end(p, 0));
+}
+
+static const double tb__strang_a[2] = { 0.5, 0.5 };
+static const double tb__strang_b[1] = { 1.0 };
+
+/* A q off unit length (a careless caller; never the world's) goes the
+   general way too, for its full normalisation. */
+#define TB__NEAR_UNIT(q) (fabs(tb__norm2(q) - 1) <= 5e-9)
+
+void tb__split2_framed(double q[4], const double L[3], const tb__split_frame *f, double h)
+{
+    tb__spin_lanes p;
+    p.h = h;
+    if (TB__NEAR_UNIT(q) && tb__spin_load(&p, 0, q, L, f, h * h, 0)) {
+        tb__split2_one(&p);
+        tb__spin_store(&p, 0, f, q);
+    } else {
+        tb__split_any(q, L, f, h, tb__strang_a, tb__strang_b, 2);
+    }
+}
+
+void tb__rotation_split2(double q[4], const double L[3], const double invI[3], double h)
+{
+    tb__split_frame f;
+    tb__split_frame_of(invI, &f);
+    tb__split2_framed(q, L, &f, h);
+}
+
+/* --------------------------------------------------------------- accurate -- */
+
 static const double tb__bm_a[7] = { TB__BM_A1, TB__BM_A2, TB__BM_A3, TB__BM_A4,
                                     TB__BM_A3, TB__BM_A2, TB__BM_A1 };
 static const double tb__bm_b[6] = { TB__BM_B1, TB__BM_B2, TB__BM_B3,
                                     TB__BM_B3, TB__BM_B2, TB__BM_B1 };
 
+void tb__accurate_lanes(tb__spin_lanes *p, int n)
+{
+    TB__ACCURATE(tb__lanes_begin(p, n), TB__LANES_A, TB__LANES_B, TB__LANES_A_LAST, tb__lanes_end(p, n));
+}
+
+static void tb__accurate_one(tb__spin_lanes *p)
+{
+    TB__ACCURATE(tb__lane_begin(p, 0), TB__ONE_A, TB__ONE_B, TB__ONE_A_LAST, tb__lane_end(p, 0));
+}
+
+void tb__accurate_framed(double q[4], const double L[3], const tb__split_frame *f, double h)
+{
+    tb__spin_lanes p;
+    p.h = h;
+    if (TB__NEAR_UNIT(q) && tb__spin_load(&p, 0, q, L, f, h * h, 1)) {
+        tb__accurate_one(&p);
+        tb__spin_store(&p, 0, f, q);
+    } else {
+        tb__split_any(q, L, f, h, tb__bm_a, tb__bm_b, 7);
+    }
+}
+
 void tb__rotation_accurate(double q[4], const double L[3], const double invI[3], double h)
 {
-    tb__frame f;
-    tb__spin p;
-    tb__split_begin(&f, &p, q, L, invI, h, TB__BM_REACH);
-    if (f.fast) {
-        TB__A(&p, TB__BM_A1, f.ka);
-        TB__B(&p, TB__BM_B1, f.kb);
-        TB__A(&p, TB__BM_A2, f.ka);
-        TB__B(&p, TB__BM_B2, f.kb);
-        TB__A(&p, TB__BM_A3, f.ka);
-        TB__B(&p, TB__BM_B3, f.kb);
-        TB__A(&p, TB__BM_A4, f.ka);
-        TB__B(&p, TB__BM_B3, f.kb);
-        TB__A(&p, TB__BM_A3, f.ka);
-        TB__B(&p, TB__BM_B2, f.kb);
-        TB__A(&p, TB__BM_A2, f.ka);
-        TB__B(&p, TB__BM_B1, f.kb);
-        TB__A_LAST(&p, TB__BM_A1, f.ka);
-    } else {
-        tb__compose_big(&p, tb__bm_a, tb__bm_b, 7, f.ka, f.kb);
-    }
-    tb__split_end(&f, &p, q);
+    tb__split_frame f;
+    tb__split_frame_of(invI, &f);
+    tb__accurate_framed(q, L, &f, h);
 }

@@ -183,6 +183,18 @@ void tb__split_sweep(tb_world *w, const tb__split_op *ops, int n)
         tb__body_sweep(w, ops, n);
 }
 
+/* RK4 one block of objects at a time through all four stages, when nothing
+   couples objects: only bodies, no springs, no callbacks (which might see
+   every object). Returns whether it stepped. */
+int tb__fused_rk4(tb_world *w, double h)
+{
+    if (!w->body_count || w->tracer_count || w->particle_count || w->forces.count)
+        return 0;
+    w->force_ready = 0; /* what tb__global_forces finds with no springs or callbacks */
+    tb__body_rk4(w, h);
+    return 1;
+}
+
 int tb__split_velocity_dependent(const tb_world *w)
 {
     return w->forces.count > 0 || tb__particle_velocity_dependent(w) || tb__body_velocity_dependent(w);
@@ -230,7 +242,7 @@ tb_status tb_world_step(tb_world *w, double h)
             tb__state_copy(w, w->y, saved);
         return st;
     }
-    if (w->body_count) /* held forces last one step, as in ODE */
+    if (w->body_count && w->body_held) /* held forces last one step, as in ODE */
         memset(w->body_applied, 0, 6 * w->body_count * sizeof(double));
     {   /* compensated sum: t after n steps of h is n h to the last bit */
         const double add = h - w->time_carry, sum = w->time + add;

@@ -15,6 +15,7 @@
 #define TB_WORLD_H
 
 #include "tumble.h"
+#include "rotation.h"
 #include <stdarg.h>
 
 /* The tiers of objects, and the arrays of the state vector y: name, tier,
@@ -80,9 +81,15 @@ typedef struct tb__method {
     int updates_before_last_evaluation;  /* needs a snapshot to roll back */
     int scratch;           /* state-sized scratch vectors it uses */
     tb_status (*step)(tb_world *w, double h);
+    /* Stability on x' = z x: the largest |h lambda| it survives along the
+       imaginary axis (oscillation, 0: none) and along the negative real
+       axis (decay). Used by the advisor (advisor.c). */
+    double oscillation_limit;
+    double decay_limit;
 } tb__method;
 
 const tb__method *tb__method_find(const char *name);
+const tb__method *tb__method_at(int index); /* NULL past the end */
 
 struct tb_world {
     tb_allocator allocator;
@@ -144,6 +151,12 @@ struct tb_world {
                                  torque of this evaluation */
     double *body_motion;      /* [6 * body_cap] m/s, rad/s: v and w shown to
                                  callbacks */
+    tb__split_frame *body_frame; /* [body_cap] the axes and rates the rotation
+                                 kernels need, fixed by the moments */
+    size_t body_damped;       /* bodies with linear or angular damping */
+    size_t body_isotropic;    /* bodies with I1 = I2 = I3 */
+    int body_held;            /* some body_applied may be nonzero (cleared
+                                 once a sweep finds them all zero) */
     tb__ids body_ids;
 
     /* velocity fields for tracers (tb__field), user forces (tb__force) */
@@ -199,6 +212,17 @@ void tb__state_copy(const tb_world *w, double *out, const double *in);
 tb_status tb__derive(tb_world *w, double t, const double *y, double *dy);
 /* Put y back on its constraints after a generic stage (unit quaternions). */
 void tb__project(tb_world *w, double *y);
+/* RK4 fused: when nothing couples objects (no springs, no callbacks), each
+   object's derivative depends on the object alone, so the step can go
+   object by object through all four stages, with the generic method's
+   arithmetic (the same bits) but none of its passes over the whole state.
+   1 when it stepped the world, 0 when the world needs the generic method
+   (coupling forces, or objects of a tier that offers no fused step: today
+   only bodies do, in body_step.c). */
+/* RK4 through all stages one block at a time, when the world allows it
+   (world.c decides; the body tier does the work). */
+int tb__fused_rk4(tb_world *w, double h);
+void tb__body_rk4(tb_world *w, double h);
 
 /* Split methods: kicks and drifts. tb__split_prepare evaluates the forces
    that are not local to one object (springs, callbacks) at the current
@@ -239,6 +263,7 @@ void tb__body_momenta(const tb_world *w, double linear[3], double angular[3]);
 tb_status tb__global_forces(tb_world *w, double t, const double *y, const double *seen);
 /* ---- springs.c, forces.c, fields.c ------------------------------------- */
 void tb__spring_forces(const tb_world *w, const double *pos, const double *vel, double *force);
+void tb__spring_stiffness_product(const tb_world *w, const double *pos, const double *u, double *out);
 void tb__springs_detach(tb_world *w, uint32_t slot);
 void tb__springs_move(tb_world *w, uint32_t from, uint32_t to);
 double tb__spring_energy(const tb_world *w);

@@ -1,9 +1,12 @@
 /* test_rotation.c: the torque-free rotation kernels (src/rotation.c) against
    closed forms (isotropic body, symmetric top), against a converged
    reference on the intermediate-axis flip that this file checks for its own
-   convergence, and for the orders, invariants and symmetries they claim. */
+   convergence, and for the orders, invariants and symmetries they claim;
+   then that the kernels in lanes, and the world's fast paths built on them,
+   give a body the bits of the one-body kernels and of the general paths. */
 #include "test_main.h"
 #include "rotation.h"
+#include "tumble.h"
 
 #include <math.h>
 #include <string.h>
@@ -604,6 +607,189 @@ static void large_steps_stay_exact(void **state)
     }
 }
 
+
+/* ------------------------------------------------------------- lanes -- */
+
+/* Reproducible numbers in [0, 1) (xorshift64*). */
+static double uniform(unsigned long long *s)
+{
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return (double)((*s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* Body k of the lane tests: every order of the moments (so every
+   relabelling and its sign), symmetric tops and isotropic bodies, a unit q,
+   spins from slow to beyond the polynomials (the libm path). */
+static void lane_body(unsigned long long *s, int k, double q[4], double L[3], double invI[3])
+{
+    static const double shapes[6][3] = { { 1, 2, 3 }, { 3, 1, 2 }, { 2, 3, 1 }, { 1, 3, 2 }, { 2, 2, 3 }, { 1.5, 1.5, 1.5 } };
+    const double spin = k % 11 == 5 ? 60 : 8;
+    int i;
+    for (i = 0; i < 3; ++i) {
+        invI[i] = 1 / (shapes[k % 6][i] * (0.5 + uniform(s)));
+        L[i] = spin * (2 * uniform(s) - 1);
+    }
+    if (k % 6 == 5)
+        invI[1] = invI[2] = invI[0];
+    if (k % 6 == 4)
+        invI[1] = invI[0];
+    for (i = 0; i < 4; ++i)
+        q[i] = 2 * uniform(s) - 1;
+    normalize(q);
+}
+
+/* The kernels in lanes give every body the bits of the one-body kernel:
+   full blocks and partial ones, with bodies beyond the polynomials among
+   them, over many steps. */
+static void lanes_give_the_one_body_bits(void **state)
+{
+    enum { N = 3 * TB__LANES + 5, STEPS = 50 };
+    static double q[N][4], L[N][3], invI[N][3], one[N][4];
+    unsigned long long seed = 42;
+    int kind, k, s;
+    (void)state;
+    for (kind = 0; kind < 4; ++kind) {
+        for (k = 0; k < N; ++k) {
+            lane_body(&seed, k, q[k], L[k], invI[k]);
+            if (kind == 0) /* the isotropic kernel reads invI[0] alone */
+                invI[k][1] = invI[k][2] = invI[k][0];
+            memcpy(one[k], q[k], sizeof one[k]);
+        }
+        for (s = 0; s < STEPS; ++s) {
+            const double h = s % 7 == 3 ? -1.0 / 60 : 1.0 / 60;
+            int b;
+            for (b = 0; b < N; b += TB__LANES) {
+                const int n = N - b < TB__LANES ? N - b : TB__LANES;
+                if (kind == 0)
+                    tb__isotropic_lanes(q[b], L[b], invI[b], h, n);
+                else if (kind == 1)
+                    tb__frozen_lanes(q[b], L[b], invI[b], h, n);
+                else {
+                    tb__split_frame f[TB__LANES];
+                    tb__spin_lanes p;
+                    int i, loaded[TB__LANES], m = 0;
+                    p.h = h;
+                    for (i = 0; i < n; ++i) {
+                        tb__split_frame_of(invI[b + i], &f[i]);
+                        loaded[i] = tb__spin_load(&p, m, q[b + i], L[b + i], &f[i], h * h, kind == 3);
+                        if (loaded[i])
+                            ++m;
+                        else if (kind == 3)
+                            tb__accurate_framed(q[b + i], L[b + i], &f[i], h);
+                        else
+                            tb__split2_framed(q[b + i], L[b + i], &f[i], h);
+                    }
+                    if (kind == 3)
+                        tb__accurate_lanes(&p, m);
+                    else
+                        tb__split2_lanes(&p, m);
+                    for (i = 0, m = 0; i < n; ++i)
+                        if (loaded[i])
+                            tb__spin_store(&p, m++, &f[i], q[b + i]);
+                }
+            }
+            for (k = 0; k < N; ++k) {
+                if (kind == 0)
+                    tb__rotation_isotropic(one[k], L[k], invI[k][0], h);
+                else
+                    kernels[kind - 1].step(one[k], L[k], invI[k], h);
+            }
+        }
+        for (k = 0; k < N; ++k)
+            assert_memory_equal(q[k], one[k], sizeof q[k]);
+    }
+}
+
+/* ---------------------------------------------- the world's fast paths -- */
+
+static tb_status no_force(const tb_force_args *args, void *user)
+{
+    (void)args;
+    (void)user;
+    return TB_OK;
+}
+
+/* Bodies of every kind, some with -0 in their velocities, some damped, in
+   a world whose gravity has a -0 component; `callback` adds a force
+   callback that adds nothing, which sends the world through the general
+   paths (the per-body kicks, the generic RK4). */
+static tb_world *mixed_world(const char *integrator, int damped, int callback)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_world *w;
+    unsigned long long seed = 7;
+    int k, i;
+    def.integrator = integrator;
+    def.gravity[0] = -0.0;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    for (k = 0; k < 2 * TB__LANES + 3; ++k) {
+        tb_body_def b = tb_default_body_def();
+        double L[3], invI[3], a[3];
+        lane_body(&seed, k, b.orientation, L, invI);
+        for (i = 0; i < 3; ++i) /* a box: sides a, isotropic for k % 6 = 5, a top for 4 */
+            a[i] = k % 6 == 5 ? 1 : 0.25 + uniform(&seed);
+        if (k % 6 == 4)
+            a[1] = a[0];
+        b.mass.inertia[0] = (a[1] * a[1] + a[2] * a[2]) / 12;
+        b.mass.inertia[1] = (a[0] * a[0] + a[2] * a[2]) / 12;
+        b.mass.inertia[2] = (a[0] * a[0] + a[1] * a[1]) / 12;
+        for (i = 0; i < 3; ++i) {
+            b.position[i] = 10 * uniform(&seed);
+            b.velocity[i] = k % 4 == 1 ? -0.0 : 4 * uniform(&seed) - 2;
+            b.angular_velocity[i] = k % 4 == 1 ? -0.0 : L[i] / 4;
+        }
+        b.mass.mass = 0.5 + uniform(&seed);
+        if (damped && k % 5 == 2)
+            b.angular_damping = b.linear_damping = 0.3;
+        assert_int_equal(tb_world_add_body(w, &b, NULL), TB_OK);
+    }
+    if (callback)
+        assert_int_equal(tb_world_add_force(w, no_force, NULL, NULL), TB_OK);
+    return w;
+}
+
+/* The sweeps in blocks (gravity alone: kicks of P alone, lanes) and the
+   fused RK4 give the bits of the general paths, for every integrator, with
+   and without damping and held forces. */
+static void fast_paths_give_the_general_bits(void **state)
+{
+    int m, damped;
+    (void)state;
+    for (m = 0; m < tb_integrator_count(); ++m)
+        for (damped = 0; damped < 2; ++damped) {
+            tb_world *w[2];
+            size_t n, k;
+            int c, s;
+            for (c = 0; c < 2; ++c)
+                w[c] = mixed_world(tb_integrator_name(m), damped, c);
+            n = tb_world_body_count(w[0]);
+            for (s = 0; s < 120; ++s)
+                for (c = 0; c < 2; ++c) {
+                    if (damped && s % 3 == 0) {
+                        const double f[3] = { 1, -2, 0.5 }, at[3] = { 0.1, 0, -0.2 };
+                        assert_int_equal(tb_body_apply_force_at_body_point(w[c], tb_world_body_at(w[c], 4), f, at),
+                                         TB_OK);
+                    }
+                    assert_int_equal(tb_world_step(w[c], 1.0 / 60), TB_OK);
+                }
+            print_message("%-16s %s: same bits\n", tb_integrator_name(m), damped ? "damped, held forces" : "gravity alone");
+            assert_memory_equal(tb_world_body_positions(w[0]), tb_world_body_positions(w[1]), 3 * n * sizeof(double));
+            assert_memory_equal(tb_world_body_orientations(w[0]), tb_world_body_orientations(w[1]),
+                                4 * n * sizeof(double));
+            for (k = 0; k < n; ++k) {
+                double P[2][3], L[2][3];
+                for (c = 0; c < 2; ++c)
+                    assert_int_equal(tb_body_momentum(w[c], tb_world_body_at(w[c], k), P[c], L[c]), TB_OK);
+                assert_memory_equal(P[0], P[1], sizeof P[0]);
+                assert_memory_equal(L[0], L[1], sizeof L[0]);
+            }
+            for (c = 0; c < 2; ++c)
+                tb_world_destroy(w[c]);
+        }
+}
+
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(reference_converges),
     cmocka_unit_test(isotropic_bodies_rotate_exactly),
@@ -617,6 +803,8 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(axis_order_does_not_matter),
     cmocka_unit_test(splitting_is_time_reversible),
     cmocka_unit_test(large_steps_stay_exact),
+    cmocka_unit_test(lanes_give_the_one_body_bits),
+    cmocka_unit_test(fast_paths_give_the_general_bits),
 };
 
 TB_TEST_MAIN(tests)

@@ -1,0 +1,492 @@
+/* body_step.c: the body tier's part of the stepping primitives: derive,
+   kick and drift, projection, callback motion, and RK4 fused per block of
+   bodies. The hot loops run over TB__LANES bodies at a time (rotation.h),
+   written so that GCC -O2 vectorises them. */
+#include "world.h"
+#include "body_math.h"
+
+/* dP/dt and dL/dt from the local forces: gravity, damping (seeing P and
+   L) and the forces held by the user. */
+TB__LANE void local_rates(double m, const double g[3], double cl, double ca, const double *held,
+                          const double P[3], const double L[3], double dP[3], double dL[3])
+{
+    /* written out: the lane loops vectorise only straight code */
+    dP[0] = m * g[0] - cl * P[0] + held[0];
+    dP[1] = m * g[1] - cl * P[1] + held[1];
+    dP[2] = m * g[2] - cl * P[2] + held[2];
+    dL[0] = held[3] - ca * L[0];
+    dL[1] = held[4] - ca * L[1];
+    dL[2] = held[5] - ca * L[2];
+}
+
+/* ... and the callbacks' forces of this evaluation. */
+static void rates(const tb_world *w, uint32_t s, const double *P, const double *L, double dP[3], double dL[3])
+{
+    int k;
+    local_rates(w->body_mass[s], w->gravity, w->body_damping[2 * s], w->body_damping[2 * s + 1],
+                w->body_applied + 6 * s, P, L, dP, dL);
+    if (w->force_ready)
+        for (k = 0; k < 3; ++k) {
+            dP[k] += w->body_force[3 * s + k];
+            dL[k] += w->body_force[3 * w->body_count + 3 * s + k];
+        }
+}
+
+/* dx/dt = P / M and dq/dt = (0, w) q / 2 = q (0, w_b) / 2, with w = R w_b
+   and w_b = diag(invI) R^T L for R = R(q / |q|): the q of a Runge-Kutta
+   stage is not unit. R^T L comes straight from q, as
+   L + w t + p x t with p = -(x, y, z) and t = (2 / |q|^2) p x L: one
+   division, no root, no matrix, no turn back to the world. An isotropic
+   body needs no R at all: w = L / I. */
+TB__LANE void motion(const double q[4], const double P[3], const double L[3], double inv_mass,
+                     const double invI[3], int isotropic, double dx[3], double dq[4])
+{
+    dx[0] = P[0] * inv_mass;
+    dx[1] = P[1] * inv_mass;
+    dx[2] = P[2] * inv_mass;
+    if (isotropic) {
+        const double w0 = invI[0] * L[0], w1 = invI[0] * L[1], w2 = invI[0] * L[2];
+        dq[0] = -0.5 * (w0 * q[1] + w1 * q[2] + w2 * q[3]);
+        dq[1] = 0.5 * (w0 * q[0] + w1 * q[3] - w2 * q[2]);
+        dq[2] = 0.5 * (-w0 * q[3] + w1 * q[0] + w2 * q[1]);
+        dq[3] = 0.5 * (w0 * q[2] - w1 * q[1] + w2 * q[0]);
+    } else {
+        const double w = q[0], x = -q[1], y = -q[2], z = -q[3];
+        const double s = 2 / (w * w + x * x + y * y + z * z);
+        const double tx = s * (y * L[2] - z * L[1]), ty = s * (z * L[0] - x * L[2]), tz = s * (x * L[1] - y * L[0]);
+        const double w0 = invI[0] * (L[0] + w * tx + (y * tz - z * ty));
+        const double w1 = invI[1] * (L[1] + w * ty + (z * tx - x * tz));
+        const double w2 = invI[2] * (L[2] + w * tz + (x * ty - y * tx));
+        dq[0] = -0.5 * (q[1] * w0 + q[2] * w1 + q[3] * w2);
+        dq[1] = 0.5 * (q[0] * w0 + q[2] * w2 - q[3] * w1);
+        dq[2] = 0.5 * (q[0] * w1 + q[3] * w0 - q[1] * w2);
+        dq[3] = 0.5 * (q[0] * w2 + q[1] * w1 - q[2] * w0);
+    }
+}
+
+void tb__body_derive(tb_world *w, const double *y, double *dy)
+{
+    const double *q = y + w->off[TB__BODY_ROT], *P = y + w->off[TB__BODY_MOM], *L = y + w->off[TB__BODY_ANG];
+    uint32_t s;
+    for (s = 0; s < w->body_count; ++s) {
+        motion(q + 4 * s, P + 3 * s, L + 3 * s, w->body_inv_mass[s], w->body_inv_inertia + 3 * s,
+               w->body_frame[s].isotropic, dy + w->off[TB__BODY_POS] + 3 * s, dy + w->off[TB__BODY_ROT] + 4 * s);
+        rates(w, s, P + 3 * s, L + 3 * s, dy + w->off[TB__BODY_MOM] + 3 * s, dy + w->off[TB__BODY_ANG] + 3 * s);
+    }
+}
+
+static int gravity_only(tb_world *w);
+
+/* ---- RK4, fused ---------------------------------------------------------------- */
+
+/* Generic RK4 (integrators.c) makes seven passes over the whole state and
+   four over the derivative. When nothing couples objects (no callbacks;
+   bodies feel no springs), each body's derivative depends on the body
+   alone, so a block of TB__LANES bodies can go through all four stages
+   while it sits in L1: one loop over the lanes per stage, which GCC
+   vectorises, takes the slope and at once adds it to the sum and makes the
+   next stage. Each lane does what the generic method does to its body, in
+   the same order: the same bits. */
+enum { RK_X = 0, RK_Q = 3, RK_P = 7, RK_L = 10, RK_N = 13 };
+
+typedef struct rk_block {
+    double y[RK_N][TB__LANES];     /* the block's state at the start: x, q, P, L */
+    double stage[RK_N][TB__LANES]; /* a stage's state; at the end, the new state */
+    double sum[RK_N][TB__LANES];   /* k1 + 2 k2 + 2 k3 + k4 */
+    double held[6][TB__LANES];     /* the held forces and torques (copied in:
+                                      GCC vectorises no stride of 6) */
+    double n2[TB__LANES];          /* |q|^2 at the end, for project_far */
+    double inv_inertia[3][TB__LANES]; /* the constants the stages read, */
+    double mg[3][TB__LANES];          /* copied in once, not at every stage */
+} rk_block;
+
+/* The bodies' constants, at the block's first body. */
+typedef struct rk_params {
+    const double *mass, *inv_mass, *damping;
+    double gravity[3];
+} rk_params;
+
+/* Stage `mode` of lane i: the slope k at the stage's state (at y for the
+   first), then what the generic method's axpy passes do with it:
+   mode 0: sum = k, stage = y + a k;
+   mode 1: sum = sum + b k, stage = y + a k;
+   mode 2: sum = sum + b k, stage = y + a sum (the end of the step).
+   The stages' positions are left out: no slope reads them. Without
+   damping and held forces (`local` 0) dP/dt = m g and dL/dt = 0 (the bits
+   local_rates() gives then), so L is left alone. */
+TB__LANE void rk_add(rk_block *r, int n, int i, double k, double a, double b, int mode)
+{
+    const double sum = mode == 0 ? k : r->sum[n][i] + b * k;
+    r->sum[n][i] = sum;
+    if (n >= RK_Q || mode == 2)
+        r->stage[n][i] = r->y[n][i] + a * (mode == 2 ? sum : k);
+}
+
+TB__LANE void rk_stage(const rk_params *c, rk_block *r, int i, int isotropic, int local, double a, double b,
+                       int mode)
+{
+    double (*in)[TB__LANES] = mode == 0 ? r->y : r->stage;
+    double (*in_l)[TB__LANES] = local ? in : r->y;
+    double q[4], P[3], L[3], k[RK_N], invI[3];
+    invI[0] = r->inv_inertia[0][i], invI[1] = r->inv_inertia[1][i], invI[2] = r->inv_inertia[2][i];
+    q[0] = in[RK_Q][i], q[1] = in[RK_Q + 1][i], q[2] = in[RK_Q + 2][i], q[3] = in[RK_Q + 3][i];
+    P[0] = in[RK_P][i], P[1] = in[RK_P + 1][i], P[2] = in[RK_P + 2][i];
+    L[0] = in_l[RK_L][i], L[1] = in_l[RK_L + 1][i], L[2] = in_l[RK_L + 2][i];
+    motion(q, P, L, c->inv_mass[i], invI, isotropic, k + RK_X, k + RK_Q);
+    if (local) {
+        double held[6];
+        held[0] = r->held[0][i], held[1] = r->held[1][i], held[2] = r->held[2][i];
+        held[3] = r->held[3][i], held[4] = r->held[4][i], held[5] = r->held[5][i];
+        local_rates(c->mass[i], c->gravity, c->damping[2 * i], c->damping[2 * i + 1], held, P, L, k + RK_P,
+                    k + RK_L);
+    } else {
+        k[RK_P] = r->mg[0][i], k[RK_P + 1] = r->mg[1][i], k[RK_P + 2] = r->mg[2][i];
+    }
+    /* written out: the lane loops vectorise only straight code */
+    rk_add(r, 0, i, k[0], a, b, mode), rk_add(r, 1, i, k[1], a, b, mode), rk_add(r, 2, i, k[2], a, b, mode);
+    rk_add(r, 3, i, k[3], a, b, mode), rk_add(r, 4, i, k[4], a, b, mode), rk_add(r, 5, i, k[5], a, b, mode);
+    rk_add(r, 6, i, k[6], a, b, mode), rk_add(r, 7, i, k[7], a, b, mode), rk_add(r, 8, i, k[8], a, b, mode);
+    rk_add(r, 9, i, k[9], a, b, mode);
+    if (local) {
+        rk_add(r, 10, i, k[10], a, b, mode), rk_add(r, 11, i, k[11], a, b, mode);
+        rk_add(r, 12, i, k[12], a, b, mode);
+    }
+}
+
+/* A stage of the m lanes; `kind` 1: all isotropic, 0: none, -1: some. The
+   loops of fixed length, one for each combination of the constant
+   arguments, are the ones GCC vectorises. */
+#define RK_LANES(isotropic, local, mode)                           \
+    for (i = 0; i < TB__LANES; ++i)                                \
+        rk_stage(c, r, i, isotropic, local, a, b, mode)
+#define RK_MODES(isotropic, local)                                 \
+    do {                                                           \
+        if (mode == 0)                                             \
+            RK_LANES(isotropic, local, 0);                         \
+        else if (mode == 1)                                        \
+            RK_LANES(isotropic, local, 1);                         \
+        else                                                       \
+            RK_LANES(isotropic, local, 2);                         \
+    } while (0)
+
+static void rk_stages(const rk_params *c, rk_block *restrict r, const tb__split_frame *frame, int kind, int local,
+                      int m, double a, double b, int mode)
+{
+    int i;
+    if (m < TB__LANES || kind < 0)
+        for (i = 0; i < m; ++i)
+            rk_stage(c, r, i, frame[i].isotropic, local, a, b, mode);
+    else if (kind && local)
+        RK_MODES(1, 1);
+    else if (kind)
+        RK_MODES(1, 0);
+    else if (local)
+        RK_MODES(0, 1);
+    else
+        RK_MODES(0, 0);
+}
+
+/* Lane i from and back to the state arrays (pointers at the block's first
+   body). */
+TB__LANE void rk_get(rk_block *r, int i, const double *x, const double *q, const double *P, const double *L,
+                     const double *inv_inertia, double mass, const double g[3])
+{
+    r->inv_inertia[0][i] = inv_inertia[3 * i], r->inv_inertia[1][i] = inv_inertia[3 * i + 1];
+    r->inv_inertia[2][i] = inv_inertia[3 * i + 2];
+    r->mg[0][i] = mass * g[0], r->mg[1][i] = mass * g[1], r->mg[2][i] = mass * g[2];
+    r->y[RK_X][i] = x[3 * i], r->y[RK_X + 1][i] = x[3 * i + 1], r->y[RK_X + 2][i] = x[3 * i + 2];
+    r->y[RK_Q][i] = q[4 * i], r->y[RK_Q + 1][i] = q[4 * i + 1];
+    r->y[RK_Q + 2][i] = q[4 * i + 2], r->y[RK_Q + 3][i] = q[4 * i + 3];
+    r->y[RK_P][i] = P[3 * i], r->y[RK_P + 1][i] = P[3 * i + 1], r->y[RK_P + 2][i] = P[3 * i + 2];
+    r->y[RK_L][i] = L[3 * i], r->y[RK_L + 1][i] = L[3 * i + 1], r->y[RK_L + 2][i] = L[3 * i + 2];
+}
+
+TB__LANE void rk_put(rk_block *r, int i, double *x, double *q, double *P, double *L, int local)
+{
+    double qi[4], f;
+    x[3 * i] = r->stage[RK_X][i], x[3 * i + 1] = r->stage[RK_X + 1][i], x[3 * i + 2] = r->stage[RK_X + 2][i];
+    P[3 * i] = r->stage[RK_P][i], P[3 * i + 1] = r->stage[RK_P + 1][i], P[3 * i + 2] = r->stage[RK_P + 2][i];
+    if (local) {
+        L[3 * i] = r->stage[RK_L][i], L[3 * i + 1] = r->stage[RK_L + 1][i];
+        L[3 * i + 2] = r->stage[RK_L + 2][i];
+    }
+    qi[0] = r->stage[RK_Q][i], qi[1] = r->stage[RK_Q + 1][i];
+    qi[2] = r->stage[RK_Q + 2][i], qi[3] = r->stage[RK_Q + 3][i];
+    f = newton_scale(qi, &r->n2[i]); /* project() with project_near's path */
+    q[4 * i] = qi[0] * f, q[4 * i + 1] = qi[1] * f, q[4 * i + 2] = qi[2] * f, q[4 * i + 3] = qi[3] * f;
+}
+
+static void rk_load(rk_block *restrict r, const double *restrict x, const double *restrict q,
+                    const double *restrict P, const double *restrict L, const double *restrict held,
+                    const rk_params *c, const double *restrict inv_inertia, int m, int local)
+{
+    const double *restrict mass = c->mass;
+    int i, k;
+    if (m == TB__LANES)
+        for (i = 0; i < TB__LANES; ++i)
+            rk_get(r, i, x, q, P, L, inv_inertia, mass[i], c->gravity);
+    else
+        for (i = 0; i < m; ++i)
+            rk_get(r, i, x, q, P, L, inv_inertia, mass[i], c->gravity);
+    for (i = 0; i < m && local; ++i)
+        for (k = 0; k < 6; ++k)
+            r->held[k][i] = held[6 * i + k];
+}
+
+static void rk_store(rk_block *restrict r, double *restrict x, double *restrict q, double *restrict P,
+                     double *restrict L, int m, int local)
+{
+    int i, k;
+    if (m == TB__LANES && local)
+        for (i = 0; i < TB__LANES; ++i)
+            rk_put(r, i, x, q, P, L, 1);
+    else if (m == TB__LANES)
+        for (i = 0; i < TB__LANES; ++i)
+            rk_put(r, i, x, q, P, L, 0);
+    else
+        for (i = 0; i < m; ++i)
+            rk_put(r, i, x, q, P, L, local);
+    for (i = 0; i < m; ++i)
+        if (!PROJECT_NEAR(r->n2[i])) {
+            for (k = 0; k < 4; ++k)
+                q[4 * i + k] = r->stage[RK_Q + k][i];
+            project_far(q + 4 * i);
+        }
+}
+
+static void rk4_block(tb_world *w, size_t b, int m, double h, int local)
+{
+    double *x = w->y + w->off[TB__BODY_POS] + 3 * b, *q = w->y + w->off[TB__BODY_ROT] + 4 * b;
+    double *P = w->y + w->off[TB__BODY_MOM] + 3 * b, *L = w->y + w->off[TB__BODY_ANG] + 3 * b;
+    const double *held = w->body_applied + 6 * b;
+    const tb__split_frame *frame = w->body_frame + b;
+    rk_params c;
+    rk_block r;
+    int i, k, iso = 0, kind;
+    c.mass = w->body_mass + b;
+    c.inv_mass = w->body_inv_mass + b;
+    c.damping = w->body_damping + 2 * b;
+    for (k = 0; k < 3; ++k) /* m (g + 0) is m g - 0 P + 0 to the bit, even for g = -0 */
+        c.gravity[k] = local ? w->gravity[k] : w->gravity[k] + 0.0;
+    rk_load(&r, x, q, P, L, held, &c, w->body_inv_inertia + 3 * b, m, local);
+    for (i = 0; i < m; ++i)
+        iso += frame[i].isotropic;
+    kind = iso == m ? 1 : iso == 0 ? 0 : -1;
+    rk_stages(&c, &r, frame, kind, local, m, h / 2, 0, 0);
+    rk_stages(&c, &r, frame, kind, local, m, h / 2, 2, 1);
+    rk_stages(&c, &r, frame, kind, local, m, h, 2, 1);
+    rk_stages(&c, &r, frame, kind, local, m, h / 6, 1, 2);
+    rk_store(&r, x, q, P, L, m, local);
+}
+
+void tb__body_rk4(tb_world *w, double h)
+{
+    const int local = !gravity_only(w);
+    size_t b;
+    for (b = 0; b < w->body_count; b += TB__LANES)
+        rk4_block(w, b, w->body_count - b < TB__LANES ? (int)(w->body_count - b) : TB__LANES, h, local);
+}
+
+/* The sweep goes over blocks of TB__LANES consecutive bodies, applying the
+   ops in order to each block while it sits in L1. Translation and kicks run
+   in loops of fixed length over the block, which GCC vectorises; drifts
+   turn the block with the kernels in lanes (rotation.h). Bodies for the
+   splitting kernels are relabelled into lanes one by one (a gather: every
+   body has its own axes) and turned TB__LANES at a time, across blocks:
+   this is right as long as a body drifts once per sweep, as in every
+   method (a sweep with more drifts turns its lanes after each). */
+typedef struct pending {
+    tb__spin_lanes lanes;
+    uint32_t slot[TB__LANES];
+    int count;
+    int accurate;
+} pending;
+
+static void turn_pending(tb_world *w, pending *p)
+{
+    double *q = w->y + w->off[TB__BODY_ROT];
+    int i;
+    if (!p->count)
+        return;
+    if (p->accurate)
+        tb__accurate_lanes(&p->lanes, p->count);
+    else
+        tb__split2_lanes(&p->lanes, p->count);
+    for (i = 0; i < p->count; ++i)
+        tb__spin_store(&p->lanes, i, &w->body_frame[p->slot[i]], q + 4 * p->slot[i]);
+    p->count = 0;
+}
+
+/* Turn bodies [b, b + m) through their free motion over h. */
+static void turn(tb_world *w, size_t b, size_t m, const tb__split_op *op, pending *p)
+{
+    double *q = w->y + w->off[TB__BODY_ROT];
+    const double *L = w->y + w->off[TB__BODY_ANG], *invI = w->body_inv_inertia;
+    const tb__split_frame *frame = w->body_frame;
+    const double h = op->h;
+    size_t s, iso = w->body_isotropic == w->body_count ? m : 0;
+    if (w->body_isotropic && iso == 0)
+        for (s = b; s < b + m; ++s)
+            iso += frame[s].isotropic;
+    /* an isotropic body turns about a fixed axis, exactly and cheaply, with
+       no gyroscopic work */
+    if (iso == m) {
+        tb__isotropic_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, (int)m);
+        return;
+    }
+    if (op->rotation == TB__ROTATE_FROZEN && iso == 0) {
+        tb__frozen_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, (int)m);
+        return;
+    }
+    for (s = b; s < b + m; ++s) {
+        const int accurate = op->rotation == TB__ROTATE_ACCURATE;
+        if (frame[s].isotropic) {
+            tb__rotation_isotropic(q + 4 * s, L + 3 * s, invI[3 * s], h);
+        } else if (op->rotation == TB__ROTATE_FROZEN) {
+            tb__rotation_frozen(q + 4 * s, L + 3 * s, invI + 3 * s, h);
+        } else {
+            if (p->accurate != accurate || p->lanes.h != h)
+                turn_pending(w, p);
+            p->accurate = accurate;
+            p->lanes.h = h;
+            if (tb__spin_load(&p->lanes, p->count, q + 4 * s, L + 3 * s, &frame[s], h * h, accurate)) {
+                p->slot[p->count++] = (uint32_t)s;
+                if (p->count == TB__LANES)
+                    turn_pending(w, p);
+            } else if (accurate) {
+                tb__accurate_framed(q + 4 * s, L + 3 * s, &frame[s], h);
+            } else {
+                tb__split2_framed(q + 4 * s, L + 3 * s, &frame[s], h);
+            }
+        }
+    }
+}
+
+TB__LANE void drift_lane(double *x, const double *P, double inv_mass, double h)
+{
+    x[0] += h * P[0] * inv_mass;
+    x[1] += h * P[1] * inv_mass;
+    x[2] += h * P[2] * inv_mass;
+}
+
+/* x += h v for bodies [0, m) of a block (pointers at the block). */
+static void drift(double *restrict x, const double *restrict P, const double *restrict inv_mass, double h, size_t m)
+{
+    size_t i;
+    if (m == TB__LANES)
+        for (i = 0; i < TB__LANES; ++i)
+            drift_lane(x + 3 * i, P + 3 * i, inv_mass[i], h);
+    else
+        for (i = 0; i < m; ++i)
+            drift_lane(x + 3 * i, P + 3 * i, inv_mass[i], h);
+}
+
+/* The kick of a world where gravity is the only force on bodies: P gains
+   h m g, L nothing. The same bits as rates() gives with its other terms
+   zero (m g - 0 P + 0), and, as P holds no -0, as P + h m 0 where a
+   component of g is zero, which is skipped. */
+static void kick_gravity(double *restrict P, const double *restrict mass, double h, const double g[3], size_t m)
+{
+    size_t i;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        const double gk = g[k];
+        if (gk == 0)
+            continue;
+        if (m == TB__LANES)
+            for (i = 0; i < TB__LANES; ++i)
+                P[3 * i + k] += h * (mass[i] * gk);
+        else
+            for (i = 0; i < m; ++i)
+                P[3 * i + k] += h * (mass[i] * gk);
+    }
+}
+
+static void kick(tb_world *w, size_t b, size_t m, double h)
+{
+    double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
+    const double *Pseen = w->kick_seen ? w->kick_seen + w->off[TB__BODY_MOM] : P;
+    const double *Lseen = w->kick_seen ? w->kick_seen + w->off[TB__BODY_ANG] : L;
+    size_t s;
+    int k;
+    for (s = b; s < b + m; ++s) {
+        double dP[3], dL[3];
+        rates(w, (uint32_t)s, Pseen + 3 * s, Lseen + 3 * s, dP, dL);
+        for (k = 0; k < 3; ++k) {
+            P[3 * s + k] += h * dP[k];
+            L[3 * s + k] += h * dL[k];
+        }
+    }
+}
+
+/* Whether kicks see gravity alone: no damping, no held forces, no callback
+   forces. Held forces last one step (tb_world_step clears them), so the
+   flag that some may be held is dropped once they are all zero. */
+static int gravity_only(tb_world *w)
+{
+    if (w->body_held) {
+        size_t i;
+        for (i = 0; i < 6 * w->body_count && w->body_applied[i] == 0; ++i)
+            ;
+        w->body_held = i < 6 * w->body_count;
+    }
+    return w->body_damped == 0 && !w->body_held && !(w->force_ready && w->forces.count > 0);
+}
+
+void tb__body_sweep(tb_world *w, const tb__split_op *ops, int n)
+{
+    double *x = w->y + w->off[TB__BODY_POS], *P = w->y + w->off[TB__BODY_MOM];
+    const int only_gravity = gravity_only(w);
+    pending p;
+    size_t b;
+    int i, drifts = 0;
+    for (i = 0; i < n; ++i)
+        drifts += ops[i].drift;
+    p.count = 0;
+    p.accurate = 0;
+    p.lanes.h = 0;
+    for (b = 0; b < w->body_count; b += TB__LANES) {
+        const size_t m = w->body_count - b < TB__LANES ? w->body_count - b : TB__LANES;
+        for (i = 0; i < n; ++i) {
+            if (!ops[i].drift) {
+                if (only_gravity)
+                    kick_gravity(P + 3 * b, w->body_mass + b, ops[i].h, w->gravity, m);
+                else
+                    kick(w, b, m, ops[i].h);
+                continue;
+            }
+            drift(x + 3 * b, P + 3 * b, w->body_inv_mass + b, ops[i].h, m);
+            turn(w, b, m, &ops[i], &p);
+            if (drifts > 1)
+                turn_pending(w, &p);
+        }
+    }
+    turn_pending(w, &p);
+}
+
+int tb__body_velocity_dependent(const tb_world *w)
+{
+    return w->body_damped > 0;
+}
+
+void tb__body_project(tb_world *w, double *y)
+{
+    double *q = y + w->off[TB__BODY_ROT];
+    size_t s;
+    for (s = 0; s < w->body_count; ++s)
+        project(q + 4 * s);
+}
+
+void tb__body_motion(tb_world *w, const double *y, const double *seen)
+{
+    const double *q = y + w->off[TB__BODY_ROT];
+    const double *P = seen + w->off[TB__BODY_MOM], *L = seen + w->off[TB__BODY_ANG];
+    double *v = w->body_motion, *omega = w->body_motion + 3 * w->body_count;
+    size_t s;
+    int k;
+    for (s = 0; s < w->body_count; ++s) {
+        for (k = 0; k < 3; ++k)
+            v[3 * s + k] = P[3 * s + k] * w->body_inv_mass[s];
+        through_inertia(q + 4 * s, w->body_inv_inertia + 3 * s, L + 3 * s, omega + 3 * s);
+    }
+}
