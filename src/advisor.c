@@ -155,9 +155,15 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
     if (advice->limit == INFINITY) {
         snprintf(advice->text, sizeof advice->text, "no spring or drag limits the step of %s", w->method->name);
     } else if (!advice->exceeded) {
-        snprintf(advice->text, sizeof advice->text,
-                 "step %g s is %.0f%% of the limit %.4g s of %s (stiffest mode %.4g rad/s)", h,
-                 100 * h / advice->limit, advice->limit, w->method->name, advice->stiffest);
+        const int by_springs = advice->stiffest > 0 &&
+                               advice->limit == w->method->oscillation_limit / advice->stiffest;
+        char cause[96];
+        if (by_springs)
+            snprintf(cause, sizeof cause, "stiffest spring mode %.4g rad/s", advice->stiffest);
+        else
+            snprintf(cause, sizeof cause, "fastest drag decay %.4g 1/s", advice->decay);
+        snprintf(advice->text, sizeof advice->text, "step %g s is %.2g%% of the limit %.4g s of %s (%s)", h,
+                 100 * h / advice->limit, advice->limit, w->method->name, cause);
     } else {
         int len = advice->limit > 0
                       ? snprintf(advice->text, sizeof advice->text,
