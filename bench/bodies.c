@@ -25,11 +25,14 @@
    ratio ODE/tumble. Targets: "verlet" at least 20 times faster than ODE,
    "rk4" at least 5 times.
 
-   Figures are medians over REPEATS repeats of about REPEAT_SECONDS each;
-   the repeats of the cases of one table are interleaved, so noise from the
-   machine falls on every case alike (the habit of bench/particles.c). */
+   Figures are medians over BENCH_REPEATS repeats of about
+   BENCH_REPEAT_SECONDS each; the repeats of the cases of one table are
+   interleaved, so noise from the machine falls on every case alike
+   (measure() in bench.h, shared with bench/particles.c). */
 #define _POSIX_C_SOURCE 200809L
+#define BENCH_NAME "bench_bodies"
 
+#include "bench.h"
 #include "tumble.h"
 
 #include <ode/ode.h>
@@ -39,10 +42,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-
-#define REPEATS 7
-#define REPEAT_SECONDS 0.1
 
 #define H (1.0 / 60)           /* s, the step of both parts */
 #define FLIP_STEPS 1200        /* 20 s */
@@ -54,113 +53,6 @@ static const double FLIP_W0[3] = { 0.01, 5, 0.01 };
 
 static const char *const METHODS[] = { "euler", "symplectic_euler", "verlet", "rk4", "verlet_exact" };
 enum { METHOD_COUNT = sizeof METHODS / sizeof METHODS[0] };
-
-static volatile double sink; /* results are folded in here so no work is dead */
-
-static double seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* Reproducible pseudo-random numbers in [0, 1) (xorshift64*). */
-static double uniform(unsigned long long *s)
-{
-    *s ^= *s >> 12;
-    *s ^= *s << 25;
-    *s ^= *s >> 27;
-    return (double)((*s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static void *xmalloc(size_t size)
-{
-    void *p = malloc(size);
-    if (!p) {
-        fprintf(stderr, "bench_bodies: out of memory (%zu bytes)\n", size);
-        exit(EXIT_FAILURE);
-    }
-    return p;
-}
-
-static void check(tb_status st, const tb_world *w, const char *what)
-{
-    if (st != TB_OK) {
-        fprintf(stderr, "bench_bodies: %s: %s: %s\n", what, tb_status_name(st), w ? tb_world_message(w) : "");
-        exit(EXIT_FAILURE);
-    }
-}
-
-static double norm3(const double a[3])
-{
-    return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-}
-
-/* Angle of a^-1 b for unit quaternions (w, x, y, z). */
-static double angle_between(const double a[4], const double b[4])
-{
-    const double s = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
-    const double x = a[0] * b[1] - a[1] * b[0] - a[2] * b[3] + a[3] * b[2];
-    const double y = a[0] * b[2] + a[1] * b[3] - a[2] * b[0] - a[3] * b[1];
-    const double z = a[0] * b[3] - a[1] * b[2] + a[2] * b[1] - a[3] * b[0];
-    return 2 * atan2(sqrt(x * x + y * y + z * z), fabs(s));
-}
-
-/* ------------------------------------------------------------- timing -- */
-
-typedef void run_fn(void *ctx, long steps);
-
-typedef struct bench_case {
-    run_fn *run;
-    void *ctx;
-    double items;           /* bodies per step */
-    long steps;             /* per repeat, set by calibrate() */
-    double ns[REPEATS];     /* ns per body-step, one per repeat */
-} bench_case;
-
-static double time_run(const bench_case *c, long steps)
-{
-    const double t0 = seconds();
-    c->run(c->ctx, steps);
-    return seconds() - t0;
-}
-
-/* Warm up and choose the steps per repeat: double them until a run takes
-   20 ms, then scale to REPEAT_SECONDS. */
-static void calibrate(bench_case *c)
-{
-    long steps = 1;
-    double s;
-    while ((s = time_run(c, steps)) < 0.02)
-        steps *= 2;
-    c->steps = (long)((double)steps * REPEAT_SECONDS / s);
-    if (c->steps < 1)
-        c->steps = 1;
-}
-
-static void measure(bench_case *cases, int n)
-{
-    int r, i;
-    for (i = 0; i < n; ++i)
-        calibrate(&cases[i]);
-    for (r = 0; r < REPEATS; ++r)
-        for (i = 0; i < n; ++i)
-            cases[i].ns[r] = 1e9 * time_run(&cases[i], cases[i].steps) / ((double)cases[i].steps * cases[i].items);
-}
-
-static int compare(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(const bench_case *c)
-{
-    double x[REPEATS];
-    memcpy(x, c->ns, sizeof x);
-    qsort(x, REPEATS, sizeof x[0], compare);
-    return x[REPEATS / 2];
-}
 
 /* ------------------------------------------------------ running worlds -- */
 
@@ -183,7 +75,7 @@ static void run_tumble(void *ctx, long steps)
 static void tumble_free(tb_world *w)
 {
     const double *x = tb_world_body_positions(w), *q = tb_world_body_orientations(w);
-    sink = sink + x[0] + q[4 * tb_world_body_count(w) - 1];
+    keep(x[0] + q[4 * tb_world_body_count(w) - 1]);
     tb_world_destroy(w);
 }
 
@@ -206,7 +98,7 @@ static void run_ode(void *ctx, long steps)
 
 static void ode_free(ode_case *c)
 {
-    sink = sink + dBodyGetPosition(c->bodies[0])[2] + dBodyGetQuaternion(c->bodies[c->n - 1])[0];
+    keep(dBodyGetPosition(c->bodies[0])[2] + dBodyGetQuaternion(c->bodies[c->n - 1])[0]);
     dWorldDestroy(c->world);
     free(c->bodies);
 }
@@ -506,53 +398,14 @@ static verdict part_throughput(size_t n, enum kind kind)
 
 /* ---------------------------------------------------------------- main -- */
 
-#ifndef TB_BENCH_COMPILER
-#ifdef __VERSION__
-#define TB_BENCH_COMPILER "cc " __VERSION__
-#else
-#define TB_BENCH_COMPILER "unknown compiler"
-#endif
-#endif
-
 static void print_header(void)
 {
-    char line[256], cpu[256] = "unknown";
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    while (f && fgets(line, sizeof line, f)) {
-        char *colon = strchr(line, ':');
-        if (strncmp(line, "model name", 10) == 0 && colon) {
-            strncpy(cpu, colon + 2, sizeof cpu - 1);
-            cpu[strcspn(cpu, "\n")] = 0;
-            break;
-        }
-    }
-    if (f)
-        fclose(f);
     printf("tumble rigid bodies beside ODE %s (%s): medians of %d repeats of ~%.2f s\n", dODE_VERSION,
-           dCheckConfiguration("ODE_double_precision") ? "double" : "NOT double", REPEATS, REPEAT_SECONDS);
-    printf("cpu       %s\n", cpu);
-    printf("compiler  %s\n", TB_BENCH_COMPILER);
-#ifdef TB_BENCH_BUILD
-    printf("build     %s\n", TB_BENCH_BUILD);
-#else
-    printf("build     flags not passed in (TB_BENCH_BUILD); this file: %s, %s\n",
-#ifdef __OPTIMIZE__
-           "optimised",
-#else
-           "NOT optimised",
-#endif
-#ifdef __FAST_MATH__
-           "-ffast-math"
-#else
-           "no -ffast-math"
-#endif
-    );
-#endif
-#ifdef NDEBUG
-    printf("asserts   off (NDEBUG)\n\n");
-#else
-    printf("asserts   on\n\n");
-#endif
+           dCheckConfiguration("ODE_double_precision") ? "double" : "NOT double", BENCH_REPEATS,
+           BENCH_REPEAT_SECONDS);
+    bench_print_build();
+    bench_print_asserts();
+    printf("\n");
 }
 
 int main(void)

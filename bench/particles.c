@@ -8,35 +8,24 @@
    Velocity Verlet and RK4 are printed for information, and so is ODE's
    dWorldStep per free body under the same forces, for 10^3 bodies.
 
-   Figures are medians over repeats of about REPEAT_SECONDS each. The repeats
-   of all cases of one size are interleaved, so noise from the machine (other
-   processes, frequency changes) falls on every case alike and each ratio
-   compares figures taken moments apart. */
+   Figures are medians over repeats of about BENCH_REPEAT_SECONDS each
+   (measure() in bench.h). The repeats of all cases of one size are
+   interleaved, so noise from the machine (other processes, frequency
+   changes) falls on every case alike and each ratio compares figures taken
+   moments apart. */
 #define _POSIX_C_SOURCE 200809L
+#define BENCH_NAME "bench_particles"
 
+#include "bench.h"
 #include "tumble.h"
 
 #include <ode/ode.h>
 
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
-#include <time.h>
-
-#ifndef TB_BENCH_COMPILER
-#define TB_BENCH_COMPILER "unknown compiler"
-#endif
-#ifndef TB_BENCH_BUILD
-#define TB_BENCH_BUILD "unknown build"
-#endif
-#ifndef TB_BENCH_ODE
-#define TB_BENCH_ODE "?"
-#endif
 
 #define H (1.0 / 240)         /* s, the step */
 #define DRAG 0.1              /* N s/m, linear drag on every particle */
-#define REPEATS 7
-#define REPEAT_SECONDS 0.1    /* long enough to dwarf the clock, short enough for 30 s in all */
 #define MAX_CASES 5
 
 /* Bytes a semi-implicit Euler step must move per particle: position and
@@ -45,25 +34,6 @@
 #define STATE_DOUBLES 6
 #define PARAM_DOUBLES 2
 #define STEP_BYTES (8.0 * (2 * STATE_DOUBLES + PARAM_DOUBLES))
-
-static volatile double sink; /* results are folded in here so no work is dead */
-
-static double seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* Reproducible pseudo-random numbers in [0, 1) (xorshift64*), so that every
-   run and ODE start from the same particles. */
-static double uniform(unsigned long long *s)
-{
-    *s ^= *s >> 12;
-    *s ^= *s << 25;
-    *s ^= *s >> 27;
-    return (double)((*s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
-}
 
 /* The initial state of particle (or body) i of a run: a 20 m box, speeds up
    to 5 m/s per axis, masses from 0.5 to 2 kg. */
@@ -75,73 +45,6 @@ static void initial(unsigned long long *s, double pos[3], double vel[3], double 
         vel[k] = 10 * uniform(s) - 5;
     }
     *mass = 0.5 + 1.5 * uniform(s);
-}
-
-static void *xmalloc(size_t size)
-{
-    void *p = malloc(size);
-    if (!p) {
-        fprintf(stderr, "bench_particles: out of memory (%zu bytes)\n", size);
-        exit(EXIT_FAILURE);
-    }
-    return p;
-}
-
-/* ------------------------------------------------------------- timing -- */
-
-typedef void run_fn(void *ctx, long steps);
-
-typedef struct bench_case {
-    run_fn *run;
-    void *ctx;
-    double items;           /* particles or bodies per step */
-    long steps;             /* per repeat, set by calibrate() */
-    double ns[REPEATS];     /* ns per item-step, one per repeat */
-} bench_case;
-
-static double time_run(const bench_case *c, long steps)
-{
-    const double t0 = seconds();
-    c->run(c->ctx, steps);
-    return seconds() - t0;
-}
-
-/* Warm up (page faults, caches, the integrators' scratch, branch predictors)
-   and choose the steps per repeat: double them until a run takes 20 ms, then
-   scale to REPEAT_SECONDS. */
-static void calibrate(bench_case *c)
-{
-    long steps = 1;
-    double s;
-    while ((s = time_run(c, steps)) < 0.02)
-        steps *= 2;
-    c->steps = (long)((double)steps * REPEAT_SECONDS / s);
-    if (c->steps < 1)
-        c->steps = 1;
-}
-
-static void measure(bench_case *cases, int n)
-{
-    int r, i;
-    for (i = 0; i < n; ++i)
-        calibrate(&cases[i]);
-    for (r = 0; r < REPEATS; ++r)
-        for (i = 0; i < n; ++i)
-            cases[i].ns[r] = 1e9 * time_run(&cases[i], cases[i].steps) / ((double)cases[i].steps * cases[i].items);
-}
-
-static int compare(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(const bench_case *c)
-{
-    double x[REPEATS];
-    memcpy(x, c->ns, sizeof x);
-    qsort(x, REPEATS, sizeof x[0], compare);
-    return x[REPEATS / 2];
 }
 
 /* ------------------------------------------------- the streaming bound -- */
@@ -199,7 +102,7 @@ static void run_stream(void *ctx, long steps)
     double sum = 0;
     for (s = 0; s < steps; ++s)
         sum += stream_pass(c->state, c->param, c->n);
-    sink = sink + sum;
+    keep(sum);
 }
 
 static void stream_init(stream_case *c, size_t n)
@@ -220,7 +123,7 @@ static void stream_free(stream_case *c)
     size_t i;
     for (i = 0; i < STATE_DOUBLES * c->n; ++i)
         sum += c->state[i];
-    sink = sink + sum;
+    keep(sum);
     free(c->state);
     free(c->param);
 }
@@ -231,15 +134,6 @@ typedef struct tumble_case {
     tb_world *world;
     const char *integrator;
 } tumble_case;
-
-static void check(tb_status st, const tb_world *w, const char *what)
-{
-    if (st != TB_OK) {
-        fprintf(stderr, "bench_particles: %s: %s: %s\n", what, tb_status_name(st),
-                w ? tb_world_message(w) : "");
-        exit(EXIT_FAILURE);
-    }
-}
 
 /* Worlds are shared by the integrators of one size: only the method changes. */
 static void run_tumble(void *ctx, long steps)
@@ -275,7 +169,7 @@ static tb_world *particle_world(size_t n)
 static void world_free(tb_world *w)
 {
     const double *x = tb_world_particle_positions(w);
-    sink = sink + x[0] + x[3 * tb_world_particle_count(w) - 1];
+    keep(x[0] + x[3 * tb_world_particle_count(w) - 1]);
     tb_world_destroy(w);
 }
 
@@ -333,7 +227,7 @@ static void ode_init(ode_case *c, size_t n)
 
 static void ode_free(ode_case *c)
 {
-    sink = sink + dBodyGetPosition(c->bodies[0])[2];
+    keep(dBodyGetPosition(c->bodies[0])[2]);
     dWorldDestroy(c->world);
     free(c->bodies);
 }
@@ -342,28 +236,10 @@ static void ode_free(ode_case *c)
 
 static void print_header(void)
 {
-    char line[256], cpu[256] = "unknown";
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    while (f && fgets(line, sizeof line, f)) {
-        char *colon = strchr(line, ':');
-        if (strncmp(line, "model name", 10) == 0 && colon) {
-            strncpy(cpu, colon + 2, sizeof cpu - 1);
-            cpu[strcspn(cpu, "\n")] = 0;
-            break;
-        }
-    }
-    if (f)
-        fclose(f);
     printf("tumble particle throughput, ns per particle-step (median of %d repeats of ~%.2f s)\n",
-           REPEATS, REPEAT_SECONDS);
-    printf("cpu       %s\n", cpu);
-    printf("compiler  %s\n", TB_BENCH_COMPILER);
-    printf("build     %s\n", TB_BENCH_BUILD);
-#ifdef NDEBUG
-    printf("asserts   off (NDEBUG)\n");
-#else
-    printf("asserts   on\n");
-#endif
+           BENCH_REPEATS, BENCH_REPEAT_SECONDS);
+    bench_print_build();
+    bench_print_asserts();
     printf("scene     gravity (0, 0, -9.81) m/s^2, linear drag %g N s/m, masses 0.5..2 kg, h = 1/240 s\n",
            DRAG);
     printf("stream    in place a = s a + c over %d doubles per particle, %d more read: %.0f bytes per particle\n\n",

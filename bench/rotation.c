@@ -22,7 +22,9 @@
      median; and for tumble's kernels, ns per body-step over the same bodies
      in lanes, TB__LANES at a time, as a world steps them (rotation.h). */
 #define _POSIX_C_SOURCE 200809L
+#define BENCH_NAME "bench_rotation"
 
+#include "bench.h"
 #include "rotation.h"
 
 #include <ode/ode.h>
@@ -31,17 +33,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-
-#ifndef TB_BENCH_COMPILER
-#define TB_BENCH_COMPILER "unknown compiler"
-#endif
-#ifndef TB_BENCH_BUILD
-#define TB_BENCH_BUILD "unknown build"
-#endif
-#ifndef TB_BENCH_ODE
-#define TB_BENCH_ODE "?"
-#endif
 
 #define T_END 20.0
 #define STEPS 1200L
@@ -52,38 +43,7 @@
 static const double I_BODY[3] = { 1, 2, 3 };
 static const double W0[3] = { 0.01, 5, 0.01 };
 
-static volatile double sink;
-
-static double seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int compare(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *x, int n)
-{
-    qsort(x, (size_t)n, sizeof *x, compare);
-    return x[n / 2];
-}
-
 /* ------------------------------------------------------- quaternions -- */
-
-static void qmul(const double a[4], const double b[4], double out[4])
-{
-    double r[4];
-    r[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-    r[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-    r[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-    r[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
-    memcpy(out, r, sizeof r);
-}
 
 static void normalize(double q[4])
 {
@@ -103,16 +63,6 @@ static void to_body(const double q[4], const double v[3], double out[3])
     qmul(t, q, t);
     memcpy(out, t + 1, 3 * sizeof *out);
 }
-
-static double angle_between(const double a[4], const double b[4])
-{
-    const double c[4] = { a[0], -a[1], -a[2], -a[3] };
-    double d[4];
-    qmul(c, b, d);
-    return 2 * atan2(sqrt(d[1] * d[1] + d[2] * d[2] + d[3] * d[3]), fabs(d[0]));
-}
-
-static double norm3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 static double energy_b(const double lb[3], const double invI[3])
 {
@@ -259,9 +209,9 @@ static void run_kernel(result *r, kernel_fn *step, int lanes, const double ref[4
         for (s = 0; s < STEPS; ++s)
             step(q, L, invI, H);
         ns[k] = 1e9 * (seconds() - t0) / STEPS;
-        sink = sink + q[0];
+        keep(q[0]);
     }
-    r->ns = median(ns, REPEATS);
+    r->ns = median_of(ns, REPEATS);
     many_states(qs, Ls, Is);
     for (k = 0; k < REPEATS; ++k) {
         const double t0 = seconds();
@@ -270,8 +220,8 @@ static void run_kernel(result *r, kernel_fn *step, int lanes, const double ref[4
                 step(qs + 4 * b, Ls + 3 * b, Is + 3 * b, H);
         many[k] = 1e9 * (seconds() - t0) / (4.0 * BODIES);
     }
-    sink = sink + qs[0];
-    r->ns_many = median(many, REPEATS);
+    keep(qs[0]);
+    r->ns_many = median_of(many, REPEATS);
     r->ns_lanes = -1;
     if (lanes < 0)
         return;
@@ -284,8 +234,8 @@ static void run_kernel(result *r, kernel_fn *step, int lanes, const double ref[4
             step_lanes(lanes, qs, Ls, Is, frames, H);
         many[k] = 1e9 * (seconds() - t0) / (4.0 * BODIES);
     }
-    sink = sink + qs[0];
-    r->ns_lanes = median(many, REPEATS);
+    keep(qs[0]);
+    r->ns_lanes = median_of(many, REPEATS);
 }
 
 static void run_rk4_carried(result *r, const double ref[4])
@@ -314,9 +264,9 @@ static void run_rk4_carried(result *r, const double ref[4])
         for (s = 0; s < STEPS; ++s)
             rk4_carried(lb, q, invI, H);
         ns[k] = 1e9 * (seconds() - t0) / STEPS;
-        sink = sink + q[0];
+        keep(q[0]);
     }
-    r->ns = median(ns, REPEATS);
+    r->ns = median_of(ns, REPEATS);
     many_states(qs, Ls, Is); /* q0 = identity: L is also L_b */
     for (k = 0; k < REPEATS; ++k) {
         const double t0 = seconds();
@@ -325,8 +275,8 @@ static void run_rk4_carried(result *r, const double ref[4])
                 rk4_carried(Ls + 3 * b, qs + 4 * b, Is + 3 * b, H);
         many[k] = 1e9 * (seconds() - t0) / (4.0 * BODIES);
     }
-    sink = sink + qs[0];
-    r->ns_many = median(many, REPEATS);
+    keep(qs[0]);
+    r->ns_many = median_of(many, REPEATS);
     r->ns_lanes = -1;
 }
 
@@ -391,10 +341,10 @@ static void run_ode(result *r, const double ref[4])
         for (s = 0; s < STEPS; ++s)
             dWorldStep(world, H);
         ns[k] = 1e9 * (seconds() - t0) / STEPS;
-        sink = sink + dBodyGetQuaternion(body)[0];
+        keep(dBodyGetQuaternion(body)[0]);
         dWorldDestroy(world);
     }
-    r->ns = median(ns, REPEATS);
+    r->ns = median_of(ns, REPEATS);
     r->ns_many = r->ns_lanes = -1;
 }
 
@@ -402,23 +352,9 @@ static void run_ode(result *r, const double ref[4])
 
 static void print_header(void)
 {
-    char line[256], cpu[256] = "unknown";
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    while (f && fgets(line, sizeof line, f)) {
-        char *colon = strchr(line, ':');
-        if (strncmp(line, "model name", 10) == 0 && colon) {
-            strncpy(cpu, colon + 2, sizeof cpu - 1);
-            cpu[strcspn(cpu, "\n")] = 0;
-            break;
-        }
-    }
-    if (f)
-        fclose(f);
     printf("torque-free rotation: the intermediate-axis flip, I = diag(1, 2, 3) kg m^2,\n"
            "w0 = (0.01, 5, 0.01) rad/s (body), q0 = identity, %.0f s at h = 1/%.0f s\n", T_END, 1 / H);
-    printf("cpu       %s\n", cpu);
-    printf("compiler  %s\n", TB_BENCH_COMPILER);
-    printf("build     %s\n", TB_BENCH_BUILD);
+    bench_print_build();
     printf("ODE       %s, %s precision\n\n", TB_BENCH_ODE,
            dCheckConfiguration("ODE_double_precision") ? "double" : "single");
 }

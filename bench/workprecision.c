@@ -44,7 +44,9 @@
    world setting, every other force added with dBodyAddForce before each
    dWorldStep, as an ODE user would. It takes about a minute. */
 #define _POSIX_C_SOURCE 200809L
+#define BENCH_NAME "bench_workprecision"
 
+#include "bench.h"
 #include "tumble.h"
 
 #include <ode/ode.h>
@@ -55,17 +57,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
-
-#ifndef TB_BENCH_COMPILER
-#define TB_BENCH_COMPILER "unknown compiler"
-#endif
-#ifndef TB_BENCH_BUILD
-#define TB_BENCH_BUILD "unknown build"
-#endif
-#ifndef TB_BENCH_ODE
-#define TB_BENCH_ODE "?"
-#endif
 
 /* dDOUBLE is the Debian header default; the comparison is meaningless in
    single precision. A negative array size stops the build otherwise. */
@@ -79,68 +70,11 @@ typedef char dreal_is_double[sizeof(dReal) == sizeof(double) ? 1 : -1];
 #define ODE_BOUND 1e6        /* ODE runs stop (unstable) once a position leaves 1e6 length scales */
 #define MAX_PARTICLES 64
 
-static double seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static void *xmalloc(size_t size)
-{
-    void *p = malloc(size ? size : 1);
-    if (!p) {
-        fprintf(stderr, "bench_workprecision: out of memory (%zu bytes)\n", size);
-        exit(EXIT_FAILURE);
-    }
-    return p;
-}
-
-static void check(tb_status st, const tb_world *w, const char *what)
-{
-    if (st != TB_OK) {
-        fprintf(stderr, "bench_workprecision: %s: %s: %s\n", what, tb_status_name(st), w ? tb_world_message(w) : "");
-        exit(EXIT_FAILURE);
-    }
-}
-
-static int compare(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double norm3(const double a[3])
-{
-    return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-}
-
-/* q = a b for quaternions (w, x, y, z). */
-static void qmul(const double a[4], const double b[4], double q[4])
-{
-    q[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-    q[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-    q[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-    q[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
-}
-
 /* The rotation by `angle` about the unit `axis`. */
 static void qrot(const double axis[3], double angle, double q[4])
 {
     const double s = sin(angle / 2);
     q[0] = cos(angle / 2), q[1] = s * axis[0], q[2] = s * axis[1], q[3] = s * axis[2];
-}
-
-/* Angle of a^-1 b for unit quaternions, 2 atan2(|vector part|, |scalar
-   part|): acos of the dot product loses everything below 1e-7 rad
-   (NOTES.md), and these errors go down to 1e-13. */
-static double angle_between(const double a[4], const double b[4])
-{
-    const double s = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
-    const double x = a[0] * b[1] - a[1] * b[0] - a[2] * b[3] + a[3] * b[2];
-    const double y = a[0] * b[2] + a[1] * b[3] - a[2] * b[0] - a[3] * b[1];
-    const double z = a[0] * b[3] - a[1] * b[2] + a[2] * b[1] - a[3] * b[0];
-    return 2 * atan2(sqrt(x * x + y * y + z * z), fabs(s));
 }
 
 /* ------------------------------------------------------------ scenes -- */
@@ -723,8 +657,7 @@ static void finish_point(point *p)
 {
     double x[MAX_SAMPLES];
     memcpy(x, p->sample, sizeof x);
-    qsort(x, (size_t)p->count, sizeof x[0], compare);
-    p->cost = p->done > 0 ? x[p->count / 2] / (p->h * (double)p->done) : NAN;
+    p->cost = p->done > 0 ? median_of(x, p->count) / (p->h * (double)p->done) : NAN;
 }
 
 /* Least-squares slope of log error against log h over the asymptotic part
@@ -878,28 +811,10 @@ static void reference(scene *s)
 
 static void print_header(void)
 {
-    char line[256], cpu[256] = "unknown";
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    while (f && fgets(line, sizeof line, f)) {
-        char *colon = strchr(line, ':');
-        if (strncmp(line, "model name", 10) == 0 && colon) {
-            strncpy(cpu, colon + 2, sizeof cpu - 1);
-            cpu[strcspn(cpu, "\n")] = 0;
-            break;
-        }
-    }
-    if (f)
-        fclose(f);
     printf("tumble work-precision: error at the final time against cost, beside ODE %s (%s)\n", TB_BENCH_ODE,
            dCheckConfiguration("ODE_double_precision") ? "double" : "NOT double");
-    printf("cpu       %s\n", cpu);
-    printf("compiler  %s\n", TB_BENCH_COMPILER);
-    printf("build     %s\n", TB_BENCH_BUILD);
-#ifdef NDEBUG
-    printf("asserts   off (NDEBUG)\n");
-#else
-    printf("asserts   on\n");
-#endif
+    bench_print_build();
+    bench_print_asserts();
     printf("cost      median wall time of the steps per simulated second (s/s); evaluations per simulated s\n"
            "          (euler 1, symplectic_euler 1, verlet 2, verlet_exact 2, rk4 4, dWorldStep 1 per step)\n"
            "          costs at an error level are interpolated in log-log along each method's curve;\n"
