@@ -36,7 +36,7 @@ static double largest_mode(const tb_world *w, double *z, double *s, double *t)
             t[i] = s[i] * z[i];
         }
         memset(w->force, 0, n * sizeof(double)); /* K t, in the force scratch */
-        tb__spring_stiffness_product(w, pos, t, w->force);
+        tb__spring_stiffness_product(w, pos, t, w->force, 0);
         for (i = 0; i < n; ++i) {
             const double bz = s[i] * w->force[i];
             rayleigh += z[i] * bz;
@@ -152,7 +152,11 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
         if (limit > best_limit && !(m->split && w->tracer_count))
             best_limit = limit, best = m;
     }
-    if (advice->limit == INFINITY) {
+    if (advice->limit == INFINITY && w->method->oscillation_limit == INFINITY) {
+        snprintf(advice->text, sizeof advice->text,
+                 "%s is stable at any step; it damps modes faster than 1/h (stiffest %.4g rad/s)", w->method->name,
+                 advice->stiffest);
+    } else if (advice->limit == INFINITY) {
         snprintf(advice->text, sizeof advice->text, "no spring or drag limits the step of %s", w->method->name);
     } else if (!advice->exceeded) {
         const int by_springs = advice->stiffest > 0 &&
@@ -173,7 +177,9 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
                                  "%s is unstable at any step on oscillations (stiffest mode %.4g rad/s)",
                                  w->method->name, advice->stiffest);
         if (len > 0 && (size_t)len < sizeof advice->text && best && best != w->method && best_limit >= h)
-            snprintf(advice->text + len, sizeof advice->text - (size_t)len, " or integrator '%s' (limit %.4g s)",
+            snprintf(advice->text + len, sizeof advice->text - (size_t)len,
+                     best_limit == INFINITY ? " or integrator '%s' (stable at any step, dissipative)"
+                                            : " or integrator '%s' (limit %.4g s)",
                      best->name, best_limit);
         if (!TB_ID_IS_NULL(advice->spring)) {
             len = (int)strlen(advice->text);

@@ -193,9 +193,11 @@ double tb__spring_energy(const tb_world *w)
    of length L along n, the block k (n n^T + (1 - rest / L)(1 - n n^T)) acts
    on the difference of its ends' displacements (an anchor does not move).
    The second term, the geometric stiffness of a stretched spring, vanishes
-   at rest length. Damping is left out: K is the stiffness that sets the
-   oscillation frequencies. */
-void tb__spring_stiffness_product(const tb_world *w, const double *pos, const double *u, double *out)
+   at rest length; for a compressed spring it is negative, and `definite`
+   clamps it at 0 so that K stays positive semi-definite (what a conjugate
+   gradient solve needs). Damping is left out: K is the stiffness that sets
+   the oscillation frequencies. */
+void tb__spring_stiffness_product(const tb_world *w, const double *pos, const double *u, double *out, int definite)
 {
     size_t s;
     for (s = 0; s < w->spring_count; ++s) {
@@ -214,12 +216,40 @@ void tb__spring_stiffness_product(const tb_world *w, const double *pos, const do
         }
         along = n[0] * du[0] + n[1] * du[1] + n[2] * du[2];
         geometric = 1 - w->spring_rest[s] / len;
+        if (definite && geometric < 0)
+            geometric = 0;
         for (k = 0; k < 3; ++k)
             f[k] = w->spring_k[s] * (n[k] * along + geometric * (du[k] - n[k] * along));
         for (k = 0; k < 3; ++k) {
             out[3 * a + k] += f[k];
             if (b != TB__ANCHOR)
                 out[3 * b + k] -= f[k];
+        }
+    }
+}
+
+/* out += D u, D = -d(spring forces)/dv: each spring's damping c n n^T on the
+   difference of its ends' velocities. */
+void tb__spring_damping_product(const tb_world *w, const double *pos, const double *u, double *out)
+{
+    size_t s;
+    for (s = 0; s < w->spring_count; ++s) {
+        const uint32_t a = w->spring_a[s], b = w->spring_b[s];
+        const double *xa = pos + 3 * a;
+        const double *xb = b == TB__ANCHOR ? w->spring_anchor + 3 * s : pos + 3 * b;
+        const double d[3] = { xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2] };
+        const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        double along = 0;
+        int k;
+        if (len == 0 || w->spring_c[s] == 0)
+            continue;
+        for (k = 0; k < 3; ++k)
+            along += d[k] / len * (u[3 * a + k] - (b == TB__ANCHOR ? 0 : u[3 * b + k]));
+        for (k = 0; k < 3; ++k) {
+            const double f = w->spring_c[s] * along * d[k] / len;
+            out[3 * a + k] += f;
+            if (b != TB__ANCHOR)
+                out[3 * b + k] -= f;
         }
     }
 }

@@ -263,7 +263,12 @@ void tb__body_momenta(const tb_world *w, double linear[3], double angular[3]);
 tb_status tb__global_forces(tb_world *w, double t, const double *y, const double *seen);
 /* ---- springs.c, forces.c, fields.c ------------------------------------- */
 void tb__spring_forces(const tb_world *w, const double *pos, const double *vel, double *force);
-void tb__spring_stiffness_product(const tb_world *w, const double *pos, const double *u, double *out);
+void tb__spring_stiffness_product(const tb_world *w, const double *pos, const double *u, double *out, int definite);
+void tb__spring_damping_product(const tb_world *w, const double *pos, const double *u, double *out);
+/* implicit.c: linearised backward Euler for particles; the whole step
+   (bodies kicked and drifted) in tb__implicit_step */
+tb_status tb__implicit_particles(tb_world *w, double h);
+tb_status tb__implicit_step(tb_world *w, double h);
 void tb__springs_detach(tb_world *w, uint32_t slot);
 void tb__springs_move(tb_world *w, uint32_t from, uint32_t to);
 double tb__spring_energy(const tb_world *w);
