@@ -39,6 +39,8 @@ typedef struct tb_world_def {
     double linear_drag;      /* N s/m; every particle feels -c v; default 0 */
     double quadratic_drag;   /* N s^2/m^2; every particle feels -c |v| v; default 0 */
     const char *integrator;  /* a name from tb_integrator_name(); NULL: "verlet" */
+    double tolerance;        /* error per step asked of adaptive methods ("dopri5"),
+                                relative to 1 + |y| per state component; 0: 1e-6 */
     tb_allocator allocator;  /* all of the world's memory goes through it */
 } tb_world_def;
 
@@ -108,6 +110,13 @@ TB_API tb_status tb_world_set_drag(tb_world *world, double linear, double quadra
                         a spring's v^2 + w^2 x^2 shrinks by 1 / (1 + (h w)^2)
                         per step (x0.535 per period at h w = 0.1). Bodies are
                         kicked and drifted as in "verlet"'s rotation.
+     "dopri5"           Dormand-Prince 5(4), error-controlled: each step of h
+                        is taken in as many substeps as the tolerance needs
+                        (tb_world_set_tolerance), each checked by the embedded
+                        fourth-order solution (RMS of the local error over
+                        the state, scaled by tolerance (1 + |y|)). Order 5,
+                        6 evaluations per accepted substep (the seventh is
+                        reused); the substep size carries over between steps.
    The split methods ("symplectic_euler", "verlet", "verlet_exact",
    "implicit_euler") need a velocity to kick: tracers have none, so a world holding tracers refuses
    them (and a world using them refuses tracers). "euler" and "rk4" move
@@ -118,6 +127,9 @@ TB_API const char *tb_integrator_name(int index);   /* NULL past the end */
 TB_API int tb_integrator_order(int index);           /* 0 past the end */
 
 TB_API tb_status tb_world_set_integrator(tb_world *world, const char *name);
+/* The tolerance of adaptive methods (finite, > 0). */
+TB_API tb_status tb_world_set_tolerance(tb_world *world, double tolerance);
+TB_API double tb_world_tolerance(const tb_world *world);
 TB_API const char *tb_world_integrator(const tb_world *world);
 
 /* Advance by h seconds (finite, > 0). If a callback fails, the step is

@@ -662,7 +662,7 @@ static lua_callback *keep_callback(lua_State *L, int world_idx, lua_world *lw, i
 
 /* -------------------------------------------------------------- world -- */
 
-static const char *const world_options[] = { "gravity", "integrator", "dt", "drag", NULL };
+static const char *const world_options[] = { "gravity", "integrator", "dt", "drag", "tolerance", NULL };
 static const char *const drag_options[] = { "linear", "quadratic", NULL };
 static const char *const particle_options[] = { "pos", "vel", "mass", "pinned", NULL };
 static const char *const tracer_options[] = { "pos", NULL };
@@ -689,6 +689,7 @@ static int world_new(lua_State *L)
     check_options(L, 1, "tumble.world", world_options);
     opt_vec3(L, 1, "gravity", "tumble.world", def.gravity);
     opt_number(L, 1, "dt", "tumble.world", &dt);
+    opt_number(L, 1, "tolerance", "tumble.world", &def.tolerance);
     if (!(isfinite(dt) && dt > 0))
         return luaL_error(L, "tumble.world: 'dt' must be finite and > 0 (got %f)", dt);
     if (lua_getfield(L, 1, "integrator") != LUA_TNIL) {
@@ -1041,6 +1042,14 @@ static int world_set_integrator(lua_State *L)
     return 0;
 }
 
+static int world_set_tolerance(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    if (tb_world_set_tolerance(lw->world, luaL_checknumber(L, 2)) != TB_OK)
+        return fail(L, lw, "world:set_tolerance");
+    return 0;
+}
+
 static int world_gravity(lua_State *L)
 {
     double g[3];
@@ -1106,6 +1115,7 @@ static const luaL_Reg world_methods[] = {
     { "drag", world_drag }, { "field", world_field }, { "force", world_force },
     { "step", world_step }, { "time", world_time }, { "dt", world_dt }, { "set_dt", world_set_dt },
     { "integrator", world_integrator }, { "set_integrator", world_set_integrator },
+    { "set_tolerance", world_set_tolerance },
     { "gravity", world_gravity }, { "set_gravity", world_set_gravity },
     { "energy", world_energy }, { "momentum", world_momentum }, { "counts", world_counts },
     { "close", world_close }, { NULL, NULL }

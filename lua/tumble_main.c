@@ -14,7 +14,8 @@
 
 static const char usage[] =
     "usage: tumble run SCENE.lua [--out FILE.csv] [--integrator NAME] [--dt SECONDS]\n"
-    "                            [--until SECONDS] [--every SECONDS] [--quiet]\n"
+    "                            [--tol TOLERANCE] [--until SECONDS] [--every SECONDS]\n"
+    "                            [--quiet]\n"
     "       tumble --help | --version\n"
     "\n"
     "Runs a scene script and writes its trajectory as CSV.\n"
@@ -27,6 +28,8 @@ static const char usage[] =
     "  --integrator NAME  override the scene's integrator: %s\n"
     "  --dt SECONDS       override the step (default: the world's dt, 1/60 s\n"
     "                     unless the scene says otherwise)\n"
+    "  --tol TOLERANCE    the error per step asked of adaptive integrators\n"
+    "                     (dopri5): relative to 1 + |y| per state value\n"
     "  --until SECONDS    override the scene's duration\n"
     "  --every SECONDS    override record_every (default 1/60 s; 0 records\n"
     "                     every step)\n"
@@ -52,7 +55,7 @@ static const char usage[] =
 
 typedef struct options {
     const char *scene, *out, *integrator;
-    double dt, until, every;
+    double dt, until, every, tol;
     int quiet;
 } options;
 
@@ -76,15 +79,15 @@ static void print_usage(FILE *f)
     fprintf(f, usage, names);
 }
 
-static int parse_seconds(const char *flag, const char *text, double *out, int allow_zero)
+static int parse_number(const char *flag, const char *text, double *out, int allow_zero)
 {
     char *end;
     double v;
     if (!text)
-        return die(2, "%s needs a value in seconds", flag);
+        return die(2, "%s needs a number", flag);
     v = strtod(text, &end);
     if (end == text || *end || !isfinite(v) || v < 0 || (v == 0 && !allow_zero))
-        return die(2, "bad number of seconds '%s'", text);
+        return die(2, "bad number '%s' (it must be finite and positive)", text);
     *out = v;
     return 0;
 }
@@ -93,7 +96,7 @@ static int parse(int argc, char **argv, options *o)
 {
     int i, rc;
     memset(o, 0, sizeof *o);
-    o->dt = o->until = o->every = -1;
+    o->dt = o->until = o->every = o->tol = -1;
     if (argc < 2)
         return print_usage(stderr), 2;
     if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))
@@ -113,15 +116,19 @@ static int parse(int argc, char **argv, options *o)
                 return die(2, "%s needs a name", a);
             o->integrator = v, ++i;
         } else if (!strcmp(a, "--dt")) {
-            if ((rc = parse_seconds(a, v, &o->dt, 0)))
+            if ((rc = parse_number(a, v, &o->dt, 0)))
+                return rc;
+            ++i;
+        } else if (!strcmp(a, "--tol")) {
+            if ((rc = parse_number(a, v, &o->tol, 0)))
                 return rc;
             ++i;
         } else if (!strcmp(a, "--until")) {
-            if ((rc = parse_seconds(a, v, &o->until, 1)))
+            if ((rc = parse_number(a, v, &o->until, 1)))
                 return rc;
             ++i;
         } else if (!strcmp(a, "--every")) {
-            if ((rc = parse_seconds(a, v, &o->every, 1)))
+            if ((rc = parse_number(a, v, &o->every, 1)))
                 return rc;
             ++i;
         } else if (!strcmp(a, "--quiet")) {
@@ -304,6 +311,8 @@ static int run(lua_State *L, const options *o)
                       "script returns: scenes that return their world must not use <close>)", o->scene);
 
     if (o->integrator && tb_world_set_integrator(w, o->integrator) != TB_OK)
+        return die(1, "%s", tb_world_message(w));
+    if (o->tol > 0 && tb_world_set_tolerance(w, o->tol) != TB_OK)
         return die(1, "%s", tb_world_message(w));
     dt = o->dt > 0 ? o->dt : tb_lua_world_dt(L, world_idx);
     duration = o->until >= 0 ? o->until : scene_number(L, scene_idx, "duration", -1, &bad);

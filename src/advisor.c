@@ -149,10 +149,14 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
     for (i = 0; tb__method_at(i); ++i) {
         const tb__method *m = tb__method_at(i);
         const double limit = limit_of(m, advice->stiffest, advice->decay);
-        if (limit > best_limit && !(m->split && w->tracer_count))
+        if (limit > best_limit && !m->adaptive && !(m->split && w->tracer_count))
             best_limit = limit, best = m;
     }
-    if (advice->limit == INFINITY && w->method->oscillation_limit == INFINITY) {
+    if (w->method->adaptive) {
+        snprintf(advice->text, sizeof advice->text,
+                 "%s chooses its own substeps for tolerance %g (stiffest mode %.4g rad/s)", w->method->name,
+                 w->tolerance, advice->stiffest);
+    } else if (advice->limit == INFINITY && w->method->oscillation_limit == INFINITY) {
         snprintf(advice->text, sizeof advice->text,
                  "%s is stable at any step; it damps modes faster than 1/h (stiffest %.4g rad/s)", w->method->name,
                  advice->stiffest);

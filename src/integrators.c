@@ -128,17 +128,98 @@ static tb_status implicit_euler(tb_world *w, double h)
     return tb__implicit_step(w, h);
 }
 
+/* Dormand-Prince 5(4): the fifth-order solution advances, the embedded
+   fourth-order one estimates the local error. A step of H is covered by
+   substeps whose size is set by the standard controller
+   h <- h min(5, max(0.2, 0.9 err^(-1/5))); a rejected substep (err > 1, or
+   a non-finite state) is retried smaller from the same state. The running
+   state lives in scratch and is written to the world only at the end, so a
+   failing callback leaves the world as it was. */
+static const double DP_C[7] = { 0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1, 1 };
+static const double DP_A[7][6] = {
+    { 0 },
+    { 1.0 / 5 },
+    { 3.0 / 40, 9.0 / 40 },
+    { 44.0 / 45, -56.0 / 15, 32.0 / 9 },
+    { 19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729 },
+    { 9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656 },
+    { 35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84 },
+};
+/* fifth-order weights minus fourth-order ones */
+static const double DP_E[7] = { 71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525,
+                                -1.0 / 40 };
+#define DP_MAX_SUBSTEPS 1000000
+
+static tb_status dopri5(tb_world *w, double H)
+{
+    double *k[7], *y, *next, *err, *swap, h, done = 0;
+    int have_k1 = 0, j, s;
+    long substeps = 0;
+    tb_status st = tb__state_scratch(w, 10);
+    if (st != TB_OK)
+        return st;
+    for (j = 0; j < 7; ++j)
+        k[j] = tb__scratch_vector(w, (size_t)j);
+    y = tb__scratch_vector(w, 7);
+    next = tb__scratch_vector(w, 8);
+    err = tb__scratch_vector(w, 9);
+    tb__state_copy(w, y, w->y);
+    h = w->adaptive_h > 0 ? w->adaptive_h : H;
+    while (done < H) {
+        const double t = w->time + done;
+        const int last = h >= H - done;
+        const double step = last ? H - done : h;
+        double e;
+        if (++substeps > DP_MAX_SUBSTEPS || step <= 1e-14 * (1 + fabs(t)))
+            return tb__fail(w, TB_ERR_ARGUMENT,
+                            "dopri5: the substep fell to %g s at t = %.17g s: too stiff for tolerance %g "
+                            "(try implicit_euler)", step, t, w->tolerance);
+        if (!have_k1 && (st = tb__derive(w, t, y, k[0])) != TB_OK)
+            return st;
+        have_k1 = 1;
+        for (s = 1; s < 7; ++s) {
+            tb__state_axpy(w, next, y, step * DP_A[s][0], k[0]);
+            for (j = 1; j < s; ++j)
+                if (DP_A[s][j] != 0)
+                    tb__state_axpy(w, next, next, step * DP_A[s][j], k[j]);
+            if ((st = tb__derive(w, t + DP_C[s] * step, next, k[s])) != TB_OK)
+                return st;
+        }
+        tb__state_scale(w, err, step * DP_E[0], k[0]);
+        for (j = 2; j < 7; ++j)
+            tb__state_axpy(w, err, err, step * DP_E[j], k[j]);
+        e = tb__state_error_norm(w, err, y, next, w->tolerance);
+        if (!(e <= 1)) { /* rejected, or not finite: shrink and retry */
+            h = step * (isfinite(e) ? fmax(0.2, 0.9 * pow(e, -0.2)) : 0.2);
+            continue;
+        }
+        tb__project(w, next);
+        swap = y, y = next, next = swap;
+        /* first same as last: the seventh stage is the next first, unless
+           projecting moved the state */
+        swap = k[0], k[0] = k[6], k[6] = swap;
+        have_k1 = w->body_count == 0;
+        done = last ? H : done + step;
+        if (!last || step == h)
+            h = step * fmin(5, fmax(0.2, 0.9 * pow(fmax(e, 1e-10), -0.2)));
+    }
+    w->adaptive_h = h;
+    tb__state_copy(w, w->y, y);
+    return TB_OK;
+}
+
 /* Stability limits (|h lambda|): explicit Euler's region |1 + z| <= 1 never
    reaches the imaginary axis; the split methods are bounded for h w < 2 and
    damp a decay for h k < 2; RK4's region reaches 2 sqrt 2 on the imaginary
    axis and 2.785 on the negative real axis. */
 static const tb__method methods[] = {
-    { "euler", 1, 0, 0, 1, euler, 0, 2 },
-    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, 2, 2 },
-    { "verlet", 2, 1, 1, 1, verlet, 2, 2 },
-    { "rk4", 4, 0, 0, 3, rk4, 2.8284271247461903, 2.785293563405282 },
-    { "verlet_exact", 2, 1, 1, 1, verlet_exact, 2, 2 },
-    { "implicit_euler", 1, 1, 0, 4, implicit_euler, INFINITY, INFINITY },
+    { "euler", 1, 0, 0, 1, euler, 0, 2, 0 },
+    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, 2, 2, 0 },
+    { "verlet", 2, 1, 1, 1, verlet, 2, 2, 0 },
+    { "rk4", 4, 0, 0, 3, rk4, 2.8284271247461903, 2.785293563405282, 0 },
+    { "verlet_exact", 2, 1, 1, 1, verlet_exact, 2, 2, 0 },
+    { "implicit_euler", 1, 1, 0, 4, implicit_euler, INFINITY, INFINITY, 0 },
+    { "dopri5", 5, 0, 0, 10, dopri5, INFINITY, INFINITY, 1 },
 };
 #define METHOD_COUNT ((int)(sizeof methods / sizeof methods[0]))
 

@@ -1,6 +1,7 @@
 /* state.c: the state vector y and the integrators' scratch vectors. */
 #include "world.h"
 
+#include <math.h>
 #include <string.h>
 
 static const struct { enum tb__tier tier; size_t width; } quantities[TB__QUANTITY_COUNT] = {
@@ -129,4 +130,27 @@ void tb__state_copy(const tb_world *w, double *out, const double *in)
     int s, n = segments(w, off, len);
     for (s = 0; s < n; ++s)
         memcpy(out + off[s], in + off[s], len[s] * sizeof(double));
+}
+
+double tb__state_error_norm(const tb_world *w, const double *err, const double *y0, const double *y1, double tol)
+{
+    size_t off[TB__QUANTITY_COUNT], len[TB__QUANTITY_COUNT], i, count = 0;
+    double sum = 0;
+    int s, n = segments(w, off, len);
+    for (s = 0; s < n; ++s)
+        for (i = off[s]; i < off[s] + len[s]; ++i) {
+            const double scale = tol * (1 + fmax(fabs(y0[i]), fabs(y1[i])));
+            sum += (err[i] / scale) * (err[i] / scale);
+            ++count;
+        }
+    return count ? sqrt(sum / (double)count) : 0;
+}
+
+void tb__state_scale(const tb_world *w, double *out, double a, const double *in)
+{
+    size_t off[TB__QUANTITY_COUNT], len[TB__QUANTITY_COUNT], i;
+    int s, n = segments(w, off, len);
+    for (s = 0; s < n; ++s)
+        for (i = off[s]; i < off[s] + len[s]; ++i)
+            out[i] = a * in[i];
 }

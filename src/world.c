@@ -37,6 +37,8 @@ tb_status tb_world_create(const tb_world_def *def, tb_world **world, char *messa
         st = tb__fail(&scratch, TB_ERR_ARGUMENT, "gravity must be finite");
     else if ((st = check_drag(&scratch, def->linear_drag, def->quadratic_drag)) != TB_OK)
         ;
+    else if (def->tolerance != 0 && !(isfinite(def->tolerance) && def->tolerance > 0))
+        st = tb__fail(&scratch, TB_ERR_ARGUMENT, "tolerance must be finite and > 0 (got %g)", def->tolerance);
     else if (!tb__method_find(def->integrator ? def->integrator : "verlet"))
         st = tb__fail(&scratch, TB_ERR_ARGUMENT, "unknown integrator '%s'", def->integrator);
     if (st == TB_OK) {
@@ -50,6 +52,7 @@ tb_status tb_world_create(const tb_world_def *def, tb_world **world, char *messa
             w->method = tb__method_find(def->integrator ? def->integrator : "verlet");
             memcpy(w->gravity, def->gravity, sizeof w->gravity);
             w->linear_drag = def->linear_drag;
+            w->tolerance = def->tolerance != 0 ? def->tolerance : 1e-6;
             w->fields.item_size = sizeof(tb__field);
             w->forces.item_size = sizeof(tb__force);
             w->quadratic_drag = def->quadratic_drag;
@@ -142,6 +145,23 @@ tb_status tb_world_set_integrator(tb_world *w, const char *name)
         return st;
     w->method = m;
     return TB_OK;
+}
+
+tb_status tb_world_set_tolerance(tb_world *w, double tolerance)
+{
+    tb_status st = tb__check_busy(w, "change the tolerance");
+    if (st != TB_OK)
+        return st;
+    if (!(isfinite(tolerance) && tolerance > 0))
+        return tb__fail(w, TB_ERR_ARGUMENT, "tolerance must be finite and > 0 (got %g)", tolerance);
+    w->tolerance = tolerance;
+    w->adaptive_h = 0; /* a new tolerance starts the step-size search afresh */
+    return TB_OK;
+}
+
+double tb_world_tolerance(const tb_world *w)
+{
+    return w->tolerance;
 }
 
 const char *tb_world_integrator(const tb_world *w)

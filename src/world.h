@@ -86,6 +86,7 @@ typedef struct tb__method {
        axis (decay). Used by the advisor (advisor.c). */
     double oscillation_limit;
     double decay_limit;
+    int adaptive;          /* chooses its own substeps: no limit on h */
 } tb__method;
 
 const tb__method *tb__method_find(const char *name);
@@ -101,6 +102,8 @@ struct tb_world {
     double time_carry;     /* s, the rounding lost from `time` (Kahan sum) */
     double gravity[3];     /* m/s^2 */
     double linear_drag;    /* N s/m */
+    double tolerance;      /* local error per step asked of adaptive methods */
+    double adaptive_h;     /* s, the last step size an adaptive method chose */
     double quadratic_drag; /* N s^2/m^2 */
 
     /* state vector and the offsets of its arrays (in doubles) */
@@ -204,6 +207,12 @@ double *tb__scratch_vector(tb_world *w, size_t k);
 /* out = base + a * dir over the used part of the state. out may be base. */
 void tb__state_axpy(const tb_world *w, double *out, const double *base, double a, const double *dir);
 void tb__state_copy(const tb_world *w, double *out, const double *in);
+/* out = a in over the used part of the state. */
+void tb__state_scale(const tb_world *w, double *out, double a, const double *in);
+/* RMS over the used state of err_i / (tol (1 + max(|y0_i|, |y1_i|))): an
+   embedded pair's error estimate measured against a tolerance that is
+   absolute near zero and relative for large values. <= 1 means accept. */
+double tb__state_error_norm(const tb_world *w, const double *err, const double *y0, const double *y1, double tol);
 
 /* ---- stepping primitives (world.c over tracers.c, particles.c, bodies.c) -- */
 /* The methods use only these; each tier supplies its part. */

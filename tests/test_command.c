@@ -318,6 +318,8 @@ static void bad_arguments_are_refused(void **state)
     assert_int_equal(tumble(args), 2);
     snprintf(args, sizeof args, "run %s --until", scene);
     assert_int_equal(tumble(args), 2);
+    snprintf(args, sizeof args, "run %s --tol 0", scene);
+    assert_int_equal(tumble(args), 2);
     snprintf(args, sizeof args, "run %s --frobnicate", scene);
     assert_int_equal(tumble(args), 2);
     assert_non_null(strstr(err_text, "--frobnicate"));
@@ -344,7 +346,12 @@ static void overrides_and_help(void **state)
     assert_non_null(strstr(out_text, "steps       100"));
     work_path(csv, sizeof csv, "over.csv");
     assert_int_equal(parse_csv(csv, "particle", last), 3); /* t = 0, 0.5, 1 */
+    snprintf(args, sizeof args, "run '%s/oscillator.lua' --integrator dopri5 --tol 1e-9 --dt 0.1 --out tol.csv",
+             SCENES_DIR);
+    assert_int_equal(tumble(args), 0);
+    assert_non_null(strstr(out_text, "tolerance 1e-09"));
     assert_int_equal(tumble("--help"), 0);
+    assert_non_null(strstr(out_text, "--tol"));
     assert_non_null(strstr(out_text, "t,kind,id,x,y,z,vx,vy,vz"));
     assert_non_null(strstr(out_text, "symplectic_euler"));
     assert_non_null(strstr(out_text, "--until"));

@@ -181,7 +181,48 @@ static void verlet_energy_stays_bounded(void **state)
     check_bounded("verlet", 0.0025 / (1 - 0.0025) * (1 + 1e-9));
 }
 
+/* dopri5 controls the local error per substep to the tolerance (relative
+   to 1 + |y|); over T = 5 s of the oscillator (w = 2, taken in outer steps
+   of 0.5 s, h w = 1) the global error must follow the tolerance down, in
+   proportion: the local errors of the substeps add up to a steady multiple
+   of the tolerance (measured 5.6 to 6.7 tol from 1e-4 to 1e-10); at most
+   10 tol is asserted at every level. */
+static void dopri5_error_follows_tolerance(void **state)
+{
+    const double tols[] = { 1e-4, 1e-7, 1e-10 };
+    size_t k;
+    (void)state;
+    for (k = 0; k < 3; ++k) {
+        const double w0 = 2, T = 5;
+        tb_particle_id id;
+        tb_world *world = oscillator("dopri5", w0, 1, 0, &id);
+        double x[3], v[3], err;
+        int i;
+        assert_int_equal(tb_world_set_tolerance(world, tols[k]), TB_OK);
+        for (i = 0; i < 10; ++i)
+            assert_int_equal(tb_world_step(world, T / 10), TB_OK);
+        tb_particle_position(world, id, x);
+        tb_particle_velocity(world, id, v);
+        err = hypot(x[0] - cos(w0 * T), (v[0] + w0 * sin(w0 * T)) / w0);
+        print_message("dopri5 tol %.0e: error %.3e (%.2f tol)\n", tols[k], err, err / tols[k]);
+        assert_below(err, 10 * tols[k]);
+        tb_world_destroy(world);
+    }
+}
+
+/* A tracer in the vortex: RK methods of the Dormand-Prince pair on the
+   rotation z' = i w z keep the radius to the tolerance. */
+static void dopri5_moves_tracers(void **state)
+{
+    const double r = vortex_radius("dopri5", 2 * PI, 0.1, 10, 1.5); /* one turn in 10 outer steps */
+    (void)state;
+    print_message("dopri5 vortex: radius error %.3e after one turn\n", fabs(r / 1.5 - 1));
+    assert_below(fabs(r / 1.5 - 1), 1e-6 * 10);
+}
+
 static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(dopri5_error_follows_tolerance),
+    cmocka_unit_test(dopri5_moves_tracers),
     cmocka_unit_test(euler_is_first_order),
     cmocka_unit_test(symplectic_euler_is_first_order),
     cmocka_unit_test(verlet_is_second_order),
