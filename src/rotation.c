@@ -618,18 +618,6 @@ static const double tb__strang_b[1] = { 1.0 };
    general way too, for its full normalisation. */
 #define TB__NEAR_UNIT(q) (fabs(tb__norm2(q) - 1) <= 5e-9)
 
-void tb__split2_framed(double q[4], const double L[3], const tb__split_frame *f, double h)
-{
-    tb__spin_lanes p;
-    p.h = h;
-    if (TB__NEAR_UNIT(q) && tb__spin_load(&p, 0, q, L, f, h * h, 0)) {
-        tb__split2_one(&p);
-        tb__spin_store(&p, 0, f, q);
-    } else {
-        tb__split_any(q, L, f, h, tb__strang_a, tb__strang_b, 2);
-    }
-}
-
 void tb__rotation_split2(double q[4], const double L[3], const double invI[3], double h)
 {
     tb__split_frame f;
@@ -654,16 +642,34 @@ static void tb__accurate_one(tb__spin_lanes *p)
     TB__ACCURATE(tb__lane_begin(p, 0), TB__ONE_A, TB__ONE_B, TB__ONE_A_LAST, tb__lane_end(p, 0));
 }
 
-void tb__accurate_framed(double q[4], const double L[3], const tb__split_frame *f, double h)
+/* One body by the lanes code (so it gets the bits it would get in a block),
+   or the general way for a q off unit length or turns too large for the
+   polynomials. */
+static void tb__framed(double q[4], const double L[3], const tb__split_frame *f, double h, int accurate)
 {
     tb__spin_lanes p;
     p.h = h;
-    if (TB__NEAR_UNIT(q) && tb__spin_load(&p, 0, q, L, f, h * h, 1)) {
-        tb__accurate_one(&p);
+    if (TB__NEAR_UNIT(q) && tb__spin_load(&p, 0, q, L, f, h * h, accurate)) {
+        if (accurate)
+            tb__accurate_one(&p);
+        else
+            tb__split2_one(&p);
         tb__spin_store(&p, 0, f, q);
-    } else {
+    } else if (accurate) {
         tb__split_any(q, L, f, h, tb__bm_a, tb__bm_b, 7);
+    } else {
+        tb__split_any(q, L, f, h, tb__strang_a, tb__strang_b, 2);
     }
+}
+
+void tb__split2_framed(double q[4], const double L[3], const tb__split_frame *f, double h)
+{
+    tb__framed(q, L, f, h, 0);
+}
+
+void tb__accurate_framed(double q[4], const double L[3], const tb__split_frame *f, double h)
+{
+    tb__framed(q, L, f, h, 1);
 }
 
 void tb__rotation_accurate(double q[4], const double L[3], const double invI[3], double h)
