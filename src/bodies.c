@@ -200,9 +200,6 @@ static tb_status find(const tb_world *w, tb_body_id id, uint32_t *slot)
 
 tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
 {
-    static const struct { enum tb__quantity q; size_t width; } state[] = {
-        { TB__BODY_POS, 3 }, { TB__BODY_ROT, 4 }, { TB__BODY_MOM, 3 }, { TB__BODY_ANG, 3 }
-    };
     void **arrays[BODY_ARRAYS];
     size_t sizes[BODY_ARRAYS], k;
     uint32_t s, last;
@@ -220,9 +217,7 @@ tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
             unsigned char *base = *arrays[k];
             memcpy(base + s * sizes[k], base + last * sizes[k], sizes[k]);
         }
-        for (k = 0; k < sizeof state / sizeof state[0]; ++k)
-            memcpy(at(w, state[k].q, state[k].width, s), at(w, state[k].q, state[k].width, last),
-                   state[k].width * sizeof(double));
+        tb__state_move(w, TB__BODIES, last, s);
         tb__ids_move(&w->body_ids, last, s);
     }
     tb__ids_release(&w->body_ids, id.index1);

@@ -77,18 +77,14 @@ tb_status tb_world_remove_particle(tb_world *w, tb_particle_id id)
 {
     tb_status st;
     uint32_t slot, last;
-    double *pos, *vel;
     if ((st = tb__check_busy(w, "remove a particle")) != TB_OK)
         return st;
     if ((st = find(w, id, &slot)) != TB_OK)
         return st;
     tb__springs_detach(w, slot);
     last = (uint32_t)w->particle_count - 1;
-    pos = w->y + w->off[TB__PARTICLE_POS];
-    vel = w->y + w->off[TB__PARTICLE_VEL];
     if (slot != last) {
-        memcpy(pos + 3 * slot, pos + 3 * last, 3 * sizeof(double));
-        memcpy(vel + 3 * slot, vel + 3 * last, 3 * sizeof(double));
+        tb__state_move(w, TB__PARTICLES, last, slot);
         w->mass[slot] = w->mass[last];
         w->inv_mass[slot] = w->inv_mass[last];
         tb__ids_move(&w->particle_ids, last, slot);
@@ -223,13 +219,7 @@ void tb__particle_derive(tb_world *w, const double *y, double *dy)
 
 int tb__particle_velocity_dependent(const tb_world *w)
 {
-    size_t s;
-    if (w->particle_count && (w->linear_drag != 0 || w->quadratic_drag != 0))
-        return 1;
-    for (s = 0; s < w->spring_count; ++s)
-        if (w->spring_c[s] != 0)
-            return 1;
-    return 0;
+    return (w->particle_count && (w->linear_drag != 0 || w->quadratic_drag != 0)) || w->spring_damped > 0;
 }
 
 /* The common case of a sweep, where a scene has only the local forces

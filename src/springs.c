@@ -74,6 +74,7 @@ tb_status tb_world_add_spring(tb_world *w, const tb_spring_def *def, tb_spring_i
     memcpy(w->spring_anchor + 3 * s, def->anchor, 3 * sizeof(double));
     w->spring_k[s] = def->stiffness;
     w->spring_c[s] = def->damping;
+    w->spring_damped += def->damping != 0;
     w->spring_rest[s] = def->rest_length >= 0 ? def->rest_length : distance(pos + 3 * a, pb);
     tb__ids_acquire(&w->spring_ids, s, &made.index1, &made.generation);
     if (id)
@@ -85,6 +86,7 @@ static void remove_slot(tb_world *w, uint32_t s)
 {
     uint32_t last = (uint32_t)w->spring_count - 1, index1, generation;
     tb__ids_at(&w->spring_ids, s, &index1, &generation);
+    w->spring_damped -= w->spring_c[s] != 0;
     if (s != last) {
         w->spring_a[s] = w->spring_a[last];
         w->spring_b[s] = w->spring_b[last];
@@ -142,7 +144,7 @@ void tb__springs_free(tb_world *w)
     arrays_of(w, arrays, sizes);
     tb__free_arrays(w, arrays, sizes, 6, w->spring_cap);
     tb__ids_free(w, &w->spring_ids);
-    w->spring_count = w->spring_cap = 0;
+    w->spring_count = w->spring_cap = w->spring_damped = 0;
 }
 
 void tb__spring_forces(const tb_world *w, const double *pos, const double *vel, double *force)

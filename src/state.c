@@ -154,3 +154,12 @@ void tb__state_scale(const tb_world *w, double *out, double a, const double *in)
         for (i = off[s]; i < off[s] + len[s]; ++i)
             out[i] = a * in[i];
 }
+
+void tb__state_move(tb_world *w, enum tb__tier tier, size_t from, size_t to)
+{
+    int k;
+    for (k = 0; k < TB__QUANTITY_COUNT; ++k)
+        if (quantities[k].tier == tier)
+            memcpy(w->y + w->off[k] + quantities[k].width * to, w->y + w->off[k] + quantities[k].width * from,
+                   quantities[k].width * sizeof(double));
+}

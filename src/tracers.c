@@ -53,15 +53,13 @@ tb_status tb_world_remove_tracer(tb_world *w, tb_tracer_id id)
 {
     tb_status st;
     uint32_t slot, last;
-    double *pos;
     if ((st = tb__check_busy(w, "remove a tracer")) != TB_OK)
         return st;
     if ((st = find(w, id, &slot)) != TB_OK)
         return st;
     last = (uint32_t)w->tracer_count - 1;
-    pos = w->y + w->off[TB__TRACER_POS];
     if (slot != last) {
-        memcpy(pos + 3 * slot, pos + 3 * last, 3 * sizeof(double));
+        tb__state_move(w, TB__TRACERS, last, slot);
         tb__ids_move(&w->tracer_ids, last, slot);
     }
     tb__ids_release(&w->tracer_ids, id.index1);

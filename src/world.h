@@ -139,6 +139,7 @@ struct tb_world {
     double *spring_k;      /* [spring_cap] N/m */
     double *spring_c;      /* [spring_cap] N s/m */
     double *spring_rest;   /* [spring_cap] m */
+    size_t spring_damped;  /* springs with damping != 0 (so no step scans them) */
     tb__ids spring_ids;
 
     /* rigid bodies: constants, held user forces, callback forces */
@@ -207,6 +208,9 @@ double *tb__scratch_vector(tb_world *w, size_t k);
 /* out = base + a * dir over the used part of the state. out may be base. */
 void tb__state_axpy(const tb_world *w, double *out, const double *base, double a, const double *dir);
 void tb__state_copy(const tb_world *w, double *out, const double *in);
+/* Copy every state array's entry of object `from` of `tier` over `to`
+   (swap-remove), as the field list TB__QUANTITIES says. */
+void tb__state_move(tb_world *w, enum tb__tier tier, size_t from, size_t to);
 /* out = a in over the used part of the state. */
 void tb__state_scale(const tb_world *w, double *out, double a, const double *in);
 /* RMS over the used state of err_i / (tol (1 + max(|y0_i|, |y1_i|))): an

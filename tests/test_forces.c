@@ -292,7 +292,9 @@ static void pinned_particles_do_not_move(void **state)
     assert_true(m == 0);
     tb_particle_position(w, s.b, x);
     assert_true(x[2] < -1); /* the free end sags under gravity */
-    tb_world_momentum(w, p); /* the pinned end carries none */
+    tb_world_momentum(w, p); /* the pinned end carries none: all of it is the free end's m v */
+    tb_particle_velocity(w, s.b, x);
+    assert_true(p[0] == 1 * x[0] && p[1] == 1 * x[1] && p[2] == 1 * x[2]);
     tb_world_destroy(w);
 }
 
