@@ -117,6 +117,18 @@ TB_API tb_status tb_world_set_drag(tb_world *world, double linear, double quadra
                         the state, scaled by tolerance (1 + |y|)). Order 5,
                         6 evaluations per accepted substep (the seventh is
                         reused); the substep size carries over between steps.
+     "auto"             picks, from what the world contains, the cheapest of
+                        "verlet", "verlet_exact", "rk4" and "dopri5" and a
+                        number of equal substeps whose estimated local error
+                        per step meets the tolerance (same norm as "dopri5"):
+                        each method errs by about C (r s)^(p+1) per substep s
+                        on the scene's fastest rates r (stiffest spring mode,
+                        drag and damping, body spin, vortex fields; gravity
+                        costs the split methods nothing). Force and field
+                        callbacks hide their rates, so worlds with them get
+                        "dopri5". The choice is made again when the step, the
+                        tolerance or the set of objects changes, and is
+                        shown by tb_world_auto_choice.
    The split methods ("symplectic_euler", "verlet", "verlet_exact",
    "implicit_euler") need a velocity to kick: tracers have none, so a world holding tracers refuses
    them (and a world using them refuses tracers). "euler" and "rk4" move
@@ -132,9 +144,27 @@ TB_API tb_status tb_world_set_tolerance(tb_world *world, double tolerance);
 TB_API double tb_world_tolerance(const tb_world *world);
 TB_API const char *tb_world_integrator(const tb_world *world);
 
+/* What "auto" chose for its last step: the method's name (NULL before the
+   first step) and the substeps per step. */
+TB_API const char *tb_world_auto_choice(const tb_world *world, long *substeps);
+
 /* Advance by h seconds (finite, > 0). If a callback fails, the step is
    abandoned and the state is bit-identical to what it was before. */
 TB_API tb_status tb_world_step(tb_world *world, double h);
+
+/* The blow-up guard; off (0) by default, because it copies the state every
+   step. When on, a step that leaves any position, velocity, orientation or
+   momentum non-finite is undone and returns TB_ERR_UNSTABLE with a message
+   naming the step, the object and the likely cause (the advisor's verdict,
+   e.g. "step 0.02 s exceeds the limit 0.0126 s of symplectic_euler ...
+   spring 17"); the world is back at the state before that step.
+   energy_growth: 0 turns the guard off, INFINITY checks finiteness only,
+   a factor > 1 also stops a step in which the kinetic, rotational and
+   spring energy grows by more than that factor beyond what gravity
+   released (forces that do work, such as callbacks, must fit in it; a
+   world starting at rest is not checked until it moves). */
+TB_API tb_status tb_world_set_guard(tb_world *world, double energy_growth);
+TB_API double tb_world_guard(const tb_world *world);
 
 /* -------------------------------------------------------------- tracers -- */
 /* Tracers are massless points with only a position, carried by the sum of

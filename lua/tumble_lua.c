@@ -662,7 +662,7 @@ static lua_callback *keep_callback(lua_State *L, int world_idx, lua_world *lw, i
 
 /* -------------------------------------------------------------- world -- */
 
-static const char *const world_options[] = { "gravity", "integrator", "dt", "drag", "tolerance", NULL };
+static const char *const world_options[] = { "gravity", "integrator", "dt", "drag", "tolerance", "guard", NULL };
 static const char *const drag_options[] = { "linear", "quadratic", NULL };
 static const char *const particle_options[] = { "pos", "vel", "mass", "pinned", NULL };
 static const char *const tracer_options[] = { "pos", NULL };
@@ -711,6 +711,14 @@ static int world_new(lua_State *L)
     def.allocator.realloc = (tb_realloc_fn *)lua_getallocf(L, &def.allocator.user);
     if (tb_world_create(&def, &lw->world, message, sizeof message) != TB_OK)
         return luaL_error(L, "tumble.world: %s", message);
+    if (lua_getfield(L, 1, "guard") != LUA_TNIL) {
+        /* true: finiteness only; a number: also the energy growth factor */
+        const double g = lua_isboolean(L, -1) ? (lua_toboolean(L, -1) ? HUGE_VAL : 0) : lua_tonumber(L, -1);
+        if ((!lua_isboolean(L, -1) && !lua_isnumber(L, -1)) || tb_world_set_guard(lw->world, g) != TB_OK)
+            return luaL_error(L, "tumble.world: 'guard' must be true, false or a factor > 1 (the largest "
+                                 "energy growth per step)");
+    }
+    lua_pop(L, 1);
     return 1;
 }
 
@@ -1050,6 +1058,28 @@ static int world_set_tolerance(lua_State *L)
     return 0;
 }
 
+/* world:set_guard(true | false | factor) */
+static int world_set_guard(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    const double g = lua_isboolean(L, 2) ? (lua_toboolean(L, 2) ? HUGE_VAL : 0) : luaL_checknumber(L, 2);
+    if (tb_world_set_guard(lw->world, g) != TB_OK)
+        return fail(L, lw, "world:set_guard");
+    return 0;
+}
+
+/* The method and substeps "auto" chose for its last step (nil before). */
+static int world_auto_choice(lua_State *L)
+{
+    long substeps;
+    const char *name = tb_world_auto_choice(to_world(L, 1)->world, &substeps);
+    if (!name)
+        return 0;
+    lua_pushstring(L, name);
+    lua_pushinteger(L, (lua_Integer)substeps);
+    return 2;
+}
+
 static int world_gravity(lua_State *L)
 {
     double g[3];
@@ -1115,7 +1145,8 @@ static const luaL_Reg world_methods[] = {
     { "drag", world_drag }, { "field", world_field }, { "force", world_force },
     { "step", world_step }, { "time", world_time }, { "dt", world_dt }, { "set_dt", world_set_dt },
     { "integrator", world_integrator }, { "set_integrator", world_set_integrator },
-    { "set_tolerance", world_set_tolerance },
+    { "set_tolerance", world_set_tolerance }, { "set_guard", world_set_guard },
+    { "auto_choice", world_auto_choice },
     { "gravity", world_gravity }, { "set_gravity", world_set_gravity },
     { "energy", world_energy }, { "momentum", world_momentum }, { "counts", world_counts },
     { "close", world_close }, { NULL, NULL }

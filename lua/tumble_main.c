@@ -29,7 +29,11 @@ static const char usage[] =
     "  --dt SECONDS       override the step (default: the world's dt, 1/60 s\n"
     "                     unless the scene says otherwise)\n"
     "  --tol TOLERANCE    the error per step asked of adaptive integrators\n"
-    "                     (dopri5): relative to 1 + |y| per state value\n"
+    "                     (dopri5, auto): relative to 1 + |y| per state value\n"
+    "  --guard FACTOR     the blow-up guard: stop when the state stops being\n"
+    "                     finite (always on in the command) or when the energy\n"
+    "                     grows more than FACTOR (> 1) times in one step; the\n"
+    "                     message names the step, the object and the cause\n"
     "  --until SECONDS    override the scene's duration\n"
     "  --every SECONDS    override record_every (default 1/60 s; 0 records\n"
     "                     every step)\n"
@@ -55,7 +59,7 @@ static const char usage[] =
 
 typedef struct options {
     const char *scene, *out, *integrator;
-    double dt, until, every, tol;
+    double dt, until, every, tol, guard;
     int quiet;
 } options;
 
@@ -96,7 +100,7 @@ static int parse(int argc, char **argv, options *o)
 {
     int i, rc;
     memset(o, 0, sizeof *o);
-    o->dt = o->until = o->every = o->tol = -1;
+    o->dt = o->until = o->every = o->tol = o->guard = -1;
     if (argc < 2)
         return print_usage(stderr), 2;
     if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))
@@ -122,6 +126,12 @@ static int parse(int argc, char **argv, options *o)
         } else if (!strcmp(a, "--tol")) {
             if ((rc = parse_number(a, v, &o->tol, 0)))
                 return rc;
+            ++i;
+        } else if (!strcmp(a, "--guard")) {
+            if ((rc = parse_number(a, v, &o->guard, 0)))
+                return rc;
+            if (!(o->guard > 1))
+                return die(2, "--guard must be a factor > 1 (got '%s')", v);
             ++i;
         } else if (!strcmp(a, "--until")) {
             if ((rc = parse_number(a, v, &o->until, 1)))
@@ -281,7 +291,7 @@ static int run(lua_State *L, const options *o)
     tb_world *w;
     tb_energy e0, e1;
     double dt, duration, every, t0, wall, *tracer_vel = NULL;
-    long steps, step, every_steps, rows = 0, r;
+    long steps, step, every_steps, rows = 0, r, substeps;
     int scene_idx, world_idx, bad = 0, have_advice;
     tb_advice advice;
     FILE *f;
@@ -313,6 +323,11 @@ static int run(lua_State *L, const options *o)
     if (o->integrator && tb_world_set_integrator(w, o->integrator) != TB_OK)
         return die(1, "%s", tb_world_message(w));
     if (o->tol > 0 && tb_world_set_tolerance(w, o->tol) != TB_OK)
+        return die(1, "%s", tb_world_message(w));
+    /* the command always guards against blow-up: scenes are small, and a
+       clear message beats a file of NaN */
+    if (tb_world_set_guard(w, o->guard > 1 ? o->guard : (tb_world_guard(w) > 1 ? tb_world_guard(w) : HUGE_VAL))
+        != TB_OK)
         return die(1, "%s", tb_world_message(w));
     dt = o->dt > 0 ? o->dt : tb_lua_world_dt(L, world_idx);
     duration = o->until >= 0 ? o->until : scene_number(L, scene_idx, "duration", -1, &bad);
@@ -370,7 +385,11 @@ static int run(lua_State *L, const options *o)
     e1 = tb_world_energy(w);
     if (!o->quiet) {
         printf("scene       %s\n", o->scene);
-        printf("integrator  %s, dt %.6g s\n", tb_world_integrator(w), dt);
+        if (tb_world_auto_choice(w, &substeps))
+            printf("integrator  auto: %s, %ld substep%s per step, dt %.6g s, tolerance %g\n",
+                   tb_world_auto_choice(w, NULL), substeps, substeps == 1 ? "" : "s", dt, tb_world_tolerance(w));
+        else
+            printf("integrator  %s, dt %.6g s\n", tb_world_integrator(w), dt);
         printf("objects     %zu particles, %zu tracers, %zu springs, %zu bodies\n", tb_world_particle_count(w),
                tb_world_tracer_count(w), tb_world_spring_count(w), tb_world_body_count(w));
         printf("steps       %ld, simulated %.6g s, wall %.3f ms (%.3g us/step)\n", steps, tb_world_time(w),

@@ -68,7 +68,7 @@ static tb_spring_id culprit(const tb_world *w, const double *z)
     return id;
 }
 
-static double fastest_decay(const tb_world *w)
+double tb__fastest_decay(const tb_world *w)
 {
     const double *v = w->y + w->off[TB__PARTICLE_VEL];
     double k = 0;
@@ -105,6 +105,23 @@ static double fastest_spin(const tb_world *w)
     return fastest;
 }
 
+tb_status tb__stiffest_mode(tb_world *w, double *omega, tb_spring_id *spring)
+{
+    const size_t n = 3 * w->particle_count;
+    double *z, *s, *t;
+    /* three vectors of 3n: a state vector holds at least 6n doubles
+       (positions and velocities), so two of them are enough */
+    tb_status st = tb__state_scratch(w, 2);
+    if (st != TB_OK)
+        return st;
+    z = tb__scratch_vector(w, 0);
+    s = z + n;
+    t = tb__scratch_vector(w, 1);
+    *omega = sqrt(largest_mode(w, z, s, t));
+    *spring = culprit(w, z);
+    return TB_OK;
+}
+
 /* The limit of method m on this world: min(c_osc / w, c_decay / k). */
 static double limit_of(const tb__method *m, double omega, double decay)
 {
@@ -118,9 +135,7 @@ static double limit_of(const tb__method *m, double omega, double decay)
 
 tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
 {
-    const size_t n = 3 * w->particle_count;
     tb_status st;
-    double *z, *s, *t;
     const tb__method *best = NULL;
     double best_limit = 0;
     int i;
@@ -131,18 +146,9 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
     if ((st = tb__check_busy(w, "advise")) != TB_OK)
         return st;
     memset(advice, 0, sizeof *advice);
-    if (w->spring_count) {
-        /* three vectors of 3n: a state vector holds at least 6n doubles
-           (positions and velocities), so two of them are enough */
-        if ((st = tb__state_scratch(w, 2)) != TB_OK)
-            return st;
-        z = tb__scratch_vector(w, 0);
-        s = z + n;
-        t = tb__scratch_vector(w, 1);
-        advice->stiffest = sqrt(largest_mode(w, z, s, t));
-        advice->spring = culprit(w, z);
-    }
-    advice->decay = fastest_decay(w);
+    if (w->spring_count && (st = tb__stiffest_mode(w, &advice->stiffest, &advice->spring)) != TB_OK)
+        return st;
+    advice->decay = tb__fastest_decay(w);
     advice->fastest_spin = fastest_spin(w);
     advice->limit = limit_of(w->method, advice->stiffest, advice->decay);
     advice->exceeded = h > advice->limit;
@@ -152,7 +158,15 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
         if (limit > best_limit && !m->adaptive && !(m->split && w->tracer_count))
             best_limit = limit, best = m;
     }
-    if (w->method->adaptive) {
+    if (w->method->adaptive && strcmp(w->method->name, "auto") == 0) {
+        if ((st = tb__auto_plan(w, h)) != TB_OK)
+            return st;
+        snprintf(advice->text, sizeof advice->text,
+                 "auto picks %s with %ld substep%s of %.4g s for tolerance %g (stiffest mode %.4g rad/s, "
+                 "decay %.4g 1/s, spin %.4g rad/s)", w->auto_method->name, w->auto_substeps,
+                 w->auto_substeps == 1 ? "" : "s", h / (double)w->auto_substeps, w->tolerance, advice->stiffest,
+                 advice->decay, advice->fastest_spin);
+    } else if (w->method->adaptive) {
         snprintf(advice->text, sizeof advice->text,
                  "%s chooses its own substeps for tolerance %g (stiffest mode %.4g rad/s)", w->method->name,
                  w->tolerance, advice->stiffest);

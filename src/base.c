@@ -15,6 +15,7 @@ const char *tb_status_name(tb_status status)
     case TB_ERR_MEMORY: return "memory";
     case TB_ERR_CALLBACK: return "callback";
     case TB_ERR_BUSY: return "busy";
+    case TB_ERR_UNSTABLE: return "unstable";
     }
     return "unknown";
 }

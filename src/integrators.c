@@ -208,6 +208,37 @@ static tb_status dopri5(tb_world *w, double H)
     return TB_OK;
 }
 
+/* "auto": the plan (auto.c) names a method and a number of equal substeps;
+   it is made again when the step, the tolerance or the set of objects
+   changes. The substeps see their own times; the driver adds h at the end. */
+static tb_status auto_step(tb_world *w, double h)
+{
+    const double key[8] = { h, w->tolerance, (double)w->tracer_count, (double)w->particle_count,
+                            (double)w->spring_count, (double)w->body_count, (double)w->forces.count,
+                            (double)w->fields.count };
+    const double t0 = w->time;
+    tb_status st = TB_OK;
+    long i;
+    if (!w->auto_method || memcmp(key, w->auto_key, sizeof key) != 0) {
+        if ((st = tb__auto_plan(w, h)) != TB_OK)
+            return st;
+        memcpy(w->auto_key, key, sizeof key);
+    }
+    for (i = 0; i < w->auto_substeps && st == TB_OK; ++i) {
+        w->time = t0 + (double)i * (h / (double)w->auto_substeps);
+        st = w->auto_method->step(w, h / (double)w->auto_substeps);
+    }
+    w->time = t0;
+    return st;
+}
+
+const char *tb_world_auto_choice(const tb_world *w, long *substeps)
+{
+    if (substeps)
+        *substeps = w->auto_method ? w->auto_substeps : 0;
+    return w->auto_method ? w->auto_method->name : NULL;
+}
+
 /* Stability limits (|h lambda|): explicit Euler's region |1 + z| <= 1 never
    reaches the imaginary axis; the split methods are bounded for h w < 2 and
    damp a decay for h k < 2; RK4's region reaches 2 sqrt 2 on the imaginary
@@ -220,6 +251,7 @@ static const tb__method methods[] = {
     { "verlet_exact", 2, 1, 1, 1, verlet_exact, 2, 2, 0 },
     { "implicit_euler", 1, 1, 0, 4, implicit_euler, INFINITY, INFINITY, 0 },
     { "dopri5", 5, 0, 0, 10, dopri5, INFINITY, INFINITY, 1 },
+    { "auto", 0, 0, 1, 10, auto_step, INFINITY, INFINITY, 1 },
 };
 #define METHOD_COUNT ((int)(sizeof methods / sizeof methods[0]))
 

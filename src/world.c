@@ -235,7 +235,8 @@ void tb__split_extrapolate(const tb_world *w, double *saved)
 
 /* A step can fail inside a callback. Methods that write the state only after
    their last force evaluation leave it untouched by construction; the others
-   get a snapshot to roll back to, taken only when something can fail. */
+   get a snapshot to roll back to, taken only when something can fail. The
+   guard needs the snapshot always. */
 tb_status tb_world_step(tb_world *w, double h)
 {
     tb_status st;
@@ -247,7 +248,7 @@ tb_status tb_world_step(tb_world *w, double h)
         return st;
     if ((st = refuse_split_with_tracers(w, w->method)) != TB_OK)
         return st;
-    snapshot = w->method->updates_before_last_evaluation && w->forces.count > 0;
+    snapshot = (w->method->updates_before_last_evaluation && w->forces.count > 0) || w->guard != 0;
     if (snapshot) {
         if ((st = tb__state_scratch(w, (size_t)w->method->scratch + 1)) != TB_OK)
             return st;
@@ -262,6 +263,8 @@ tb_status tb_world_step(tb_world *w, double h)
             tb__state_copy(w, w->y, saved);
         return st;
     }
+    if (w->guard != 0 && (st = tb__guard_check(w, saved, h)) != TB_OK)
+        return st; /* rolled back, held forces kept */
     if (w->body_count && w->body_held) /* held forces last one step, as in ODE */
         memset(w->body_applied, 0, 6 * w->body_count * sizeof(double));
     {   /* compensated sum: t after n steps of h is n h to the last bit */
@@ -269,5 +272,6 @@ tb_status tb_world_step(tb_world *w, double h)
         w->time_carry = (sum - w->time) - add;
         w->time = sum;
     }
+    ++w->steps;
     return TB_OK;
 }

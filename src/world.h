@@ -106,6 +106,18 @@ struct tb_world {
     double adaptive_h;     /* s, the last step size an adaptive method chose */
     double quadratic_drag; /* N s^2/m^2 */
 
+    /* integrator "auto" (auto.c): the method and substeps it chose, and
+       what it chose them for (step, tolerance, object counts) */
+    const tb__method *auto_method;
+    long auto_substeps;
+    double auto_estimate;  /* its cost estimate, force evaluations per step */
+    double auto_key[8];
+
+    /* the blow-up guard (guard.c): 0 off; INFINITY: finiteness only; > 1:
+       also the largest energy growth per step */
+    double guard;
+    unsigned long steps;   /* completed steps, for messages */
+
     /* state vector and the offsets of its arrays (in doubles) */
     double *y;
     size_t y_size;
@@ -255,6 +267,19 @@ int tb__split_velocity_dependent(const tb_world *w);
 /* saved = 2 y - saved on the velocities and momenta: with saved = y_n and
    the current state after a half kick, this predicts the end-of-step ones. */
 void tb__split_extrapolate(const tb_world *w, double *saved);
+
+/* ---- advisor.c, auto.c, guard.c ---------------------------------------- */
+/* The stiffest spring mode w (rad/s) by power iteration, and the stiffest
+   spring where that mode is largest. Uses two scratch state vectors. */
+tb_status tb__stiffest_mode(tb_world *w, double *omega, tb_spring_id *culprit);
+/* The fastest drag or damping decay rate (1/s) of particles and bodies. */
+double tb__fastest_decay(const tb_world *w);
+/* Choose w->auto_method and w->auto_substeps for steps of h. */
+tb_status tb__auto_plan(tb_world *w, double h);
+/* After a step from the state `before`: TB_OK, or TB_ERR_UNSTABLE with a
+   message naming the step, the object and the likely cause (the caller
+   rolls back). */
+tb_status tb__guard_check(tb_world *w, const double *before, double h);
 
 /* ---- the tiers' parts ----------------------------------------------------- */
 tb_status tb__tracer_derive(tb_world *w, double t, const double *y, double *dy);

@@ -358,7 +358,35 @@ static void overrides_and_help(void **state)
     assert_non_null(strstr(out_text, "--until"));
 }
 
+
+/* The command guards every run: the rope stepped at twice its split-method
+   limit stops with the step, the particle and the advisor's cause, and
+   writes no file. auto plans its method and substeps and says which. */
+static void blow_up_is_stopped_and_auto_plans(void **state)
+{
+    char args[2048], csv[1024];
+    (void)state;
+    snprintf(args, sizeof args, "run '%s/rope.lua' --dt 0.0045 --out blown.csv", SCENES_DIR);
+    assert_int_equal(tumble(args), 1);
+    assert_non_null(strstr(err_text, "step "));
+    assert_non_null(strstr(err_text, "particle "));
+    assert_non_null(strstr(err_text, "exceeds the limit"));
+    assert_non_null(strstr(err_text, "spring "));
+    work_path(csv, sizeof csv, "blown.csv");
+    assert_false(exists(csv));
+    snprintf(args, sizeof args, "run '%s/rope.lua' --dt 0.0045 --guard 1.01 --out blown.csv", SCENES_DIR);
+    assert_int_equal(tumble(args), 1);
+    assert_non_null(strstr(err_text, "energy grew"));
+    snprintf(args, sizeof args, "run '%s/rope.lua' --integrator auto --tol 1e-6 --until 0.5 --out auto.csv",
+             SCENES_DIR);
+    assert_int_equal(tumble(args), 0);
+    assert_non_null(strstr(out_text, "integrator  auto: "));
+    assert_non_null(strstr(out_text, "tolerance 1e-06"));
+    assert_non_null(strstr(out_text, "auto picks"));
+}
+
 static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(blow_up_is_stopped_and_auto_plans),
     cmocka_unit_test(projectile_scene),
     cmocka_unit_test(vortex_scene),
     cmocka_unit_test(oscillator_scene),

@@ -220,7 +220,107 @@ static void dopri5_moves_tracers(void **state)
     assert_below(fabs(r / 1.5 - 1), 1e-6 * 10);
 }
 
+
+/* ---- auto ------------------------------------------------------------------- */
+
+/* "auto" plans substeps from the spring's rate so that each step of
+   h w = 1 errs by at most the tolerance (relative to 1 + |y|, the norm of
+   dopri5). The local error of every step is measured against the exact
+   flow from that step's start. */
+static void auto_meets_its_tolerance_per_step(void **state)
+{
+    const double tols[] = { 1e-3, 1e-6, 1e-9 };
+    size_t k;
+    (void)state;
+    for (k = 0; k < 3; ++k) {
+        const double w0 = 2, H = 0.5;
+        tb_particle_id id;
+        tb_world *world = oscillator("auto", w0, 1, 0, &id);
+        const char *name;
+        long substeps;
+        double worst = 0;
+        int i;
+        assert_int_equal(tb_world_set_tolerance(world, tols[k]), TB_OK);
+        for (i = 0; i < 10; ++i) {
+            double x0[3], v0[3], x[3], v[3], ex, ev;
+            tb_particle_position(world, id, x0);
+            tb_particle_velocity(world, id, v0);
+            assert_int_equal(tb_world_step(world, H), TB_OK);
+            tb_particle_position(world, id, x);
+            tb_particle_velocity(world, id, v);
+            ex = x0[0] * cos(w0 * H) + v0[0] / w0 * sin(w0 * H);
+            ev = -x0[0] * w0 * sin(w0 * H) + v0[0] * cos(w0 * H);
+            worst = fmax(worst, sqrt(0.5 * (pow((x[0] - ex) / (1 + fabs(ex)), 2) + pow((v[0] - ev) / (1 + fabs(ev)), 2))));
+        }
+        name = tb_world_auto_choice(world, &substeps);
+        assert_non_null(name);
+        print_message("auto tol %.0e: %s x %ld substeps, worst local error %.3e (%.2f tol)\n", tols[k], name,
+                      substeps, worst, worst / tols[k]);
+        assert_below(worst, tols[k]);
+        tb_world_destroy(world);
+    }
+}
+
+static const char *auto_choice_after_a_step(tb_world *world, double h, double tol, long *substeps)
+{
+    assert_int_equal(tb_world_set_integrator(world, "auto"), TB_OK);
+    assert_int_equal(tb_world_set_tolerance(world, tol), TB_OK);
+    assert_int_equal(tb_world_step(world, h), TB_OK);
+    return tb_world_auto_choice(world, substeps);
+}
+
+static tb_status push_nothing(const tb_force_args *args, void *user)
+{
+    (void)args, (void)user;
+    return TB_OK;
+}
+
+/* What the scene contains decides: Verlet is exact for a sphere under
+   gravity (one substep at any tolerance); callbacks hide their rates, so
+   dopri5; tracers have no velocity to kick, so never a split method; a
+   fast asymmetric spin at a tight tolerance needs verlet_exact's rotation. */
+static void auto_picks_from_what_the_scene_contains(void **state)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_body_def b = tb_default_body_def();
+    tb_tracer_def t = tb_default_tracer_def();
+    const double omega[3] = { 0, 0, 3 }, centre[3] = { 0, 0, 0 };
+    tb_world *world;
+    long n;
+    (void)state;
+    assert_int_equal(tb_world_create(&def, &world, NULL, 0), TB_OK);
+    b.velocity[0] = 3;
+    b.angular_velocity[2] = 2;
+    assert_int_equal(tb_world_add_body(world, &b, NULL), TB_OK);
+    assert_string_equal(auto_choice_after_a_step(world, 1.0 / 60, 1e-12, &n), "verlet");
+    assert_int_equal(n, 1);
+    assert_int_equal(tb_world_add_force(world, push_nothing, NULL, NULL), TB_OK);
+    assert_string_equal(auto_choice_after_a_step(world, 1.0 / 60, 1e-6, &n), "dopri5");
+    tb_world_destroy(world);
+
+    def.integrator = "auto"; /* a world of tracers refuses the default, verlet */
+    assert_int_equal(tb_world_create(&def, &world, NULL, 0), TB_OK);
+    def.integrator = NULL;
+    assert_int_equal(tb_world_add_vortex_field(world, omega, centre, NULL), TB_OK);
+    t.position[0] = 1;
+    assert_int_equal(tb_world_add_tracer(world, &t, NULL), TB_OK);
+    assert_string_equal(auto_choice_after_a_step(world, 0.1, 1e-6, &n), "rk4");
+    tb_world_destroy(world);
+
+    /* the intermediate-axis flip: I = diag(1, 2, 3), w = (0.01, 5, 0.01) */
+    assert_int_equal(tb_world_create(&def, &world, NULL, 0), TB_OK);
+    b = tb_default_body_def();
+    b.mass.inertia[0] = 1, b.mass.inertia[1] = 2, b.mass.inertia[2] = 3;
+    b.angular_velocity[0] = 0.01, b.angular_velocity[1] = 5, b.angular_velocity[2] = 0.01;
+    assert_int_equal(tb_world_add_body(world, &b, NULL), TB_OK);
+    assert_string_equal(auto_choice_after_a_step(world, 1.0 / 60, 1e-9, &n), "verlet_exact");
+    assert_string_equal(auto_choice_after_a_step(world, 1.0 / 60, 1e-2, &n), "verlet");
+    tb_world_destroy(world);
+}
+
 static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(auto_meets_its_tolerance_per_step),
+    cmocka_unit_test(auto_picks_from_what_the_scene_contains),
     cmocka_unit_test(dopri5_error_follows_tolerance),
     cmocka_unit_test(dopri5_moves_tracers),
     cmocka_unit_test(euler_is_first_order),

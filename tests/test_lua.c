@@ -132,7 +132,7 @@ static void metatables_are_locked_and_handles_print(void **state)
                  "assert(tostring(w):find('verlet'))\n"
                  "local index, generation = p:id(); assert(index == 1 and generation == 1)\n"
                  "assert(p == w:particle{} == false)\n"
-                 "assert(#tumble.integrators() == 7)\n");
+                 "assert(#tumble.integrators() == 8)\n");
     expect_error(L, "w.world = 1", "index"); /* userdata fields are not writable */
     lua_close(L);
 }
@@ -210,7 +210,7 @@ static void callback_error_leaves_state_bit_identical(void **state)
     (void)state;
     expect_ok(L, fingerprint_fn);
     expect_ok(L, "for _, name in ipairs(tumble.integrators()) do\n"
-                 "  local evaluations = ({ euler = 1, symplectic_euler = 1, verlet = 2, rk4 = 4, verlet_exact = 2, implicit_euler = 1, dopri5 = 7 })[name]\n"
+                 "  local evaluations = ({ euler = 1, symplectic_euler = 1, verlet = 2, rk4 = 4, verlet_exact = 2, implicit_euler = 1, dopri5 = 7, auto = 7 })[name]\n"
                  "  for fail_at = 1, evaluations do\n"
                  "    local w = tumble.world{ integrator = name, dt = 0.01, drag = { linear = 0.3 } }\n"
                  "    local p = w:particle{ pos = {1, 2, 3}, vel = {3, 0, 1} }\n"

@@ -758,7 +758,8 @@ static void fast_paths_give_the_general_bits(void **state)
     int m, damped;
     (void)state;
     for (m = 0; m < tb_integrator_count(); ++m)
-        for (damped = 0; damped < 2; ++damped) {
+        for (damped = 0; damped < 2 && strcmp(tb_integrator_name(m), "auto"); ++damped) {
+            /* (auto sends worlds with callbacks to dopri5: not the same method) */
             tb_world *w[2];
             size_t n, k;
             int c, s;

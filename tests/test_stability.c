@@ -7,6 +7,7 @@
 #include "tumble.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* A unit mass on a spring of stiffness w^2 (damping 2 z w) to the origin,
@@ -363,7 +364,111 @@ static void implicit_euler_survives_100x_the_limit(void **state)
     }
 }
 
+
+/* ---- the blow-up guard ------------------------------------------------------ */
+
+/* The chain past symplectic Euler's limit: the guard stops the step where
+   the state stops being finite (or, with an energy factor, much earlier),
+   names the step, the particle and the advisor's cause, and leaves the
+   world exactly as it was after the last good step. */
+static int run_until_stopped(tb_world *w, double h, double *kept, int *stopped_at)
+{
+    const size_t n = 3 * tb_world_particle_count(w);
+    int i;
+    for (i = 0; i < 100000; ++i) {
+        tb_status st;
+        memcpy(kept, tb_world_particle_positions(w), n * sizeof(double));
+        st = tb_world_step(w, h);
+        if (st != TB_OK) {
+            *stopped_at = i + 1;
+            return st;
+        }
+    }
+    return TB_OK;
+}
+
+static void guard_stops_a_blow_up_and_names_its_cause(void **state)
+{
+    double kept[60], limit;
+    const double growths[] = { INFINITY, 2 };
+    int stopped[2], k;
+    (void)state;
+    {
+        tb_world *w = chain("symplectic_euler");
+        tb_advice advice;
+        assert_true(tb_world_guard(w) == 0); /* off unless asked */
+        assert_int_equal(tb_world_advise(w, 1e-4, &advice), TB_OK);
+        limit = advice.limit;
+        tb_world_destroy(w);
+    }
+    for (k = 0; k < 2; ++k) {
+        tb_world *w = chain("symplectic_euler");
+        const char *m;
+        char step_text[32];
+        double t;
+        assert_int_equal(tb_world_set_guard(w, growths[k]), TB_OK);
+        assert_int_equal(run_until_stopped(w, 1.5 * limit, kept, &stopped[k]), TB_ERR_UNSTABLE);
+        m = tb_world_message(w);
+        print_message("guard %g: %s\n", growths[k], m);
+        snprintf(step_text, sizeof step_text, "step %d ", stopped[k]);
+        assert_non_null(strstr(m, step_text));
+        assert_non_null(strstr(m, k == 0 ? "is not finite" : "energy grew"));
+        assert_non_null(strstr(m, "particle "));
+        assert_non_null(strstr(m, "exceeds the limit"));
+        assert_non_null(strstr(m, "spring "));
+        /* rolled back: the positions of the last good step, bit for bit */
+        assert_memory_equal(tb_world_particle_positions(w), kept, sizeof kept);
+        t = tb_world_time(w);
+        assert_rel(t, (stopped[k] - 1) * 1.5 * limit, 1e-12);
+        tb_world_destroy(w);
+    }
+    assert_true(stopped[1] < stopped[0] / 2);
+}
+
+/* Energy that gravity releases, or that a stable method only sloshes
+   about, must not trip the guard: a stiff chain at 0.9 of its limit and
+   the same chain falling from rest run 3000 steps at factor 1.5. */
+static void guard_lets_stable_runs_through(void **state)
+{
+    tb_world *w = chain("verlet");
+    tb_advice advice;
+    const double g[3] = { 0, 0, -9.81 };
+    int i;
+    (void)state;
+    assert_int_equal(tb_world_advise(w, 1e-4, &advice), TB_OK);
+    assert_int_equal(tb_world_set_guard(w, 1.5), TB_OK);
+    for (i = 0; i < 3000; ++i)
+        assert_int_equal(tb_world_step(w, 0.9 * advice.limit), TB_OK);
+    tb_world_destroy(w);
+    w = chain("verlet");
+    assert_int_equal(tb_world_set_gravity(w, g), TB_OK);
+    assert_int_equal(tb_world_set_guard(w, 1.5), TB_OK);
+    for (i = 0; i < 3000; ++i)
+        assert_int_equal(tb_world_step(w, 0.5 * advice.limit), TB_OK);
+    tb_world_destroy(w);
+}
+
+static void guard_refuses_bad_settings(void **state)
+{
+    tb_world *w = chain("verlet");
+    const double bad[] = { 1, 0.5, -1, NAN, -INFINITY };
+    size_t k;
+    (void)state;
+    assert_int_equal(tb_world_set_guard(w, 3), TB_OK);
+    for (k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+        assert_int_equal(tb_world_set_guard(w, bad[k]), TB_ERR_ARGUMENT);
+        assert_non_null(strstr(tb_world_message(w), "guard"));
+        assert_true(tb_world_guard(w) == 3);
+    }
+    assert_int_equal(tb_world_set_guard(w, 0), TB_OK);
+    assert_true(tb_world_guard(w) == 0);
+    tb_world_destroy(w);
+}
+
 static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(guard_stops_a_blow_up_and_names_its_cause),
+    cmocka_unit_test(guard_lets_stable_runs_through),
+    cmocka_unit_test(guard_refuses_bad_settings),
     cmocka_unit_test(implicit_euler_damps_as_predicted),
     cmocka_unit_test(implicit_euler_survives_100x_the_limit),
     cmocka_unit_test(advisor_predicts_chain_blow_up),

@@ -35,7 +35,8 @@ typedef enum tb_status {
     TB_ERR_STALE_ID,   /* the id is null, removed, or from another world */
     TB_ERR_MEMORY,     /* the allocator returned NULL */
     TB_ERR_CALLBACK,   /* a user force or field callback reported failure */
-    TB_ERR_BUSY        /* a structural change was asked for during a step */
+    TB_ERR_BUSY,       /* a structural change was asked for during a step */
+    TB_ERR_UNSTABLE    /* the blow-up guard stopped a step (tb_world_set_guard) */
 } tb_status;
 
 /* A short constant name for a status ("ok", "argument", ...). */
