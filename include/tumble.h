@@ -397,6 +397,92 @@ typedef tb_status tb_force_fn(const tb_force_args *args, void *user);
 TB_API tb_status tb_world_add_force(tb_world *world, tb_force_fn *fn, void *user, tb_force_id *id);
 TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
 
+/* ------------------------------------------------------ shapes, contacts -- */
+/* Shapes make things collide. A shape is attached to a body (it moves with
+   it; its pose is given in the body's frame: centre of mass at the origin,
+   axes along the principal axes, which for a body made with
+   tb_mass_sphere/box/cylinder/capsule is the solid's own centred frame) or
+   is static (pose in the world). Planes are static only. A world without shapes pays nothing for
+   collision.
+
+   A step with shapes: (1) contacts are found at the start positions, with
+   speculative points for gaps the step may close (fast objects do not pass
+   through thin ones); (2) the integrator moves everything as if nothing
+   touched (any method); (3) a velocity pass of sequential impulses, warm
+   started from the last step, enforces for each touching point v_n >= 0
+   (or the restitution rebound), Coulomb friction |f_t| <= mu f_n, and
+   moves positions as those impulses would have over the step: by h/2 for
+   resting and sliding contact (a force acting through the step), by the
+   time left after impact for a new contact (the impact is timed within the
+   step, so a ball bounces to e^2 of its height at any step size); (4) a
+   position pass pushes overlaps apart without adding velocity: rigidly for
+   gaps that closed, softly (contact_hertz, damping ratio) for overlaps
+   that were already there. Momentum is exchanged by equal and opposite
+   impulses, so it is conserved to rounding. */
+typedef enum tb_shape_type { TB_SHAPE_SPHERE, TB_SHAPE_CAPSULE, TB_SHAPE_BOX, TB_SHAPE_PLANE } tb_shape_type;
+
+typedef struct tb_shape_def {
+    tb_shape_type type;
+    tb_body_id body;          /* null: static */
+    double position[3];       /* m: centre, in the body's principal frame (static: world) */
+    double orientation[4];    /* unit quaternion: body (or world) from shape; default identity */
+    double radius;            /* m: sphere, capsule; > 0 */
+    double half_length;       /* m: capsule, half its core segment along the shape's z; >= 0 */
+    double half_extents[3];   /* m: box; > 0 */
+    double normal[3];         /* plane: unit outward normal; default (0, 0, 1) */
+    double offset;            /* m, plane: points x with normal . x = offset */
+    double friction;          /* Coulomb coefficient >= 0; default 0.6; a pair uses sqrt(mu_a mu_b) */
+    double restitution;       /* 0 to 1; default 0; a pair uses the larger */
+    uint32_t category;        /* bits this shape is; default 1 */
+    uint32_t mask;            /* bits it collides with; default all. A pair collides
+                                 when each one's category meets the other's mask */
+} tb_shape_def;
+
+TB_API tb_shape_def tb_default_shape_def(void);
+/* Refused: sizes <= 0 or not finite, a plane normal that is not unit within
+   1e-6, a plane on a body, a stale body, friction < 0, restitution outside
+   [0, 1], a non-unit orientation. */
+TB_API tb_status tb_world_add_shape(tb_world *world, const tb_shape_def *def, tb_shape_id *id);
+TB_API tb_status tb_world_remove_shape(tb_world *world, tb_shape_id id);
+TB_API size_t tb_world_shape_count(const tb_world *world);
+/* Removing a body removes its shapes. */
+
+typedef struct tb_contact_settings {
+    double hertz;                 /* 1/s: stiffness of the push that resolves old overlaps; default 30 */
+    double damping_ratio;         /* of that push; default 10 */
+    double max_push;              /* m/s: the fastest it separates overlaps; default 3 */
+    double restitution_threshold; /* m/s: slower impacts do not bounce; default 1 */
+    double slop;                  /* m: overlap left alone, against jitter; default 0.005 */
+    int velocity_iterations;      /* default 20 (x4 in a step where contacts start
+                                     touching without last step's impulses) */
+    int position_iterations;      /* default 4 */
+    double particle_radius;       /* m: particles collide with shapes as spheres of this
+                                     radius (0: points); < 0 (default -1): they do not */
+    double particle_friction;     /* default 0.6 */
+    double particle_restitution;  /* default 0 */
+} tb_contact_settings;
+
+TB_API tb_contact_settings tb_default_contact_settings(void);
+TB_API tb_status tb_world_set_contact_settings(tb_world *world, const tb_contact_settings *settings);
+TB_API tb_contact_settings tb_world_contact_settings(const tb_world *world);
+
+typedef enum tb_contact_event_type { TB_CONTACT_BEGIN, TB_CONTACT_END } tb_contact_event_type;
+typedef struct tb_contact_event {
+    tb_contact_event_type type;
+    tb_shape_id a;            /* the first shape */
+    tb_shape_id b;            /* the second shape (null when a particle touches a) */
+    tb_particle_id particle;  /* the particle (null for shape pairs) */
+    double speed;             /* m/s: the approach speed at impact (begin events) */
+    double point[3];          /* m, world: a contact point (begin events) */
+    double normal[3];         /* unit, from a to b (begin events) */
+} tb_contact_event;
+
+/* The contacts that began and ended in the last step, valid until the next
+   step or structural change. */
+TB_API const tb_contact_event *tb_world_contact_events(const tb_world *world, size_t *count);
+/* Points of contact that are touching now (after the last step). */
+TB_API size_t tb_world_contact_count(const tb_world *world);
+
 /* --------------------------------------------------------------- advisor -- */
 /* Before a run: how large a step the world's integrator can take. The
    stiffest spring mode w is estimated by power iteration on M^-1 K (the

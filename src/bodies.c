@@ -222,6 +222,7 @@ tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
     }
     tb__ids_release(&w->body_ids, id.index1);
     w->body_count--;
+    tb__shapes_of_body_removed(w, id.index1);
     return TB_OK;
 }
 

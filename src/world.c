@@ -75,6 +75,7 @@ void tb_world_destroy(tb_world *w)
     if (w->y)
         tb__alloc(w, w->y, w->y_size * sizeof(double), 0);
     tb__bodies_free(w);
+    tb__contacts_free(w);
     arrays[0] = (void **)&w->mass;
     arrays[1] = (void **)&w->inv_mass;
     arrays[2] = (void **)&w->force;
@@ -255,6 +256,8 @@ tb_status tb_world_step(tb_world *w, double h)
         saved = tb__scratch_vector(w, (size_t)w->method->scratch);
         tb__state_copy(w, saved, w->y);
     }
+    if (tb__contacts_active(w) && (st = tb__contacts_prepare(w, h)) != TB_OK)
+        return st;
     w->stepping = 1;
     st = w->method->step(w, h);
     w->stepping = 0;
@@ -263,6 +266,8 @@ tb_status tb_world_step(tb_world *w, double h)
             tb__state_copy(w, w->y, saved);
         return st;
     }
+    if (tb__contacts_active(w))
+        tb__contacts_solve(w, h);
     if (w->guard != 0 && (st = tb__guard_check(w, saved, h)) != TB_OK)
         return st; /* rolled back, held forces kept */
     if (w->body_count && w->body_held) /* held forces last one step, as in ODE */

@@ -39,6 +39,8 @@ enum tb__quantity {
     TB__QUANTITY_COUNT
 };
 
+typedef struct tb__contacts tb__contacts;
+
 /* ---- ids.c: generation-checked id tables, one per kind of object ------- */
 typedef struct tb__ids {
     uint32_t *slot;        /* [capacity] per id: its slot, or the next free id */
@@ -175,6 +177,9 @@ struct tb_world {
                                  once a sweep finds them all zero) */
     tb__ids body_ids;
 
+    /* shapes and contacts (contact.h); NULL until the first shape */
+    struct tb__contacts *contacts;
+
     /* velocity fields for tracers (tb__field), user forces (tb__force) */
     tb__list fields;
     tb__list forces;
@@ -280,6 +285,12 @@ tb_status tb__auto_plan(tb_world *w, double h);
    message naming the step, the object and the likely cause (the caller
    rolls back). */
 tb_status tb__guard_check(tb_world *w, const double *before, double h);
+/* contact.c, shapes.c: collision around the integrator's step */
+int tb__contacts_active(const tb_world *w);
+tb_status tb__contacts_prepare(tb_world *w, double h);
+void tb__contacts_solve(tb_world *w, double h);
+void tb__contacts_free(tb_world *w);
+void tb__shapes_of_body_removed(tb_world *w, uint32_t body_index1);
 
 /* ---- the tiers' parts ----------------------------------------------------- */
 tb_status tb__tracer_derive(tb_world *w, double t, const double *y, double *dy);

@@ -11,6 +11,7 @@ typedef struct tb_tracer_id   { uint32_t index1; uint32_t generation; } tb_trace
 typedef struct tb_particle_id { uint32_t index1; uint32_t generation; } tb_particle_id;
 typedef struct tb_spring_id   { uint32_t index1; uint32_t generation; } tb_spring_id;
 typedef struct tb_body_id     { uint32_t index1; uint32_t generation; } tb_body_id;
+typedef struct tb_shape_id    { uint32_t index1; uint32_t generation; } tb_shape_id;
 
 #define TB_ID_IS_NULL(id) ((id).index1 == 0)
 #define TB_ID_EQUAL(a, b) ((a).index1 == (b).index1 && (a).generation == (b).generation)

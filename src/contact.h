@@ -1,0 +1,113 @@
+/* contact.h: the collision tier's inside, shared by shapes.c (the API and
+   storage) and contact.c (finding contacts and solving them). Internal.
+   A world holds a pointer to one tb__contacts, allocated with its first
+   shape: a world without shapes pays nothing. */
+#ifndef TB_CONTACT_H
+#define TB_CONTACT_H
+
+#include "world.h"
+#include "collide.h"
+#include "broadphase.h"
+
+typedef struct tb__shape {
+    tb__shape_kind kind;
+    uint32_t body;         /* body id index1, 0: static */
+    uint32_t body_generation;
+    double pos[3];         /* m: in the body's principal frame (static: world) */
+    double rot[4];         /* body (or world) from shape */
+    double radius;         /* m: sphere, capsule */
+    double half[3];        /* m: box half extents; capsule: half[2] = half length */
+    double normal[3];      /* plane */
+    double offset;         /* m, plane */
+    double friction, restitution;
+    uint32_t category, mask;
+    double reach;          /* m: how far the shape reaches from the body's centre */
+} tb__shape;
+
+/* One contact point, as the solver sees it. */
+typedef struct tb__point {
+    uint32_t feature;
+    double normal_impulse;     /* N s, kept from step to step (warm start) */
+    double tangent_impulse[2]; /* N s */
+    double local_a[3], local_b[3]; /* m: the point from each body's centre, in
+                                  its principal frame (static: world point) */
+    double separation;         /* m, at the start of the step (< 0: overlap) */
+    double approach;           /* m/s: normal relative velocity at the start */
+    /* filled by the solve */
+    double ra[3], rb[3];       /* m: the point from each centre, world, after the free motion */
+    double normal_mass, tangent_mass[2];
+    double target;             /* m/s: the normal velocity to reach */
+    double lever;              /* s: how long its impulse acts on positions */
+    double predicted;          /* m: separation after the free motion */
+    double position_impulse;
+    double speed;              /* m/s: the approach speed of an impact, 0 otherwise */
+    int active;
+    int matched;               /* it touched last step too (warm started) */
+} tb__point;
+
+/* The points between two shapes (or a shape and a particle). */
+typedef struct tb__entry {
+    uint32_t key_a, key_b;     /* shape id index1s; key_b | TB__PARTICLE_KEY for a particle */
+    int32_t body_a, body_b;    /* solver bodies, -1: static */
+    double normal[3], tangent[2][3];
+    double friction, restitution;
+    int count;
+    int touching;
+    tb__point point[TB__MANIFOLD_POINTS];
+} tb__entry;
+
+#define TB__PARTICLE_KEY 0x80000000u
+
+/* A body or particle that takes part in contacts this step. */
+typedef struct tb__solver_body {
+    enum tb__tier tier;
+    uint32_t slot;
+    double inv_mass;
+    double inv_inertia[3];     /* principal moments' inverses (0 for particles) */
+    double x0[3], q0[4];       /* pose at the start of the step */
+    double R[9];               /* world from principal, after the free motion */
+    double inv_world[9];       /* R diag(inv_inertia) R^T */
+    double v[3], w[3];         /* velocities during the velocity pass */
+    double P[3], L[3];         /* their momenta, changed only by impulses */
+    double dp[3], dtheta[3];   /* position and rotation corrections */
+} tb__solver_body;
+
+struct tb__contacts {
+    tb__shape *shapes;         /* [shape_cap] */
+    size_t shape_count, shape_cap;
+    size_t planes;             /* how many of the shapes are planes */
+    tb__ids ids;
+    tb_contact_settings settings;
+
+    /* broadphase proxies: non-plane shapes, then particles */
+    tb__sap sap;
+    double *lo, *hi;           /* [3 * proxy_cap] */
+    uint32_t *category, *mask, *group, *proxy; /* [proxy_cap]; proxy: shape slot, or
+                                  particle slot | TB__PARTICLE_KEY */
+    double *margin;            /* [proxy_cap] m: how far the proxy may move this step */
+    tb__geom *geoms;           /* [proxy_cap + shape_cap]: placed shapes */
+    size_t proxy_count, proxy_cap;
+    tb__pair *pairs;
+    size_t pair_count, pair_cap;
+
+    /* contact entries of this step and of the last one, sorted by key */
+    tb__entry *entries, *previous;
+    size_t entry_count, entry_cap, previous_count, previous_cap;
+
+    tb__solver_body *bodies;
+    size_t body_count, body_cap;
+    int32_t *body_map;         /* [map_cap] body slot -> solver body, -1 */
+    int32_t *particle_map;     /* [map_cap2] particle slot -> solver body, -1 */
+    size_t body_map_cap, particle_map_cap;
+
+    tb_contact_event *events;
+    size_t event_count, event_cap;
+    size_t touching_points;
+    int prepared;              /* entries hold this step's contacts, to solve */
+    int solved;                /* entries hold the last step's solved contacts */
+};
+
+/* shapes.c: grow an array to hold `need` items of `size` bytes */
+tb_status tb__contacts_reserve(tb_world *w, void **array, size_t *cap, size_t need, size_t size);
+
+#endif

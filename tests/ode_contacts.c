@@ -1,0 +1,665 @@
+/* ode_contacts.c: ODE reference runs of scenes with contacts. The scenes
+   and the reasons for their settings are in ode_contacts.h. */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime under -std=c99 */
+
+#include "ode_contacts.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <ode/ode.h>
+
+/* The reference figures are for double precision; a negative array size
+   stops the build otherwise. */
+typedef char ode_contacts_dreal_is_double[sizeof(dReal) == sizeof(double) ? 1 : -1];
+
+#define PI 3.14159265358979323846
+
+/* ------------------------------------------------------------- in common -- */
+
+static double seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static int finite_positive(double x)
+{
+    return isfinite(x) && x > 0;
+}
+
+/* dInitODE2 only allocates the basic per-thread data; collision data is
+   a separate request that the documentation asks for before collision.
+   dWorldQuickStep shuffles its constraint rows with dRandInt, whose seed is
+   a process-wide global that survives dCloseODE: without the reset a second
+   pyramid in the same process sinks and drifts differently from the first.
+   0 is the seed ODE starts with, so every run matches a fresh process. */
+static int ode_open(void)
+{
+    if (!dInitODE2(0))
+        return 0;
+    if (!dAllocateODEDataForThread((unsigned)dAllocateMaskAll)) {
+        dCloseODE();
+        return 0;
+    }
+    dRandSetSeed(0);
+    return 1;
+}
+
+static int compare_doubles(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Sorts t in place. */
+static double median(double *t, int n)
+{
+    qsort(t, (size_t)n, sizeof *t, compare_doubles);
+    return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
+}
+
+/* The near callback's state: dSpaceCollide passes one pointer, and nothing
+   here may be global (several runs, one after the other, in one process). */
+typedef struct near_ctx {
+    dWorldID world;
+    dJointGroupID group;
+    double mu;
+    int max_contacts; /* <= NEAR_MAX */
+    int contacts;     /* joints made this step */
+} near_ctx;
+
+#define NEAR_MAX 16
+
+static void near_callback(void *data, dGeomID a, dGeomID b)
+{
+    near_ctx *c = data;
+    dBodyID ba = dGeomGetBody(a), bb = dGeomGetBody(b);
+    dContactGeom g[NEAR_MAX];
+    int n, i;
+
+    if (!ba && !bb)
+        return;
+    n = dCollide(a, b, c->max_contacts, g, sizeof g[0]);
+    for (i = 0; i < n; ++i) {
+        dContact contact;
+        dJointID j;
+        memset(&contact, 0, sizeof contact);
+        contact.surface.mode = dContactApprox1;
+        contact.surface.mu = c->mu;
+        contact.geom = g[i];
+        j = dJointCreateContact(c->world, c->group, &contact);
+        dJointAttach(j, ba, bb);
+    }
+    c->contacts += n;
+}
+
+/* One timed step of the pyramid or the pile; adds to the timing sums. */
+static void timed_step(dWorldID world, dSpaceID space, near_ctx *c, double h, double *step_ms,
+                       double *collide_ms_sum, long *contacts_sum, int *contacts_max)
+{
+    double t0, t1, t2;
+
+    c->contacts = 0;
+    t0 = seconds();
+    dSpaceCollide(space, c, near_callback);
+    t1 = seconds();
+    dWorldQuickStep(world, h);
+    dJointGroupEmpty(c->group);
+    t2 = seconds();
+    *step_ms = 1e3 * (t2 - t0);
+    *collide_ms_sum += 1e3 * (t1 - t0);
+    *contacts_sum += c->contacts;
+    if (c->contacts > *contacts_max)
+        *contacts_max = c->contacts;
+}
+
+static void finish_timing(ode_timing *t, double *step_ms, int steps, double collide_ms_sum,
+                          long contacts_sum, int contacts_max)
+{
+    double sum = 0;
+    int i;
+
+    for (i = 0; i < steps; ++i)
+        sum += step_ms[i];
+    t->steps = steps;
+    t->ms_mean = steps ? sum / steps : 0;
+    t->ms_median = steps ? median(step_ms, steps) : 0;
+    t->ms_collide_mean = steps ? collide_ms_sum / steps : 0;
+    t->contacts_mean = steps ? (double)contacts_sum / steps : 0;
+    t->contacts_max = contacts_max;
+}
+
+/* The world every contact scene uses: ODE's defaults, named here so that a
+   change of default in another ODE version shows up as a change in this
+   file rather than in the figures. */
+static dWorldID make_world(double gravity)
+{
+    dWorldID w = dWorldCreate();
+    dWorldSetGravity(w, 0, 0, -gravity);
+    dWorldSetERP(w, 0.2);
+    dWorldSetCFM(w, 1e-10);
+    dWorldSetContactSurfaceLayer(w, 0);
+    dWorldSetAutoDisableFlag(w, 0);
+    return w;
+}
+
+/* --------------------------------------------------------- bouncing ball -- */
+
+ode_ball_def ode_default_ball_def(void)
+{
+    ode_ball_def d;
+    d.hz = 60;
+    d.restitution = 0.5;
+    d.drop_height = 1;
+    d.radius = 0.1;
+    d.mass = 1;
+    d.bounce_vel = 0.01;
+    d.gravity = 9.81;
+    d.max_time = 20;
+    return d;
+}
+
+int ode_ball_run(const ode_ball_def *def, ode_ball_result *out)
+{
+    dWorldID world;
+    dBodyID body;
+    dGeomID sphere, plane;
+    dJointGroupID group;
+    dMass mass;
+    double h, prev_z, prev_vz = 0;
+    int n, steps, bounced = 0, i;
+
+    memset(out, 0, sizeof *out);
+    for (i = 0; i < ODE_BALL_APEXES; ++i)
+        out->apex[i] = out->apex_max[i] = out->apex_time[i] = NAN;
+    if (!finite_positive(def->hz) || !isfinite(def->restitution) || def->restitution < 0 ||
+        def->restitution > 1 || !isfinite(def->drop_height) || def->drop_height < 0 ||
+        !finite_positive(def->radius) || !finite_positive(def->mass) ||
+        !isfinite(def->bounce_vel) || def->bounce_vel < 0 || !isfinite(def->gravity) ||
+        !finite_positive(def->max_time) || def->max_time * def->hz > 1e8)
+        return 0;
+    if (!ode_open())
+        return 0;
+
+    h = 1 / def->hz;
+    steps = (int)ceil(def->max_time * def->hz);
+    world = make_world(def->gravity);
+    plane = dCreatePlane(0, 0, 0, 1, 0);
+    body = dBodyCreate(world);
+    dMassSetSphereTotal(&mass, def->mass, def->radius);
+    dBodySetMass(body, &mass);
+    sphere = dCreateSphere(0, def->radius);
+    dGeomSetBody(sphere, body);
+    dBodySetPosition(body, 0, 0, def->drop_height + def->radius);
+    group = dJointGroupCreate(0);
+    prev_z = def->drop_height;
+
+    for (n = 1; n <= steps && out->apexes < ODE_BALL_APEXES; ++n) {
+        dContactGeom g[4];
+        double z, vz;
+        int nc = dCollide(sphere, plane, 4, g, sizeof g[0]);
+        for (i = 0; i < nc; ++i) {
+            dContact contact;
+            memset(&contact, 0, sizeof contact);
+            contact.surface.mode = dContactBounce;
+            contact.surface.mu = 0;
+            contact.surface.bounce = def->restitution;
+            contact.surface.bounce_vel = def->bounce_vel;
+            contact.geom = g[i];
+            dJointAttach(dJointCreateContact(world, group, &contact), body, 0);
+        }
+        bounced |= nc > 0;
+        dWorldStep(world, h);
+        dJointGroupEmpty(group);
+        z = dBodyGetPosition(body)[2] - def->radius;
+        vz = dBodyGetLinearVel(body)[2];
+        /* Only after a contact, so that the start from rest is no apex. */
+        if (bounced && prev_vz > 0 && vz <= 0) {
+            out->apex[out->apexes] = z;
+            out->apex_max[out->apexes] = z > prev_z ? z : prev_z;
+            out->apex_time[out->apexes] = n * h;
+            out->apexes++;
+            bounced = 0;
+        }
+        prev_z = z;
+        prev_vz = vz;
+        out->steps = n;
+    }
+
+    dJointGroupDestroy(group);
+    dGeomDestroy(sphere);
+    dGeomDestroy(plane);
+    dBodyDestroy(body);
+    dWorldDestroy(world);
+    dCloseODE();
+    return 1;
+}
+
+int ode_ball_apexes(double hz, double restitution, double drop_height, double apex[2])
+{
+    ode_ball_def def = ode_default_ball_def();
+    ode_ball_result r;
+    int ok;
+
+    def.hz = hz;
+    def.restitution = restitution;
+    def.drop_height = drop_height;
+    ok = ode_ball_run(&def, &r);
+    apex[0] = r.apex[0];
+    apex[1] = r.apex[1];
+    if (!ok)
+        return 0;
+    return r.apexes < 2 ? r.apexes : 2;
+}
+
+/* ----------------------------------------------------------- sliding box -- */
+
+ode_slide_def ode_default_slide_def(void)
+{
+    ode_slide_def d;
+    d.hz = 60;
+    d.speed = 5;
+    d.mu = 0.5;
+    d.edge = 1;
+    d.mass = 1;
+    d.gravity = 9.81;
+    d.stop_speed = 1e-6;
+    d.max_time = 60;
+    return d;
+}
+
+int ode_slide_run(const ode_slide_def *def, ode_slide_result *out)
+{
+    dWorldID world;
+    dBodyID body;
+    dGeomID box, plane;
+    dJointGroupID group;
+    dMass mass;
+    double h, z0;
+    int n, steps, i;
+
+    memset(out, 0, sizeof *out);
+    out->distance = out->time = NAN;
+    if (!finite_positive(def->hz) || !finite_positive(def->speed) || !isfinite(def->mu) ||
+        def->mu < 0 || !finite_positive(def->edge) || !finite_positive(def->mass) ||
+        !isfinite(def->gravity) || !isfinite(def->stop_speed) || def->stop_speed < 0 ||
+        !finite_positive(def->max_time) || def->max_time * def->hz > 1e8)
+        return 0;
+    if (!ode_open())
+        return 0;
+
+    h = 1 / def->hz;
+    steps = (int)ceil(def->max_time * def->hz);
+    z0 = def->edge / 2;
+    world = make_world(def->gravity);
+    plane = dCreatePlane(0, 0, 0, 1, 0);
+    body = dBodyCreate(world);
+    dMassSetBoxTotal(&mass, def->mass, def->edge, def->edge, def->edge);
+    dBodySetMass(body, &mass);
+    box = dCreateBox(0, def->edge, def->edge, def->edge);
+    dGeomSetBody(box, body);
+    dBodySetPosition(body, 0, 0, z0);
+    dBodySetLinearVel(body, def->speed, 0, 0);
+    group = dJointGroupCreate(0);
+
+    for (n = 1; n <= steps; ++n) {
+        dContactGeom g[4];
+        const dReal *p, *v, *w;
+        double wn;
+        int nc = dCollide(box, plane, 4, g, sizeof g[0]);
+        for (i = 0; i < nc; ++i) {
+            dContact contact;
+            memset(&contact, 0, sizeof contact);
+            contact.surface.mode = dContactApprox1;
+            contact.surface.mu = def->mu;
+            contact.geom = g[i];
+            dJointAttach(dJointCreateContact(world, group, &contact), body, 0);
+        }
+        dWorldStep(world, h);
+        dJointGroupEmpty(group);
+        p = dBodyGetPosition(body);
+        v = dBodyGetLinearVel(body);
+        w = dBodyGetAngularVel(body);
+        out->steps = n;
+        out->distance = sqrt(p[0] * p[0] + p[1] * p[1]);
+        out->time = n * h;
+        if (fabs(p[2] - z0) > out->max_height_change)
+            out->max_height_change = fabs(p[2] - z0);
+        wn = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+        if (wn > out->max_angular_speed)
+            out->max_angular_speed = wn;
+        if (v[0] <= def->stop_speed) {
+            out->stopped = 1;
+            break;
+        }
+    }
+
+    dJointGroupDestroy(group);
+    dGeomDestroy(box);
+    dGeomDestroy(plane);
+    dBodyDestroy(body);
+    dWorldDestroy(world);
+    dCloseODE();
+    return 1;
+}
+
+double ode_slide_distance(double hz, double speed, double mu)
+{
+    ode_slide_def def = ode_default_slide_def();
+    ode_slide_result r;
+
+    def.hz = hz;
+    def.speed = speed;
+    def.mu = mu;
+    if (!ode_slide_run(&def, &r) || !r.stopped)
+        return NAN;
+    return r.distance;
+}
+
+/* --------------------------------------------------------------- pyramid -- */
+
+ode_pyramid_def ode_default_pyramid_def(void)
+{
+    ode_pyramid_def d;
+    d.levels = 20;
+    d.edge = 1;
+    d.mass = 1;
+    d.gap = 0.01;
+    d.hz = 60;
+    d.iterations = 20;
+    d.mu = 0.6;
+    d.max_contacts = 4;
+    d.gravity = 9.81;
+    d.duration = 10;
+    return d;
+}
+
+int ode_pyramid_boxes(int levels)
+{
+    return levels > 0 && levels <= 10000 ? levels * (levels + 1) / 2 : 0;
+}
+
+static int pyramid_def_ok(const ode_pyramid_def *d)
+{
+    return ode_pyramid_boxes(d->levels) > 0 && finite_positive(d->edge) &&
+           finite_positive(d->mass) && isfinite(d->gap) && d->gap >= 0 &&
+           finite_positive(d->hz) && d->iterations > 0 && isfinite(d->mu) && d->mu >= 0 &&
+           d->max_contacts > 0 && d->max_contacts <= NEAR_MAX && isfinite(d->gravity) &&
+           finite_positive(d->duration) && d->duration * d->hz <= 1e8;
+}
+
+int ode_pyramid_positions(const ode_pyramid_def *def, double (*pos)[3])
+{
+    int i, j, k = 0;
+
+    if (!pyramid_def_ok(def))
+        return 0;
+    for (i = 0; i < def->levels; ++i) {
+        const int row = def->levels - i;
+        for (j = 0; j < row; ++j, ++k) {
+            pos[k][0] = (j - 0.5 * (row - 1)) * (def->edge + def->gap);
+            pos[k][1] = 0;
+            pos[k][2] = 0.5 * def->edge + i * def->edge;
+        }
+    }
+    return k;
+}
+
+int ode_pyramid(const ode_pyramid_def *def, ode_pyramid_result *out)
+{
+    dWorldID world;
+    dSpaceID space;
+    dBodyID *bodies;
+    double(*pos)[3];
+    double *step_ms;
+    near_ctx ctx;
+    dMass mass;
+    double h, collide_sum = 0;
+    long contacts_sum = 0;
+    int count, steps, n, i, contacts_max = 0;
+
+    memset(out, 0, sizeof *out);
+    if (!pyramid_def_ok(def))
+        return 0;
+    count = ode_pyramid_boxes(def->levels);
+    steps = (int)ceil(def->duration * def->hz);
+    pos = malloc((size_t)count * sizeof *pos);
+    bodies = malloc((size_t)count * sizeof *bodies);
+    step_ms = malloc((size_t)steps * sizeof *step_ms);
+    if (!pos || !bodies || !step_ms || !ode_open()) {
+        free(pos);
+        free(bodies);
+        free(step_ms);
+        return 0;
+    }
+    ode_pyramid_positions(def, pos);
+
+    h = 1 / def->hz;
+    world = make_world(def->gravity);
+    dWorldSetQuickStepNumIterations(world, def->iterations);
+    space = dHashSpaceCreate(0);
+    dCreatePlane(space, 0, 0, 1, 0);
+    dMassSetBoxTotal(&mass, def->mass, def->edge, def->edge, def->edge);
+    for (i = 0; i < count; ++i) {
+        dGeomID g = dCreateBox(space, def->edge, def->edge, def->edge);
+        bodies[i] = dBodyCreate(world);
+        dBodySetMass(bodies[i], &mass);
+        dGeomSetBody(g, bodies[i]);
+        dBodySetPosition(bodies[i], pos[i][0], pos[i][1], pos[i][2]);
+    }
+    ctx.world = world;
+    ctx.group = dJointGroupCreate(0);
+    ctx.mu = def->mu;
+    ctx.max_contacts = def->max_contacts;
+
+    for (n = 0; n < steps; ++n)
+        timed_step(world, space, &ctx, h, &step_ms[n], &collide_sum, &contacts_sum,
+                   &contacts_max);
+    finish_timing(&out->timing, step_ms, steps, collide_sum, contacts_sum, contacts_max);
+
+    out->boxes = count;
+    for (i = 0; i < count; ++i) {
+        const dReal *p = dBodyGetPosition(bodies[i]);
+        const double d[3] = { p[0] - pos[i][0], p[1] - pos[i][1], p[2] - pos[i][2] };
+        const double dist = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (dist > out->max_displacement)
+            out->max_displacement = dist;
+        if (i == count - 1) {
+            out->top_sink = -d[2];
+            out->top_drift = sqrt(d[0] * d[0] + d[1] * d[1]);
+        }
+    }
+
+    /* The space destroys its geoms (cleanup mode is on by default). */
+    dJointGroupDestroy(ctx.group);
+    dSpaceDestroy(space);
+    dWorldDestroy(world);
+    dCloseODE();
+    free(pos);
+    free(bodies);
+    free(step_ms);
+    return 1;
+}
+
+/* ------------------------------------------------------------------ pile -- */
+
+ode_pile_def ode_default_pile_def(void)
+{
+    ode_pile_def d;
+    d.count = 1000;
+    d.seed = 1;
+    d.grid = 10;
+    d.spacing = 1.2;
+    d.base = 1;
+    d.density = 1000;
+    d.hz = 60;
+    d.iterations = 20;
+    d.mu = 0.6;
+    d.max_contacts = 4;
+    d.gravity = 9.81;
+    d.steps = 600;
+    return d;
+}
+
+static int pile_def_ok(const ode_pile_def *d)
+{
+    return d->count > 0 && d->count <= 10000000 && d->grid > 0 && d->grid <= 100000 &&
+           finite_positive(d->spacing) && isfinite(d->base) && finite_positive(d->density) &&
+           finite_positive(d->hz) && d->iterations > 0 && isfinite(d->mu) && d->mu >= 0 &&
+           d->max_contacts > 0 && d->max_contacts <= NEAR_MAX && isfinite(d->gravity) &&
+           d->steps > 0;
+}
+
+/* Knuth's MMIX constants; the top 53 bits are the best of an LCG's. */
+static double lcg_uniform(uint64_t *state)
+{
+    *state = *state * UINT64_C(6364136223846793005) + UINT64_C(1442695040888963407);
+    return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+int ode_pile_scene(const ode_pile_def *def, ode_shape *shapes)
+{
+    uint64_t state;
+    int b, k;
+
+    if (!pile_def_ok(def))
+        return 0;
+    state = def->seed;
+    for (b = 0; b < def->count; ++b) {
+        ode_shape *s = &shapes[b];
+        const int per_layer = def->grid * def->grid;
+        const double centre = 0.5 * (def->grid - 1);
+        const double rho = def->density;
+        double u[7], a, c, t1, t2;
+
+        for (k = 0; k < 7; ++k)
+            u[k] = lcg_uniform(&state);
+        memset(s, 0, sizeof *s);
+        s->kind = (ode_shape_kind)(int)(3 * u[0]);
+        if (s->kind == ODE_SHAPE_SPHERE) {
+            const double r = 0.5 * (0.2 + 0.4 * u[1]);
+            s->radius = r;
+            s->mass = 4.0 / 3.0 * PI * r * r * r * rho;
+            s->inertia[0] = s->inertia[1] = s->inertia[2] = 0.4 * s->mass * r * r;
+        } else if (s->kind == ODE_SHAPE_BOX) {
+            const double lx = 0.2 + 0.4 * u[1], ly = 0.2 + 0.4 * u[2], lz = 0.2 + 0.4 * u[3];
+            s->half[0] = 0.5 * lx;
+            s->half[1] = 0.5 * ly;
+            s->half[2] = 0.5 * lz;
+            s->mass = rho * lx * ly * lz;
+            s->inertia[0] = s->mass * (ly * ly + lz * lz) / 12;
+            s->inertia[1] = s->mass * (lx * lx + lz * lz) / 12;
+            s->inertia[2] = s->mass * (lx * lx + ly * ly) / 12;
+        } else {
+            const double r = 0.5 * (0.2 + 0.2 * u[1]), l = 0.2 + 0.4 * u[2];
+            const double m1 = PI * r * r * l * rho, m2 = 4.0 / 3.0 * PI * r * r * r * rho;
+            s->radius = r;
+            s->half[2] = 0.5 * l;
+            s->mass = m1 + m2;
+            s->inertia[0] = s->inertia[1] = m1 * (0.25 * r * r + l * l / 12) +
+                                            m2 * (0.4 * r * r + 0.375 * r * l + 0.25 * l * l);
+            s->inertia[2] = (0.5 * m1 + 0.4 * m2) * r * r;
+        }
+        a = sqrt(1 - u[4]);
+        c = sqrt(u[4]);
+        t1 = 2 * PI * u[5];
+        t2 = 2 * PI * u[6];
+        s->orientation[0] = c * cos(t2);
+        s->orientation[1] = a * sin(t1);
+        s->orientation[2] = a * cos(t1);
+        s->orientation[3] = c * sin(t2);
+        s->position[0] = (b % def->grid - centre) * def->spacing;
+        s->position[1] = (b / def->grid % def->grid - centre) * def->spacing;
+        s->position[2] = def->base + (b / per_layer) * def->spacing;
+    }
+    return def->count;
+}
+
+int ode_pile(const ode_pile_def *def, ode_pile_result *out)
+{
+    dWorldID world;
+    dSpaceID space;
+    dBodyID *bodies;
+    ode_shape *shapes;
+    double *step_ms;
+    near_ctx ctx;
+    double h, collide_sum = 0;
+    long contacts_sum = 0;
+    int n, i, contacts_max = 0;
+
+    memset(out, 0, sizeof *out);
+    if (!pile_def_ok(def))
+        return 0;
+    shapes = malloc((size_t)def->count * sizeof *shapes);
+    bodies = malloc((size_t)def->count * sizeof *bodies);
+    step_ms = malloc((size_t)def->steps * sizeof *step_ms);
+    if (!shapes || !bodies || !step_ms || !ode_open()) {
+        free(shapes);
+        free(bodies);
+        free(step_ms);
+        return 0;
+    }
+    ode_pile_scene(def, shapes);
+
+    h = 1 / def->hz;
+    world = make_world(def->gravity);
+    dWorldSetQuickStepNumIterations(world, def->iterations);
+    space = dHashSpaceCreate(0);
+    dCreatePlane(space, 0, 0, 1, 0);
+    for (i = 0; i < def->count; ++i) {
+        const ode_shape *s = &shapes[i];
+        dGeomID g;
+        dMass mass;
+        dQuaternion q;
+        if (s->kind == ODE_SHAPE_SPHERE)
+            g = dCreateSphere(space, s->radius);
+        else if (s->kind == ODE_SHAPE_BOX)
+            g = dCreateBox(space, 2 * s->half[0], 2 * s->half[1], 2 * s->half[2]);
+        else
+            g = dCreateCapsule(space, s->radius, 2 * s->half[2]);
+        bodies[i] = dBodyCreate(world);
+        dMassSetParameters(&mass, s->mass, 0, 0, 0, s->inertia[0], s->inertia[1],
+                           s->inertia[2], 0, 0, 0);
+        dBodySetMass(bodies[i], &mass);
+        dGeomSetBody(g, bodies[i]);
+        dBodySetPosition(bodies[i], s->position[0], s->position[1], s->position[2]);
+        q[0] = s->orientation[0];
+        q[1] = s->orientation[1];
+        q[2] = s->orientation[2];
+        q[3] = s->orientation[3];
+        dBodySetQuaternion(bodies[i], q);
+    }
+    ctx.world = world;
+    ctx.group = dJointGroupCreate(0);
+    ctx.mu = def->mu;
+    ctx.max_contacts = def->max_contacts;
+
+    for (n = 0; n < def->steps; ++n)
+        timed_step(world, space, &ctx, h, &step_ms[n], &collide_sum, &contacts_sum,
+                   &contacts_max);
+    finish_timing(&out->timing, step_ms, def->steps, collide_sum, contacts_sum, contacts_max);
+
+    out->final_top = -INFINITY;
+    for (i = 0; i < def->count; ++i) {
+        const dReal *p = dBodyGetPosition(bodies[i]), *v = dBodyGetLinearVel(bodies[i]);
+        const double speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (speed > out->final_max_speed)
+            out->final_max_speed = speed;
+        out->final_moving += speed > 0.1;
+        if (p[2] > out->final_top)
+            out->final_top = p[2];
+    }
+
+    dJointGroupDestroy(ctx.group);
+    dSpaceDestroy(space);
+    dWorldDestroy(world);
+    dCloseODE();
+    free(shapes);
+    free(bodies);
+    free(step_ms);
+    return 1;
+}

@@ -1,0 +1,366 @@
+/* test_contacts.c: shapes, contacts, friction and restitution against
+   closed forms and against ODE (dCollide, contact joints, dWorldStep) on
+   the same scenes (tests/ode_contacts.c). */
+#include "test_main.h"
+#include "tumble.h"
+#include "ode_contacts.h"
+
+#include <math.h>
+#include <string.h>
+
+static const double G = 9.81;
+
+static tb_world *world_on_plane(double friction, double restitution)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_shape_def plane = tb_default_shape_def();
+    tb_world *w;
+    def.gravity[2] = -G;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    plane.type = TB_SHAPE_PLANE;
+    plane.friction = friction;
+    plane.restitution = restitution;
+    assert_int_equal(tb_world_add_shape(w, &plane, NULL), TB_OK);
+    return w;
+}
+
+static tb_body_id add_box(tb_world *w, const double centre[3], double edge, double friction)
+{
+    tb_body_def b = tb_default_body_def();
+    tb_shape_def s = tb_default_shape_def();
+    const double size[3] = { edge, edge, edge };
+    tb_body_id id;
+    assert_int_equal(tb_mass_box(1 / (edge * edge * edge), size, &b.mass, NULL), TB_OK); /* 1 kg */
+    memcpy(b.position, centre, sizeof b.position);
+    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
+    s.type = TB_SHAPE_BOX;
+    s.body = id;
+    s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = edge / 2;
+    s.friction = friction;
+    assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
+    return id;
+}
+
+static tb_body_id add_ball(tb_world *w, const double centre[3], double radius, double restitution)
+{
+    tb_body_def b = tb_default_body_def();
+    tb_shape_def s = tb_default_shape_def();
+    tb_body_id id;
+    assert_int_equal(tb_mass_sphere(1 / (4.0 / 3 * 3.14159265358979323846 * radius * radius * radius), radius,
+                                    &b.mass, NULL), TB_OK);
+    memcpy(b.position, centre, sizeof b.position);
+    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
+    s.body = id;
+    s.radius = radius;
+    s.restitution = restitution;
+    assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
+    return id;
+}
+
+/* ---- the bouncing ball --------------------------------------------------- */
+
+/* A 0.1 m ball dropped with its lowest point 1 m above the plane,
+   restitution 0.5, default settings. Two readings of each apex: `sampled`
+   is ODE's (the first step past the top), `top` the top of the ballistic
+   arc through the last rising step, z + v^2 / 2g (exact between contacts). */
+static void drop_ball(double hz, double sampled[2], double top[2])
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double start[3] = { 0, 0, 1.1 };
+    tb_body_id id = add_ball(w, start, 0.1, 0.5);
+    double previous_v = 0, previous_top = 0;
+    int n = 0, i;
+    for (i = 0; i < 4 * hz && n < 2; ++i) {
+        double x[3], v[3];
+        assert_int_equal(tb_world_step(w, 1 / hz), TB_OK);
+        tb_body_position(w, id, x);
+        tb_body_velocity(w, id, v);
+        if (previous_v > 0 && v[2] <= 0) {
+            sampled[n] = x[2] - 0.1;
+            top[n++] = previous_top;
+        }
+        previous_top = x[2] - 0.1 + (v[2] > 0 ? v[2] * v[2] / (2 * G) : 0);
+        previous_v = v[2];
+    }
+    assert_int_equal(n, 2);
+    tb_world_destroy(w);
+}
+
+static void ball_bounces_to_e_squared(void **state)
+{
+    const double truth[2] = { 0.25, 0.0625 };
+    double sampled[2], top[2], ode60[2], ode240[2], s240[2], t240[2];
+    int k;
+    (void)state;
+    drop_ball(60, sampled, top);
+    drop_ball(240, s240, t240);
+    assert_int_equal(ode_ball_apexes(60, 0.5, 1, ode60), 2);
+    assert_int_equal(ode_ball_apexes(240, 0.5, 1, ode240), 2);
+    for (k = 0; k < 2; ++k) {
+        print_message("apex %d: truth %.4f | 60 Hz: tumble top %.6f sampled %.4f, ODE %.4f | 240 Hz: tumble %.4f, "
+                      "ODE %.4f\n", k + 1, truth[k], top[k], sampled[k], ode60[k], s240[k], ode240[k]);
+        assert_rel(top[k], truth[k], 0.02);
+        assert_rel(t240[k], truth[k], 0.02);
+        /* where ODE is accurate, the two agree; at 60 Hz tumble is closer */
+        assert_rel(s240[k], ode240[k], 0.02);
+        assert_true(fabs(sampled[k] - truth[k]) < fabs(ode60[k] - truth[k]));
+    }
+}
+
+/* ---- sliding to rest, and resting ------------------------------------------ */
+
+/* A 1 m cube at 5 m/s with mu = 0.5 on both shapes (the pair uses
+   sqrt(mu_a mu_b) = 0.5) stops after v^2 / (2 mu g) = 2.548 m. */
+static double slide(double hz, tb_world **kept, tb_body_id *box)
+{
+    tb_world *w = world_on_plane(0.5, 0);
+    const double start[3] = { 0, 0, 0.5 };
+    const double v0[3] = { 5, 0, 0 };
+    tb_body_id id = add_box(w, start, 1, 0.5);
+    double x[3], v[3];
+    int i;
+    assert_int_equal(tb_body_set_velocity(w, id, v0), TB_OK);
+    for (i = 0; i < 3 * hz; ++i) {
+        assert_int_equal(tb_world_step(w, 1 / hz), TB_OK);
+        tb_body_velocity(w, id, v);
+        if (v[0] <= 1e-6)
+            break;
+    }
+    tb_body_position(w, id, x);
+    if (kept)
+        *kept = w, *box = id;
+    else
+        tb_world_destroy(w);
+    return x[0];
+}
+
+static void box_slides_to_v2_over_2_mu_g(void **state)
+{
+    const double truth = 25 / (2 * 0.5 * G);
+    const double d60 = slide(60, NULL, NULL), d240 = slide(240, NULL, NULL);
+    const double o60 = ode_slide_distance(60, 5, 0.5), o240 = ode_slide_distance(240, 5, 0.5);
+    (void)state;
+    print_message("slide: truth %.4f m | 60 Hz: tumble %.5f, ODE %.4f | 240 Hz: tumble %.5f, ODE %.4f\n", truth, d60,
+                  o60, d240, o240);
+    assert_rel(d60, truth, 0.01);
+    assert_rel(d240, o240, 0.02);
+    assert_true(fabs(d60 - truth) < fabs(o60 - truth));
+}
+
+/* After sliding to rest, 10 s more on the plane: it must not creep or
+   jitter. */
+static void box_rests_without_drift(void **state)
+{
+    tb_world *w;
+    tb_body_id id;
+    double x0[3], x[3], v[3], wv[3], drift;
+    int i;
+    (void)state;
+    slide(60, &w, &id);
+    for (i = 0; i < 60; ++i) /* settle for a second */
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_position(w, id, x0);
+    for (i = 0; i < 600; ++i) {
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        tb_body_velocity(w, id, v);
+        tb_body_angular_velocity(w, id, wv);
+        assert_below(sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]), 1e-3);
+        assert_below(sqrt(wv[0] * wv[0] + wv[1] * wv[1] + wv[2] * wv[2]), 1e-3);
+    }
+    tb_body_position(w, id, x);
+    drift = sqrt((x[0] - x0[0]) * (x[0] - x0[0]) + (x[1] - x0[1]) * (x[1] - x0[1]) + (x[2] - x0[2]) * (x[2] - x0[2]));
+    print_message("resting box: drift %.3g m in 10 s, height %.7f m\n", drift, x[2]);
+    assert_below(drift, 1e-4);
+    assert_rel(x[2], 0.5, 1e-3);
+    tb_world_destroy(w);
+}
+
+/* Ten unit boxes stacked on the plane, 30 s at 60 Hz: standing means every
+   box within 0.25 m of its column and upright within 0.1 rad, the top box
+   within 2 cm of its height. */
+static void stack_of_ten_stands(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    tb_body_id ids[10];
+    double worst = 0, top[3];
+    int i, k;
+    (void)state;
+    for (k = 0; k < 10; ++k) {
+        const double at[3] = { 0, 0, 0.5 + k };
+        ids[k] = add_box(w, at, 1, 0.6);
+    }
+    for (i = 0; i < 30 * 60; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    for (k = 0; k < 10; ++k) {
+        double x[3], q[4];
+        tb_body_position(w, ids[k], x);
+        tb_body_orientation(w, ids[k], q);
+        worst = fmax(worst, hypot(x[0], x[1]));
+        assert_below(2 * asin(fmin(1, sqrt(q[1] * q[1] + q[2] * q[2]))), 0.1);
+    }
+    tb_body_position(w, ids[9], top);
+    print_message("stack of 10 after 30 s: widest offset %.4f m, top box at %.4f m (started 9.5)\n", worst, top[2]);
+    assert_below(worst, 0.25);
+    assert_below(fabs(top[2] - 9.5), 0.02);
+    tb_world_destroy(w);
+}
+
+/* ---- speed and momentum ----------------------------------------------------- */
+
+/* A 0.1 m sphere at 50 m/s towards a static box 5 cm thick, 60 Hz: it moves
+   0.83 m a step, 17 times the box's thickness, and must still stop at it. */
+static void fast_sphere_does_not_tunnel(void **state)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_shape_def wall = tb_default_shape_def();
+    tb_world *w;
+    tb_body_id ball;
+    const double start[3] = { -2, 0, 0 }, v0[3] = { 50, 0, 0 };
+    double x[3];
+    int i;
+    (void)state;
+    def.gravity[2] = 0;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    wall.type = TB_SHAPE_BOX;
+    wall.half_extents[0] = 0.025, wall.half_extents[1] = wall.half_extents[2] = 1;
+    assert_int_equal(tb_world_add_shape(w, &wall, NULL), TB_OK);
+    ball = add_ball(w, start, 0.1, 0);
+    assert_int_equal(tb_body_set_velocity(w, ball, v0), TB_OK);
+    for (i = 0; i < 30; ++i) {
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        tb_body_position(w, ball, x);
+        assert_below(x[0], -0.125 + 1e-3); /* never past the near face */
+    }
+    print_message("fast sphere: stopped at x = %.6f m (touching at -0.125)\n", x[0]);
+    assert_rel(x[0], -0.125, 1e-2);
+    tb_world_destroy(w);
+}
+
+/* Two spheres, restitution 1, off-centre at different masses and no
+   gravity: equal and opposite impulses keep the momentum to rounding. */
+static void collision_keeps_momentum(void **state)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_world *w;
+    tb_body_id a, b;
+    const double pa[3] = { -1, 0.05, 0 }, pb[3] = { 1, 0, 0.02 }, va[3] = { 6, 0, 0 }, vb[3] = { -3, 0.5, 0 };
+    double before[3], after[3], scale;
+    int i, k;
+    size_t events = 0, n;
+    (void)state;
+    def.gravity[2] = 0;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    a = add_ball(w, pa, 0.2, 1);
+    b = add_ball(w, pb, 0.3, 1);
+    assert_int_equal(tb_body_set_velocity(w, a, va), TB_OK);
+    assert_int_equal(tb_body_set_velocity(w, b, vb), TB_OK);
+    tb_world_momentum(w, before);
+    for (i = 0; i < 60; ++i) {
+        const tb_contact_event *ev;
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        ev = tb_world_contact_events(w, &n);
+        for (k = 0; k < (int)n; ++k)
+            events += ev[k].type == TB_CONTACT_BEGIN;
+    }
+    tb_world_momentum(w, after);
+    scale = fabs(before[0]) + fabs(before[1]) + fabs(before[2]);
+    for (k = 0; k < 3; ++k)
+        assert_below(fabs(after[k] - before[k]), 1e-9 * scale);
+    {
+        double v[3];
+        tb_body_velocity(w, a, v);
+        assert_true(v[0] < 0); /* it bounced */
+    }
+    assert_int_equal(events, 1);
+    tb_world_destroy(w);
+}
+
+/* The drop's first contact begins with the impact speed sqrt(2 g h0). */
+static void events_report_impacts(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double start[3] = { 0, 0, 1.1 };
+    int i, begins = 0, ends = 0;
+    double speed = 0;
+    (void)state;
+    add_ball(w, start, 0.1, 0.5);
+    for (i = 0; i < 90; ++i) {
+        size_t n, k;
+        const tb_contact_event *ev;
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        ev = tb_world_contact_events(w, &n);
+        for (k = 0; k < n; ++k) {
+            if (ev[k].type == TB_CONTACT_BEGIN && begins++ == 0)
+                speed = ev[k].speed;
+            ends += ev[k].type == TB_CONTACT_END;
+            assert_false(TB_ID_IS_NULL(ev[k].a));
+            assert_false(TB_ID_IS_NULL(ev[k].b));
+        }
+    }
+    print_message("first impact at %.5f m/s (sqrt(2 g h0) = %.5f)\n", speed, sqrt(2 * G));
+    assert_rel(speed, sqrt(2 * G), 1e-3);
+    assert_true(begins >= 2 && ends >= 1);
+    tb_world_destroy(w);
+}
+
+/* ---- bad input -------------------------------------------------------------- */
+
+static void bad_shapes_are_refused(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double at[3] = { 0, 0, 3 };
+    tb_body_id body = add_box(w, at, 1, 0.6);
+    tb_shape_def d;
+    tb_contact_settings cs = tb_default_contact_settings();
+    const size_t shapes = tb_world_shape_count(w);
+    (void)state;
+    d = tb_default_shape_def(), d.radius = 0;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_ARGUMENT);
+    d = tb_default_shape_def(), d.radius = -1;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_ARGUMENT);
+    d = tb_default_shape_def(), d.radius = NAN;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_ARGUMENT);
+    d = tb_default_shape_def(), d.type = TB_SHAPE_BOX, d.half_extents[1] = 0;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_ARGUMENT);
+    d = tb_default_shape_def(), d.type = TB_SHAPE_CAPSULE, d.half_length = -0.1;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_ARGUMENT);
+    d = tb_default_shape_def(), d.position[0] = INFINITY;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_ARGUMENT);
+    d = tb_default_shape_def(), d.type = TB_SHAPE_PLANE, d.normal[2] = 2;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_ARGUMENT);
+    assert_non_null(strstr(tb_world_message(w), "unit"));
+    d = tb_default_shape_def(), d.type = TB_SHAPE_PLANE, d.body = body;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_ARGUMENT);
+    d = tb_default_shape_def(), d.restitution = 1.5;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_ARGUMENT);
+    d = tb_default_shape_def(), d.orientation[0] = 0.5;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_world_shape_count(w), shapes);
+    cs.hertz = 0;
+    assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
+    cs = tb_default_contact_settings(), cs.velocity_iterations = 0;
+    assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
+    /* a removed body takes its shapes with it; its id goes stale */
+    assert_int_equal(tb_world_remove_body(w, body), TB_OK);
+    assert_int_equal(tb_world_shape_count(w), shapes - 1);
+    d = tb_default_shape_def(), d.body = body;
+    assert_int_equal(tb_world_add_shape(w, &d, NULL), TB_ERR_STALE_ID);
+    {
+        tb_shape_id stale = { 77, 1 };
+        assert_int_equal(tb_world_remove_shape(w, stale), TB_ERR_STALE_ID);
+    }
+    tb_world_destroy(w);
+}
+
+static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(ball_bounces_to_e_squared),
+    cmocka_unit_test(box_slides_to_v2_over_2_mu_g),
+    cmocka_unit_test(box_rests_without_drift),
+    cmocka_unit_test(stack_of_ten_stands),
+    cmocka_unit_test(fast_sphere_does_not_tunnel),
+    cmocka_unit_test(collision_keeps_momentum),
+    cmocka_unit_test(events_report_impacts),
+    cmocka_unit_test(bad_shapes_are_refused),
+};
+
+TB_TEST_MAIN(tests)
