@@ -426,7 +426,8 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
                 return st;
         }
     }
-    qsort(c->entries, c->entry_count, sizeof *c->entries, entry_order);
+    if (c->entry_count > 1) /* (qsort wants a valid pointer even for nothing) */
+        qsort(c->entries, c->entry_count, sizeof *c->entries, entry_order);
     c->prepared = 1;
     return TB_OK;
 }
