@@ -18,9 +18,10 @@
 
 #define WORLD_MT "tumble.world"
 
-enum handle_kind { H_PARTICLE, H_TRACER, H_SPRING, H_FIELD, H_FORCE, H_BODY, H_KINDS };
+enum handle_kind { H_PARTICLE, H_TRACER, H_SPRING, H_FIELD, H_FORCE, H_BODY, H_SHAPE, H_KINDS };
 static const char *const handle_mt[H_KINDS] = {
-    "tumble.particle", "tumble.tracer", "tumble.spring", "tumble.field", "tumble.force", "tumble.body"
+    "tumble.particle", "tumble.tracer", "tumble.spring", "tumble.field", "tumble.force", "tumble.body",
+    "tumble.shape"
 };
 
 typedef struct lua_world {
@@ -166,6 +167,16 @@ static int push_vec3(lua_State *L, const double v[3])
     lua_pushnumber(L, v[1]);
     lua_pushnumber(L, v[2]);
     return 3;
+}
+
+static void push_vec3_table(lua_State *L, const double v[3])
+{
+    int k;
+    lua_createtable(L, 3, 0);
+    for (k = 0; k < 3; ++k) {
+        lua_pushnumber(L, v[k]);
+        lua_rawseti(L, -2, k + 1);
+    }
 }
 
 /* ------------------------------------------------------------ handles -- */
@@ -426,6 +437,11 @@ static int handle_remove(lua_State *L)
         st = tb_world_remove_spring(lw->world, id);
     } else if (k == H_BODY) {
         st = tb_world_remove_body(lw->world, body_id(h));
+    } else if (k == H_SHAPE) {
+        tb_shape_id id;
+        id.index1 = h->index1;
+        id.generation = h->generation;
+        st = tb_world_remove_shape(lw->world, id);
     } else if (k == H_FIELD) {
         tb_field_id id;
         id.index1 = h->index1;
@@ -920,6 +936,119 @@ static int world_body(lua_State *L)
     return 1;
 }
 
+/* world:shape{ type = "sphere" | "capsule" | "box" | "plane", body = b (none:
+   static), pos, rot, radius, half_length, half = {x, y, z}, normal, offset,
+   friction, restitution, category, mask } */
+static const char *const shape_options[] = { "type", "body", "pos", "rot", "radius", "half_length", "half",
+                                             "normal", "offset", "friction", "restitution", "category",
+                                             "mask", NULL };
+
+static int world_shape(lua_State *L)
+{
+    static const char *const types[] = { "sphere", "capsule", "box", "plane", NULL };
+    lua_world *lw = to_world(L, 1), *other;
+    tb_shape_def def = tb_default_shape_def();
+    tb_shape_id id;
+    double bits;
+    check_options(L, 2, "world:shape", shape_options);
+    lua_getfield(L, 2, "type");
+    def.type = (tb_shape_type)luaL_checkoption(L, -1, NULL, types);
+    lua_pop(L, 1);
+    if (lua_getfield(L, 2, "body") != LUA_TNIL) {
+        lua_handle *b = check_handle(L, lua_gettop(L), H_BODY, &other);
+        if (other != lw)
+            return luaL_error(L, "world:shape: the body belongs to another world");
+        def.body = body_id(b);
+    }
+    lua_pop(L, 1);
+    opt_vec3(L, 2, "pos", "world:shape", def.position);
+    if (lua_getfield(L, 2, "rot") != LUA_TNIL)
+        read_quat(L, lua_gettop(L), "world:shape", def.orientation);
+    lua_pop(L, 1);
+    opt_number(L, 2, "radius", "world:shape", &def.radius);
+    opt_number(L, 2, "half_length", "world:shape", &def.half_length);
+    opt_vec3(L, 2, "half", "world:shape", def.half_extents);
+    opt_vec3(L, 2, "normal", "world:shape", def.normal);
+    opt_number(L, 2, "offset", "world:shape", &def.offset);
+    opt_number(L, 2, "friction", "world:shape", &def.friction);
+    opt_number(L, 2, "restitution", "world:shape", &def.restitution);
+    bits = def.category;
+    opt_number(L, 2, "category", "world:shape", &bits);
+    def.category = (uint32_t)bits;
+    bits = def.mask;
+    opt_number(L, 2, "mask", "world:shape", &bits);
+    def.mask = (uint32_t)bits;
+    if (tb_world_add_shape(lw->world, &def, &id) != TB_OK)
+        return fail(L, lw, "world:shape");
+    push_handle(L, 1, H_SHAPE, id.index1, id.generation, 0);
+    return 1;
+}
+
+/* world:contacts{ hertz, damping_ratio, max_push, restitution_threshold,
+   slop, velocity_iterations, position_iterations, particle_radius,
+   particle_friction, particle_restitution }: change the contact settings */
+static const char *const contact_options[] = { "hertz", "damping_ratio", "max_push", "restitution_threshold",
+                                               "slop", "velocity_iterations", "position_iterations",
+                                               "particle_radius", "particle_friction", "particle_restitution",
+                                               NULL };
+
+static int world_contacts(lua_State *L)
+{
+    lua_world *lw = to_world(L, 1);
+    tb_contact_settings cs = tb_world_contact_settings(lw->world);
+    double vi = cs.velocity_iterations, pi = cs.position_iterations;
+    check_options(L, 2, "world:contacts", contact_options);
+    opt_number(L, 2, "hertz", "world:contacts", &cs.hertz);
+    opt_number(L, 2, "damping_ratio", "world:contacts", &cs.damping_ratio);
+    opt_number(L, 2, "max_push", "world:contacts", &cs.max_push);
+    opt_number(L, 2, "restitution_threshold", "world:contacts", &cs.restitution_threshold);
+    opt_number(L, 2, "slop", "world:contacts", &cs.slop);
+    opt_number(L, 2, "velocity_iterations", "world:contacts", &vi);
+    opt_number(L, 2, "position_iterations", "world:contacts", &pi);
+    opt_number(L, 2, "particle_radius", "world:contacts", &cs.particle_radius);
+    opt_number(L, 2, "particle_friction", "world:contacts", &cs.particle_friction);
+    opt_number(L, 2, "particle_restitution", "world:contacts", &cs.particle_restitution);
+    cs.velocity_iterations = vi >= 0 && vi < 1e6 ? (int)vi : 0;
+    cs.position_iterations = pi >= 0 && pi < 1e6 ? (int)pi : -1;
+    if (tb_world_set_contact_settings(lw->world, &cs) != TB_OK)
+        return fail(L, lw, "world:contacts");
+    return 0;
+}
+
+/* world:events(): the contacts that began or ended in the last step, as
+   { type = "begin" | "end", a = shape index, b = shape index or nil,
+     particle = particle index or nil, speed, point = {x, y, z},
+     normal = {x, y, z} } (indices as in handle:id()) */
+static int world_events(lua_State *L)
+{
+    size_t n, i;
+    const tb_contact_event *ev = tb_world_contact_events(to_world(L, 1)->world, &n);
+    lua_createtable(L, (int)n, 0);
+    for (i = 0; i < n; ++i) {
+        lua_createtable(L, 0, 7);
+        lua_pushstring(L, ev[i].type == TB_CONTACT_BEGIN ? "begin" : "end");
+        lua_setfield(L, -2, "type");
+        lua_pushinteger(L, (lua_Integer)ev[i].a.index1);
+        lua_setfield(L, -2, "a");
+        if (!TB_ID_IS_NULL(ev[i].b)) {
+            lua_pushinteger(L, (lua_Integer)ev[i].b.index1);
+            lua_setfield(L, -2, "b");
+        }
+        if (!TB_ID_IS_NULL(ev[i].particle)) {
+            lua_pushinteger(L, (lua_Integer)ev[i].particle.index1);
+            lua_setfield(L, -2, "particle");
+        }
+        lua_pushnumber(L, ev[i].speed);
+        lua_setfield(L, -2, "speed");
+        push_vec3_table(L, ev[i].point);
+        lua_setfield(L, -2, "point");
+        push_vec3_table(L, ev[i].normal);
+        lua_setfield(L, -2, "normal");
+        lua_rawseti(L, -2, (lua_Integer)i + 1);
+    }
+    return 1;
+}
+
 /* world:spring(a, b_or_point, {k = N/m, damping = N s/m, rest = m}) */
 static int world_spring(lua_State *L)
 {
@@ -1142,6 +1271,7 @@ static int world_counts(lua_State *L)
 static const luaL_Reg world_methods[] = {
     { "particle", world_particle }, { "tracer", world_tracer }, { "spring", world_spring },
     { "body", world_body }, { "angular_momentum", world_angular_momentum },
+    { "shape", world_shape }, { "contacts", world_contacts }, { "events", world_events },
     { "drag", world_drag }, { "field", world_field }, { "force", world_force },
     { "step", world_step }, { "time", world_time }, { "dt", world_dt }, { "set_dt", world_set_dt },
     { "integrator", world_integrator }, { "set_integrator", world_set_integrator },
@@ -1179,7 +1309,8 @@ int luaopen_tumble(lua_State *L)
 {
     static const luaL_Reg funcs[] = { { "world", world_new }, { "integrators", integrators }, { NULL, NULL } };
     static const luaL_Reg *const kind_methods[H_KINDS] = {
-        particle_methods, tracer_methods, plain_methods, plain_methods, plain_methods, body_methods
+        particle_methods, tracer_methods, plain_methods, plain_methods, plain_methods, body_methods,
+        plain_methods
     };
     int k;
     new_metatable(L, WORLD_MT, world_methods);

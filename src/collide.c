@@ -16,7 +16,8 @@
      0x10  | end                                   capsule end on a plane
      0x20  | overlap end (bit 1) from b (bit 0)    parallel capsules
      0x40  | corner                                box corner on a plane
-     0x100 | face << 4 | clip                      capsule core on a box face
+     0x100 | face << 4 | end                       capsule core on a box face
+                   (end: 0, 1 the core's own ends, 2 + j cut by side plane j)
      0x10000 | ref_is_b << 15 | ref face << 12 | incident face << 9
              | polygon edge in << 3 | edge out     box face on box face
      0x20000 | axis a << 6 | sides a << 4 | axis b << 2 | sides b
@@ -29,11 +30,16 @@
 
 /* Segments closer to parallel than this sine give two capsule points. */
 #define TB__PARALLEL 0.02
-/* A capsule core within this cosine of a box face's normal (1.1 degrees)
-   lies on the face: two points clipped to it, each at the exact distance
-   of its core point; the deepest of them can miss the true closest distance
-   (found beyond the face's edge) by (1 / cos - 1) of it, 2e-4. */
+/* A capsule core whose closest direction to a box is within this cosine of
+   a face's normal (1.1 degrees) lies on the face: two points, the core
+   clipped to the face (reaching out to the closest point if that is just
+   beyond the face's edge), rather than one that would come and go with
+   rounding as a capsule rests across the edge. */
 #define TB__FLAT 0.9998
+/* Clipping to a face keeps what lies less than this times the box's size
+   (the sum of its half extents) outside the face's sides: 0.1 mm on a 1 m
+   box; see clip. */
+#define TB__CLIP_TOL 1e-4
 /* Edge axes of a smaller cross product than this are skipped by the SAT:
    they duplicate a face axis and normalising them amplifies rounding. */
 #define TB__EDGE_MIN 1e-6
@@ -426,44 +432,62 @@ static void sphere_box(const tb__geom *a, const tb__geom *b, double margin, tb__
 }
 
 /* Clips a capsule's core (box frame: p0 + t d, t in [0, 1]) to the side
-   planes of box face (k, side) and adds a point for each end of what is
-   left. Returns the number of points added. */
+   planes of box face (k, side), keeping an end less than TB__CLIP_TOL out
+   as box_face keeps a corner, and adds a point for each end of what is
+   left. An end short of t_near, the core's closest point to the box just
+   beyond the face's edge (-1: none), is moved to it, so that the deepest
+   point is exact. Returns the number of points added. */
 static int capsule_face(const double p0[3], const double d[3], double r, const tb__geom *b, int k, double side,
-                        double margin, tb__manifold *m)
+                        double t_near, double margin, tb__manifold *m)
 {
-    const double *h = b->half;
+    const double *h = b->half, tol = TB__CLIP_TOL * (h[0] + h[1] + h[2]);
     double t[2] = { 0, 1 };
     uint32_t code[2] = { 0, 1 };
     int i, j, e, count = m->count;
     for (j = 0; j < 4; ++j) {
-        /* Side plane j: s x_i <= h_i, i.e. s d_i t <= h_i - s p0_i. */
+        /* Side plane j: s x_i <= h_i, i.e. s d_i t <= h_i - s p0_i; the end
+           of the core that goes furthest out is cut if it is beyond tol. */
         i = (k + 1 + j / 2) % 3;
         const double s = j & 1 ? -1.0 : 1.0, slope = s * d[i], room = h[i] - s * p0[i];
-        if (slope > 0 && room / slope < t[1])
-            t[1] = room / slope, code[1] = 2u + (uint32_t)j;
-        else if (slope < 0 && room / slope > t[0])
-            t[0] = room / slope, code[0] = 2u + (uint32_t)j;
-        else if (slope == 0 && room < 0)
+        const int end = slope > 0;
+        if (slope * end - room <= tol)
+            continue;
+        if (slope == 0)
             return 0;
+        if (end ? room / slope < t[1] : room / slope > t[0])
+            t[end] = room / slope, code[end] = 2u + (uint32_t)j;
     }
     if (t[0] > t[1])
         return 0;
+    if (t_near >= 0)
+        t[0] = t_near < t[0] ? t_near : t[0], t[1] = t_near > t[1] ? t_near : t[1];
     for (e = 0; e < (t[1] - t[0] > 1e-9 ? 2 : 1); ++e) {
-        double p[3], pos[3];
+        /* From q, the closest point of the face's plane within the face,
+           to the core; negative when the core is behind the face. */
+        double p[3], q[3], diff[3], n[3], pos[3];
         madd(p0, t[e], d, p);
-        const double dist = side * p[k] - h[k];
-        p[k] -= side * 0.5 * (r + dist);
-        to_world(b, p, 1, pos);
-        add_point(m, margin, pos, dist - r,
-                  0x100u | (uint32_t)(2 * k + (side < 0)) << 4 | code[e]);
+        for (i = 0; i < 3; ++i)
+            q[i] = i == k ? side * h[k] : clampd(p[i], -h[i], h[i]);
+        sub(p, q, diff);
+        const double dist = sign_of(side * diff[k]) * len(diff);
+        if (dist != 0)
+            scale(diff, 1 / dist, n);
+        else
+            n[0] = n[1] = n[2] = 0, n[k] = side;
+        madd(p, -r, n, p);
+        mid(p, q, pos);
+        to_world(b, pos, 1, pos);
+        add_point(m, margin, pos, dist - r, 0x100u | (uint32_t)(2 * k + (side < 0)) << 4 | code[e]);
     }
     return m->count - count;
 }
 
 /* The closest points p of segment p0 + t d (t in [0, 1]) and q of the box
-   |x_i| <= h_i. The squared distance is convex in t, and quadratic between
-   the crossings of the slab planes: minimise each piece in closed form. */
-static void closest_segment_box(const double p0[3], const double d[3], const double h[3], double p[3], double q[3])
+   |x_i| <= h_i; returns p's t. The squared distance is convex in t, and
+   quadratic between the crossings of the slab planes: each piece is
+   minimised in closed form. */
+static double closest_segment_box(const double p0[3], const double d[3], const double h[3], double p[3],
+                                  double q[3])
 {
     double ts[8] = { 0, 1 }, best = HUGE_VAL, bt = 0, diff[3];
     int i, j, k, nt = 2;
@@ -495,6 +519,7 @@ static void closest_segment_box(const double p0[3], const double d[3], const dou
     madd(p0, bt, d, p);
     for (i = 0; i < 3; ++i)
         q[i] = clampd(p[i], -h[i], h[i]);
+    return bt;
 }
 
 /* A capsule's core (box frame: p0 + t d) that enters box b: the separating
@@ -529,7 +554,7 @@ static void capsule_in_box(const double p0[3], const double d[3], double r, cons
         memset(n, 0, sizeof n);
         n[face] = -sign_of(c[face]);
         to_world(b, n, 0, m->normal);
-        capsule_face(p0, d, r, b, face, sign_of(c[face]), margin, m);
+        capsule_face(p0, d, r, b, face, sign_of(c[face]), -1, margin, m);
         return;
     }
     /* The box's edge along axis `edge` furthest towards the core. */
@@ -558,7 +583,7 @@ static void capsule_box(const tb__geom *a, const tb__geom *b, double margin, tb_
     segment(a, p0, d);
     to_local(b, p0, 1, p0);
     to_local(b, d, 0, d);
-    closest_segment_box(p0, d, h, p, q);
+    const double t = closest_segment_box(p0, d, h, p, q);
     sub(q, p, diff);
     const double dist = len(diff);
     if (dist > 1e-9 * (h[0] + h[1] + h[2] + len(d) + r)) {
@@ -566,7 +591,7 @@ static void capsule_box(const tb__geom *a, const tb__geom *b, double margin, tb_
             return;
         scale(diff, 1 / dist, n);
         k = fabs(n[0]) >= fabs(n[1]) && fabs(n[0]) >= fabs(n[2]) ? 0 : fabs(n[1]) >= fabs(n[2]) ? 1 : 2;
-        if (fabs(n[k]) >= TB__FLAT && capsule_face(p0, d, r, b, k, -sign_of(n[k]), margin, m)) {
+        if (fabs(n[k]) >= TB__FLAT && capsule_face(p0, d, r, b, k, -sign_of(n[k]), t, margin, m)) {
             memset(n, 0, sizeof n);
             n[k] = sign_of(diff[k]);
         } else {
@@ -578,7 +603,7 @@ static void capsule_box(const tb__geom *a, const tb__geom *b, double margin, tb_
         to_world(b, n, 0, m->normal);
         return;
     }
-    capsule_in_box(p0, d, a->radius, b, margin, m);
+    capsule_in_box(p0, d, r, b, margin, m);
 }
 
 /* ------------------------------------------------------- box and box -- */
@@ -611,8 +636,6 @@ typedef struct tb__vertex {
 } tb__vertex;
 
 #define TB__CLIP_MAX 16
-/* Relative to the reference box's size: 0.1 mm on a 1 m box. */
-#define TB__CLIP_TOL 1e-4
 
 /* Sutherland-Hodgman: the part of polygon v (n vertices) with
    dot(pn, x) <= off; plane `id` names the new edge. A vertex less than tol
@@ -665,11 +688,11 @@ static void box_face(const tb__box *ref, const tb__box *inc, int k, int ref_is_b
         poly[0][i].in = (i + 3) % 4;
         poly[0][i].out = i;
     }
+    const double tol = TB__CLIP_TOL * (ref->h[0] + ref->h[1] + ref->h[2]);
     for (j = 0; j < 4 && count; ++j) {
         const int t = (k + 1 + j / 2) % 3;
         const double s = j & 1 ? -1.0 : 1.0, pn[3] = { s * ref->ax[t][0], s * ref->ax[t][1], s * ref->ax[t][2] };
-        count = clip(poly[cur], count, pn, dot(pn, ref->c) + ref->h[t], TB__CLIP_TOL * (ref->h[0] + ref->h[1] + ref->h[2]),
-                     4 + j, poly[1 - cur]);
+        count = clip(poly[cur], count, pn, dot(pn, ref->c) + ref->h[t], tol, 4 + j, poly[1 - cur]);
         cur = 1 - cur;
     }
     const double face = dot(n, ref->c) + ref->h[k];
@@ -689,9 +712,10 @@ static void box_face(const tb__box *ref, const tb__box *inc, int k, int ref_is_b
 }
 
 /* Edge i of a against edge j of b, along unit L (from a to b): one point
-   midway between the edges' closest points. */
-static void box_edge(const tb__box *a, const tb__box *b, int i, int j, const double L[3], double margin,
-                     tb__manifold *m)
+   midway between the edges' closest points (none if crossing_only and
+   either closest point is an end of its edge). */
+static void box_edge(const tb__box *a, const tb__box *b, int i, int j, const double L[3], int crossing_only,
+                     double margin, tb__manifold *m)
 {
     double pa[3], pb[3], da[3], db[3], qa[3], qb[3], pos[3], s, t;
     uint32_t sides_a = 0, sides_b = 0;
@@ -711,6 +735,8 @@ static void box_edge(const tb__box *a, const tb__box *b, int i, int j, const dou
     scale(a->ax[i], 2 * a->h[i], da);
     scale(b->ax[j], 2 * b->h[j], db);
     closest_segments(pa, da, pb, db, &s, &t);
+    if (crossing_only && !(s > 0 && s < 1 && t > 0 && t < 1))
+        return;
     madd(pa, s, da, qa);
     madd(pb, t, db, qb);
     mid(qa, qb, pos);
@@ -764,8 +790,11 @@ static void box_box(const tb__geom *ga, const tb__geom *gb, double margin, tb__m
             box_face(&a, &b, fa, 0, margin, m);
         if (m->count || ea < 0)
             return;
+        /* No face point within the margin: the edges, if they cross. */
+        box_edge(&a, &b, ea, eb, edge_L, 1, margin, m);
+        return;
     }
-    box_edge(&a, &b, ea, eb, edge_L, margin, m);
+    box_edge(&a, &b, ea, eb, edge_L, 0, margin, m);
 }
 
 /* ----------------------------------------------------------- dispatch -- */

@@ -279,16 +279,34 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
                 vb[j] -= va[j];
             p->approach = dot(vb, e->normal);
         }
-        /* warm start from the same pair of features last step, if they touched */
-        if (old)
-            for (j = 0; j < old->count; ++j)
-                if (old->point[j].feature == p->feature && old->point[j].active) {
-                    p->normal_impulse = old->point[j].normal_impulse;
-                    p->tangent_impulse[0] = old->point[j].tangent_impulse[0];
-                    p->tangent_impulse[1] = old->point[j].tangent_impulse[1];
-                    p->matched = 1;
+        /* warm start from last step's point: the same pair of features, or
+           failing that (a clipped polygon may renumber its corners) the
+           nearest point on body a within the slop */
+        if (old) {
+            int best = -1;
+            double nearest = c->settings.slop * c->settings.slop;
+            for (j = 0; j < old->count; ++j) {
+                const tb__point *o = &old->point[j];
+                double d2 = 0;
+                int q;
+                if (!o->active)
+                    continue;
+                if (o->feature == p->feature) {
+                    best = j;
                     break;
                 }
+                for (q = 0; q < 3; ++q)
+                    d2 += (o->local_a[q] - p->local_a[q]) * (o->local_a[q] - p->local_a[q]);
+                if (d2 < nearest)
+                    nearest = d2, best = j;
+            }
+            if (best >= 0) {
+                p->normal_impulse = old->point[best].normal_impulse;
+                p->tangent_impulse[0] = old->point[best].tangent_impulse[0];
+                p->tangent_impulse[1] = old->point[best].tangent_impulse[1];
+                p->matched = 1;
+            }
+        }
     }
     return TB_OK;
 }
@@ -434,28 +452,6 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
 
 /* ---- solving ---------------------------------------------------------------- */
 
-static void apply_impulse(tb__contacts *c, int32_t i, const double r[3], const double J[3], double sign)
-{
-    tb__solver_body *b;
-    double t[3], dw[3];
-    int k;
-    if (i < 0)
-        return;
-    b = &c->bodies[i];
-    for (k = 0; k < 3; ++k) {
-        b->P[k] += sign * J[k];
-        b->v[k] += sign * J[k] * b->inv_mass;
-    }
-    if (b->tier != TB__BODIES)
-        return;
-    cross(r, J, t);
-    mul(b->inv_world, t, dw);
-    for (k = 0; k < 3; ++k) {
-        b->L[k] += sign * t[k];
-        b->w[k] += sign * dw[k];
-    }
-}
-
 /* Move the body's pose as an impulse J at r would over `lever` seconds. */
 static void shift(tb__contacts *c, int32_t i, const double r[3], const double J[3], double scale)
 {
@@ -572,6 +568,26 @@ static void load_bodies(tb_world *w, tb__contacts *c)
     }
 }
 
+/* The precomputed rows of point p (see tb__point). */
+static void set_rows(const tb__contacts *c, const tb__entry *e, tb__point *p)
+{
+    int d, k;
+    for (d = 0; d < 3; ++d) {
+        const double *dir = d == 0 ? e->normal : e->tangent[d - 1];
+        for (k = 0; k < 2; ++k) {
+            const int32_t i = k ? e->body_b : e->body_a;
+            double *arm = k ? p->arm_b[d] : p->arm_a[d], *turn = k ? p->turn_b[d] : p->turn_a[d];
+            if (i < 0 || c->bodies[i].tier != TB__BODIES) {
+                memset(arm, 0, 3 * sizeof(double));
+                memset(turn, 0, 3 * sizeof(double));
+                continue;
+            }
+            cross(k ? p->rb : p->ra, dir, arm);
+            mul(c->bodies[i].inv_world, arm, turn);
+        }
+    }
+}
+
 /* Where the free motion took each point; its impact timing and targets. */
 static void set_up_points(tb_world *w, tb__contacts *c, double h)
 {
@@ -613,6 +629,7 @@ static void set_up_points(tb_world *w, tb__contacts *c, double h)
             p->normal_mass = effective_mass(c, e, p, e->normal);
             p->tangent_mass[0] = effective_mass(c, e, p, e->tangent[0]);
             p->tangent_mass[1] = effective_mass(c, e, p, e->tangent[1]);
+            set_rows(c, e, p);
             relative_velocity(c, e, p, dv);
             /* closed, or within a fifth of the slop of it: a resting point
                must not drop out of the solve for a rounding-sized gap */
@@ -651,65 +668,86 @@ static void set_up_points(tb_world *w, tb__contacts *c, double h)
     }
 }
 
+/* Relative velocity of the anchors along row d. */
+static double row_velocity(const tb__contacts *c, const tb__entry *e, const tb__point *p, int d, const double *dir)
+{
+    double v = 0;
+    if (e->body_b >= 0) {
+        const tb__solver_body *b = &c->bodies[e->body_b];
+        v += dot(dir, b->v) + dot(p->arm_b[d], b->w);
+    }
+    if (e->body_a >= 0) {
+        const tb__solver_body *a = &c->bodies[e->body_a];
+        v -= dot(dir, a->v) + dot(p->arm_a[d], a->w);
+    }
+    return v;
+}
+
+/* An impulse lambda along row d: -lambda on a, +lambda on b. */
+static void row_impulse(tb__contacts *c, const tb__entry *e, const tb__point *p, int d, const double *dir,
+                        double lambda)
+{
+    int k, j;
+    for (k = 0; k < 2; ++k) {
+        const int32_t i = k ? e->body_b : e->body_a;
+        const double l = k ? lambda : -lambda;
+        const double *arm = k ? p->arm_b[d] : p->arm_a[d], *turn = k ? p->turn_b[d] : p->turn_a[d];
+        tb__solver_body *b;
+        if (i < 0)
+            continue;
+        b = &c->bodies[i];
+        for (j = 0; j < 3; ++j) {
+            b->P[j] += l * dir[j];
+            b->v[j] += l * dir[j] * b->inv_mass;
+            b->L[j] += l * arm[j];
+            b->w[j] += l * turn[j];
+        }
+    }
+}
+
+/* One Gauss-Seidel sweep over the touching points: friction first, within
+   the circle mu * normal impulse, then the normal, v_n >= target. */
+static void solve_velocities(tb__contacts *c)
+{
+    size_t n;
+    for (n = 0; n < c->entry_count; ++n) {
+        tb__entry *e = &c->entries[n];
+        int k;
+        for (k = 0; k < e->count; ++k) {
+            tb__point *p = &e->point[k];
+            double lambda, total, limit, t0, t1, len;
+            if (!p->active)
+                continue;
+            limit = e->friction * p->normal_impulse;
+            t0 = p->tangent_impulse[0] - p->tangent_mass[0] * row_velocity(c, e, p, 1, e->tangent[0]);
+            t1 = p->tangent_impulse[1] - p->tangent_mass[1] * row_velocity(c, e, p, 2, e->tangent[1]);
+            len = sqrt(t0 * t0 + t1 * t1);
+            if (len > limit && len > 0)
+                t0 *= limit / len, t1 *= limit / len;
+            row_impulse(c, e, p, 1, e->tangent[0], t0 - p->tangent_impulse[0]);
+            row_impulse(c, e, p, 2, e->tangent[1], t1 - p->tangent_impulse[1]);
+            p->tangent_impulse[0] = t0, p->tangent_impulse[1] = t1;
+            lambda = -p->normal_mass * (row_velocity(c, e, p, 0, e->normal) - p->target);
+            total = fmax(p->normal_impulse + lambda, 0);
+            row_impulse(c, e, p, 0, e->normal, total - p->normal_impulse);
+            p->normal_impulse = total;
+        }
+    }
+}
+
 static void warm_start(tb__contacts *c)
 {
     size_t i;
     for (i = 0; i < c->entry_count; ++i) {
         const tb__entry *e = &c->entries[i];
-        int k, j;
+        int k;
         for (k = 0; k < e->count; ++k) {
             const tb__point *p = &e->point[k];
-            double J[3];
             if (!p->active)
                 continue;
-            for (j = 0; j < 3; ++j)
-                J[j] = p->normal_impulse * e->normal[j] + p->tangent_impulse[0] * e->tangent[0][j] +
-                       p->tangent_impulse[1] * e->tangent[1][j];
-            apply_impulse(c, e->body_a, p->ra, J, -1);
-            apply_impulse(c, e->body_b, p->rb, J, 1);
-        }
-    }
-}
-
-/* One Gauss-Seidel sweep; every other sweep runs backwards, so that no
-   side of a symmetric pile is always solved first (a one-way sweep leans
-   stacks towards the side it starts from). */
-static void solve_velocities(tb__contacts *c, int backwards)
-{
-    size_t n;
-    for (n = 0; n < c->entry_count; ++n) {
-        tb__entry *e = &c->entries[backwards ? c->entry_count - 1 - n : n];
-        int m, j, t;
-        for (m = 0; m < e->count; ++m) {
-            const int k = backwards ? e->count - 1 - m : m;
-            tb__point *p = &e->point[k];
-            double dv[3], J[3], lambda, total, limit, t0, t1, len;
-            if (!p->active)
-                continue;
-            /* friction first, within the circle mu * normal impulse */
-            relative_velocity(c, e, p, dv);
-            limit = e->friction * p->normal_impulse;
-            t0 = p->tangent_impulse[0] - p->tangent_mass[0] * dot(dv, e->tangent[0]);
-            t1 = p->tangent_impulse[1] - p->tangent_mass[1] * dot(dv, e->tangent[1]);
-            len = sqrt(t0 * t0 + t1 * t1);
-            if (len > limit && len > 0)
-                t0 *= limit / len, t1 *= limit / len;
-            for (j = 0; j < 3; ++j)
-                J[j] = (t0 - p->tangent_impulse[0]) * e->tangent[0][j] +
-                       (t1 - p->tangent_impulse[1]) * e->tangent[1][j];
-            p->tangent_impulse[0] = t0, p->tangent_impulse[1] = t1;
-            apply_impulse(c, e->body_a, p->ra, J, -1);
-            apply_impulse(c, e->body_b, p->rb, J, 1);
-            /* then the normal: v_n >= target */
-            relative_velocity(c, e, p, dv);
-            lambda = -p->normal_mass * (dot(dv, e->normal) - p->target);
-            total = fmax(p->normal_impulse + lambda, 0);
-            lambda = total - p->normal_impulse;
-            p->normal_impulse = total;
-            for (t = 0; t < 3; ++t)
-                J[t] = lambda * e->normal[t];
-            apply_impulse(c, e->body_a, p->ra, J, -1);
-            apply_impulse(c, e->body_b, p->rb, J, 1);
+            row_impulse(c, e, p, 0, e->normal, p->normal_impulse);
+            row_impulse(c, e, p, 1, e->tangent[0], p->tangent_impulse[0]);
+            row_impulse(c, e, p, 2, e->tangent[1], p->tangent_impulse[1]);
         }
     }
 }
@@ -887,7 +925,7 @@ static tb_status make_events(tb_world *w, tb__contacts *c)
     return TB_OK;
 }
 
-/* Touching points that were not touching last step. */
+/* Touching points that were not touching last step, and all of them. */
 static size_t cold_points(const tb__contacts *c)
 {
     size_t i, n = 0;
@@ -895,6 +933,16 @@ static size_t cold_points(const tb__contacts *c)
     for (i = 0; i < c->entry_count; ++i)
         for (k = 0; k < c->entries[i].count; ++k)
             n += c->entries[i].point[k].active && !c->entries[i].point[k].matched;
+    return n;
+}
+
+static size_t active_points(const tb__contacts *c)
+{
+    size_t i, n = 0;
+    int k;
+    for (i = 0; i < c->entry_count; ++i)
+        for (k = 0; k < c->entries[i].count; ++k)
+            n += c->entries[i].point[k].active;
     return n;
 }
 
@@ -910,9 +958,9 @@ void tb__contacts_solve(tb_world *w, double h)
     /* a contact without last step's impulses to start from needs more
        sweeps to reach them: a stack built at rest would otherwise sink and
        lean in its first steps */
-    iterations = c->settings.velocity_iterations * (cold_points(c) ? 4 : 1);
+    iterations = c->settings.velocity_iterations * (8 * cold_points(c) > active_points(c) ? 4 : 1);
     for (it = 0; it < iterations; ++it)
-        solve_velocities(c, 0);
+        solve_velocities(c);
     apply_levers(w, c);
     for (it = 0; it < c->settings.position_iterations; ++it)
         solve_positions(c, h);

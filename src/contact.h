@@ -36,6 +36,9 @@ typedef struct tb__point {
     /* filled by the solve */
     double ra[3], rb[3];       /* m: the point from each centre, world, after the free motion */
     double normal_mass, tangent_mass[2];
+    /* the rows of the velocity solve, per direction (normal, tangent 1,
+       tangent 2): r x d at each anchor, and I^-1 (r x d) */
+    double arm_a[3][3], arm_b[3][3], turn_a[3][3], turn_b[3][3];
     double target;             /* m/s: the normal velocity to reach */
     double lever;              /* s: how long its impulse acts on positions */
     double predicted;          /* m: separation after the free motion */

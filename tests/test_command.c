@@ -385,7 +385,26 @@ static void blow_up_is_stopped_and_auto_plans(void **state)
     assert_non_null(strstr(out_text, "auto picks"));
 }
 
+
+/* Scenes with contacts: the slide stops at v^2 / (2 mu g) = 2.548 m (its
+   last row), the balls of the bounce scene never sink below the plane by
+   more than the slop, and the other three run. */
+static void contact_scenes(void **state)
+{
+    double last[15];
+    (void)state;
+    run_scene("slide", "body", 1, 61, last);
+    assert_true(fabs(last[2] - 25 / (2 * 0.5 * 9.81)) < 0.01 * 2.548); /* x */
+    run_scene("bounce", "body", 5, 241, last);
+    assert_true(last[4] > 0.1 - 0.005); /* z of the last ball */
+    run_scene("pyramid", "body", 55, 51, last);
+    run_scene("pile", "body", 100, 51, last);
+    run_scene("spray", "particle", 200, 61, last);
+    assert_true(last[4] > -0.005); /* z: on or above the plane */
+}
+
 static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(contact_scenes),
     cmocka_unit_test(blow_up_is_stopped_and_auto_plans),
     cmocka_unit_test(projectile_scene),
     cmocka_unit_test(vortex_scene),

@@ -327,7 +327,39 @@ static void lua_force_moves_bodies(void **state)
     lua_close(L);
 }
 
+
+/* Shapes and events from Lua: a ball dropped on a plane reports one begin
+   event with its impact speed; bad shapes are errors naming the problem. */
+static void shapes_and_events(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{ dt = 1/60 }\n"
+                 "plane = w:shape{ type = 'plane' }\n"
+                 "ball = w:body{ sphere = 0.1, mass = 1, pos = {0, 0, 1.1} }\n"
+                 "s = w:shape{ type = 'sphere', body = ball, radius = 0.1, restitution = 0.5 }\n"
+                 "local begun\n"
+                 "for i = 1, 40 do w:step()\n"
+                 "  for _, e in ipairs(w:events()) do\n"
+                 "    if e.type == 'begin' and not begun then begun = e end\n"
+                 "  end\n"
+                 "end\n"
+                 "assert(begun, 'no begin event')\n"
+                 "assert(math.abs(begun.speed - math.sqrt(2 * 9.81)) < 1e-3 * math.sqrt(2 * 9.81), begun.speed)\n"
+                 "assert(begun.a == plane:id() and begun.b == s:id())\n"
+                 "assert(math.abs(begun.normal[3] - 1) < 1e-12)\n"
+                 "w:contacts{ velocity_iterations = 5, particle_radius = 0.01 }\n");
+    expect_error(L, "w:shape{ type = 'box', half = {1, 0, 1} }", "half extents");
+    expect_error(L, "w:shape{ type = 'plane', normal = {0, 0, 2} }", "unit");
+    expect_error(L, "w:shape{ type = 'cone' }", "cone");
+    expect_error(L, "w:shape{ type = 'sphere', radius = 1, colour = 'red' }", "colour");
+    expect_error(L, "w:contacts{ hertz = -1 }", "hertz");
+    expect_ok(L, "s:remove(); assert(not pcall(s.remove, s))");
+    lua_close(L);
+}
+
 static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(shapes_and_events),
     cmocka_unit_test(bodies_from_lua),
     cmocka_unit_test(lua_force_moves_bodies),
     cmocka_unit_test(bad_input_from_lua_is_refused),
