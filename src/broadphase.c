@@ -12,8 +12,9 @@ typedef struct tb__sap_key {
 } tb__sap_key;
 
 /* The sweep's candidates are first tested in floats, four at a time, from
-   five arrays in sweep order (lanes): lo0, lo1, lo2, -hi1, -hi2, so that
-   every test reads x <= y (-hi1 <= -lo1' is lo1' <= hi1). Rounding to
+   five arrays in sweep order (lanes): lo0, lo1, lo2, -hi1, -hi2, with 0 the
+   sweep axis and 1, 2 the others, so that every test reads x <= y
+   (-hi1 <= -lo1' is lo1' <= hi1). Rounding to
    float is monotonic, so that test passes every pair the test in doubles
    passes, in half the bytes; the few that pass are tested again in
    doubles, which alone decide. Each array has TB__SAP_PAD NaNs past its
@@ -21,6 +22,14 @@ typedef struct tb__sap_key {
    last group of four needs no tail loop. */
 #define TB__SAP_PAD 4
 #define TB__SAP_LANES 5
+
+/* A proxy in sweep order: its box and filter, so that the exact test of the
+   hits (which lie a few places after the proxy they pair with) reads
+   memory next to memory it has just read. */
+typedef struct tb__sap_proxy {
+    double lo[3], hi[3];
+    uint32_t category, mask, group, index;
+} tb__sap_proxy;
 
 /* SSE2 where every x86-64 compiler has it; TB__SAP_SCALAR forces the
    portable loop (it gives the same pairs: the doubles decide). */
@@ -46,7 +55,7 @@ static const unsigned char tb__sap_popcount[16] = { 0, 1, 1, 2, 1, 2, 2, 3, 1, 2
    order[0, n) outlives a call, and it stays at the front, so growing the
    block by realloc keeps it. */
 typedef struct tb__sap_layout {
-    size_t keys, lanes, hits, counts, units; /* units: the block's size in uint32_t */
+    size_t keys, proxies, lanes, hits, counts, units; /* units: the block's size in uint32_t */
 } tb__sap_layout;
 
 #define TB__SAP_ROUND(x) (((x) + 15) & ~(size_t)15)
@@ -62,12 +71,13 @@ typedef struct tb__sap_layout {
 
 static int tb__sap_layout_of(size_t n, tb__sap_layout *l)
 {
-    const size_t per = sizeof(uint32_t) + sizeof(tb__sap_key) + TB__SAP_LANES * sizeof(float) +
-                       sizeof(uint32_t) + 2 * sizeof(size_t);
+    const size_t per = sizeof(uint32_t) + sizeof(tb__sap_key) + sizeof(tb__sap_proxy) +
+                       TB__SAP_LANES * sizeof(float) + sizeof(uint32_t) + 2 * sizeof(size_t);
     if (n > (SIZE_MAX / 4 - 256) / per)
         return 0;
     l->keys = TB__SAP_ROUND(n * sizeof(uint32_t));
-    l->lanes = TB__SAP_ROUND(l->keys + n * sizeof(tb__sap_key));
+    l->proxies = TB__SAP_ROUND(l->keys + n * sizeof(tb__sap_key));
+    l->lanes = TB__SAP_ROUND(l->proxies + n * sizeof(tb__sap_proxy));
     l->hits = TB__SAP_ROUND(l->lanes + TB__SAP_LANES * (n + TB__SAP_PAD) * sizeof(float));
     l->counts = TB__SAP_ROUND(l->hits + (n + 2 * TB__SAP_PAD) * sizeof(uint32_t));
     l->units = TB__SAP_ROUND(l->counts + 2 * n * sizeof(size_t)) / sizeof(uint32_t);
@@ -225,22 +235,6 @@ static void tb__sap_renumber(uint32_t *order, size_t kept, size_t n, size_t *see
             order[valid++] = i;
 }
 
-static int tb__sap_accept(const uint32_t *category, const uint32_t *mask, const uint32_t *group,
-                          uint32_t a, uint32_t b)
-{
-    if (category && mask) {
-        if (!(category[a] & mask[b]) || !(category[b] & mask[a]))
-            return 0;
-    } else if (category) {
-        if (!category[a] || !category[b])
-            return 0;
-    } else if (mask) {
-        if (!mask[a] || !mask[b])
-            return 0;
-    }
-    return !group || group[a] != group[b];
-}
-
 static int tb__pair_less(tb__pair x, tb__pair y)
 {
     return x.a < y.a || (x.a == y.a && x.b < y.b);
@@ -293,6 +287,7 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
 {
     tb__sap_layout layout;
     tb__sap_key *keys;
+    tb__sap_proxy *proxy;
     float *lane[TB__SAP_LANES];
     size_t *counts;
     uint32_t *order, *hits;
@@ -320,6 +315,7 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
         return status;
     order = sap->order;
     keys = (tb__sap_key *)(void *)((unsigned char *)order + layout.keys);
+    proxy = (tb__sap_proxy *)(void *)((unsigned char *)order + layout.proxies);
     lane[0] = (float *)(void *)((unsigned char *)order + layout.lanes);
     for (d = 1; d < TB__SAP_LANES; ++d)
         lane[d] = lane[d - 1] + n + TB__SAP_PAD;
@@ -339,18 +335,28 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
         keys[k].index = order[k];
     }
     if (axis != sap->axis || !tb__sap_insertion_sort(keys, n, TB__SAP_BUDGET(n)))
-        tb__sap_merge_sort(keys, (tb__sap_key *)(void *)lane[0], n); /* 20 bytes a proxy there */
+        tb__sap_merge_sort(keys, (tb__sap_key *)(void *)proxy, n);
 
     a1 = (axis + 1) % 3;
     a2 = (axis + 2) % 3;
     for (k = 0; k < n; ++k) {
         const size_t i = keys[k].index;
+        tb__sap_proxy *p = &proxy[k];
         order[k] = (uint32_t)i;
-        lane[0][k] = (float)lo[3 * i + axis];
-        lane[1][k] = (float)lo[3 * i + a1];
-        lane[2][k] = (float)lo[3 * i + a2];
-        lane[3][k] = -(float)hi[3 * i + a1];
-        lane[4][k] = -(float)hi[3 * i + a2];
+        for (d = 0; d < 3; ++d) {
+            p->lo[d] = lo[3 * i + d];
+            p->hi[d] = hi[3 * i + d];
+        }
+        /* no filter: every bit, a group of its own */
+        p->category = category ? category[i] : UINT32_MAX;
+        p->mask = mask ? mask[i] : UINT32_MAX;
+        p->group = group ? group[i] : (uint32_t)i;
+        p->index = (uint32_t)i;
+        lane[0][k] = (float)p->lo[axis];
+        lane[1][k] = (float)p->lo[a1];
+        lane[2][k] = (float)p->lo[a2];
+        lane[3][k] = -(float)p->hi[a1];
+        lane[4][k] = -(float)p->hi[a2];
     }
     for (d = 0; d < TB__SAP_LANES; ++d)
         for (k = n; k < n + TB__SAP_PAD; ++k)
@@ -367,8 +373,8 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
     out = *pairs;
     room = *cap;
     for (k = 0; k < n; ++k) {
-        const uint32_t i = order[k];
-        const double *plo = lo + 3 * (size_t)i, *phi = hi + 3 * (size_t)i;
+        const tb__sap_proxy p = proxy[k];
+        const double *plo = p.lo, *phi = p.hi;
         const float top = (float)phi[axis];
         size_t h = 0, j;
 #if TB__SAP_SSE
@@ -397,13 +403,13 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
         }
 #endif
         for (j = 0; j < h; ++j) {
-            const uint32_t other = order[hits[j]];
-            const uint32_t a = i < other ? i : other, b = i < other ? other : i;
-            const double *qlo = lo + 3 * (size_t)other, *qhi = hi + 3 * (size_t)other;
-            if (!(qlo[0] <= phi[0] && plo[0] <= qhi[0] && qlo[1] <= phi[1] && plo[1] <= qhi[1] &&
-                  qlo[2] <= phi[2] && plo[2] <= qhi[2]))
+            const tb__sap_proxy *q = &proxy[hits[j]];
+            const uint32_t a = p.index < q->index ? p.index : q->index;
+            const uint32_t b = p.index < q->index ? q->index : p.index;
+            if (!(q->lo[0] <= phi[0] && plo[0] <= q->hi[0] && q->lo[1] <= phi[1] && plo[1] <= q->hi[1] &&
+                  q->lo[2] <= phi[2] && plo[2] <= q->hi[2]))
                 continue;
-            if (!tb__sap_accept(category, mask, group, a, b))
+            if (!(p.category & q->mask) || !(q->category & p.mask) || p.group == q->group)
                 continue;
             if (found == room) {
                 status = tb__sap_grow_pairs(w, pairs, cap, found + 1);

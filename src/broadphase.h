@@ -8,9 +8,10 @@
    same pairs in the same order from run to run.
 
    Memory: the block behind `order` is cap uint32_t long. Its first count
-   entries are the kept order; the rest is this module's scratch (keys, the
-   boxes in sweep order, counters), so that once it has seen its largest n a
-   call allocates nothing. The pair buffer past *count is the scratch of the
+   entries are the kept order; the rest is this module's scratch (the sort
+   keys, the boxes and filters in sweep order, the sweep's hits, the pair
+   sort's counters), so that once it has seen its largest n a call
+   allocates nothing. The pair buffer past *count is the scratch of the
    pair sort, so *cap may end up to about twice *count. */
 #ifndef TB_BROADPHASE_H
 #define TB_BROADPHASE_H

@@ -375,39 +375,45 @@ static void proxies_removed_and_added(void **state)
     free(s);
 }
 
+/* Box 0 is [0, 1]^3; box 1 is beside it along axis d, below or above,
+   touching or one ulp away; two far boxes along axis e make e the sweep
+   axis, and box 1 starts before or after box 0 on it, so that each side of
+   each test in the sweep meets the touching faces. */
 static void touching_boxes_count(void **state)
 {
     fixture *f = fixture_new();
     scene *s = scene_new();
-    int d, e;
+    int d, e, below, before, apart, c;
     (void)state;
-    s->n = 2;
-    for (d = 0; d < 3; ++d) {
-        for (e = 0; e < 3; ++e) {
-            s->lo[e] = 0;
-            s->hi[e] = 1;
-            s->lo[3 + e] = 0.25;
-            s->hi[3 + e] = 0.75;
-        }
-        /* face to face along d, from either side */
-        s->lo[3 + d] = 1;
-        s->hi[3 + d] = 2;
-        check_pairs(f, s);
-        assert_int_equal(f->count, 1);
-        s->lo[3 + d] = -1;
-        s->hi[3 + d] = 0;
-        check_pairs(f, s);
-        assert_int_equal(f->count, 1);
-        /* one ulp apart */
-        s->lo[3 + d] = nextafter(1, 2);
-        s->hi[3 + d] = 2;
-        check_pairs(f, s);
-        assert_int_equal(f->count, 0);
-        s->lo[3 + d] = -1;
-        s->hi[3 + d] = nextafter(0, -1);
-        check_pairs(f, s);
-        assert_int_equal(f->count, 0);
-    }
+    s->n = 4;
+    for (d = 0; d < 3; ++d)
+        for (e = 0; e < 3; ++e)
+            for (below = 0; below < 2; ++below)
+                for (before = 0; before < 2; ++before)
+                    for (apart = 0; apart < 2; ++apart) {
+                        for (c = 0; c < 3; ++c) {
+                            s->lo[c] = 0;
+                            s->hi[c] = 1;
+                            s->lo[3 + c] = c == e && before ? -0.25 : 0.25;
+                            s->hi[3 + c] = 0.75;
+                            s->lo[6 + c] = s->lo[9 + c] = 0;
+                            s->hi[6 + c] = s->hi[9 + c] = 1;
+                        }
+                        s->lo[6 + e] = -1001;
+                        s->hi[6 + e] = -1000;
+                        s->lo[9 + e] = 1000;
+                        s->hi[9 + e] = 1001;
+                        if (below) {
+                            s->lo[3 + d] = -1;
+                            s->hi[3 + d] = apart ? nextafter(0, -1) : 0;
+                        } else {
+                            s->lo[3 + d] = apart ? nextafter(1, 2) : 1;
+                            s->hi[3 + d] = 2;
+                        }
+                        check_pairs(f, s);
+                        assert_int_equal(f->sap.axis, e);
+                        assert_int_equal(f->count, apart ? 0 : 1);
+                    }
     /* corner to corner, and points (empty boxes) on a face and on each other */
     for (e = 0; e < 3; ++e) {
         s->lo[e] = 0;
@@ -608,7 +614,7 @@ static void identical_boxes_pair_with_all(void **state)
     free(s);
 }
 
-static void infinite_boxes_are_fine(void **state)
+static void infinite_and_huge_boxes_are_fine(void **state)
 {
     const double extent[3] = { 10, 10, 10 };
     fixture *f = fixture_new();
@@ -621,6 +627,14 @@ static void infinite_boxes_are_fine(void **state)
     for (d = 0; d < 3; ++d) {
         s->lo[d] = -INFINITY;
         s->hi[d] = d == 2 ? 2 : INFINITY;
+    }
+    /* and boxes past the range of a float, which the sweep's first test
+       sees in floats */
+    for (d = 0; d < 3; ++d) {
+        s->lo[3 + d] = -1e300;
+        s->hi[3 + d] = d == 0 ? -1e299 : 1e300;
+        s->lo[6 + d] = d == 1 ? 3e38 : 1;
+        s->hi[6 + d] = d == 1 ? 1e300 : 9;
     }
     check_pairs(f, s);
     jitter(s, &r, 0.05);
@@ -712,7 +726,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(output_is_sorted),
     cmocka_unit_test(no_proxies_and_one),
     cmocka_unit_test(identical_boxes_pair_with_all),
-    cmocka_unit_test(infinite_boxes_are_fine),
+    cmocka_unit_test(infinite_and_huge_boxes_are_fine),
     cmocka_unit_test(steady_state_allocates_nothing),
     cmocka_unit_test(out_of_memory_is_reported_and_leaks_nothing),
 };
