@@ -7,12 +7,15 @@
 #
 # One PNG per scene (workprecision_SCENE.png) and an overview of all scenes
 # (workprecision.png) in `out`. Log error against log cost, one line per
-# method; runs that failed (error > 1, non-finite, or a refused step) are
-# crosses above the error-1 line, at their cost, so where a method breaks
-# down stays visible. The legend gives each method's fitted order (slope of
-# log error against log h over its stable asymptotic points, computed by the
-# benchmark). Everything is kept here, not in the C program, so the charts
-# can be restyled without running the benchmark again.
+# method: fixed-step methods over a sweep of steps (solid), the adaptive
+# dopri5 and auto over a sweep of the tolerance at one outer step (dashed,
+# open markers, "tol sweep" in the legend); runs that failed (error > 1,
+# non-finite, or a refused step) are crosses above the error-1 line, at
+# their cost, so where a method breaks down stays visible. The legend gives
+# each fixed-step method's fitted order (slope of log error against log h
+# over its stable asymptotic points, computed by the benchmark). Everything
+# is kept here, not in the C program, so the charts can be restyled without
+# running the benchmark again.
 
 if (!exists("data")) data = 'bench/out'
 if (!exists("out")) out = 'docs/charts'
@@ -21,17 +24,27 @@ load data.'/workprecision_meta.gp'
 ok = system(sprintf("mkdir -p '%s'", out))
 
 # One colour and point shape per method on every chart (colour-blind safe
-# Okabe-Ito hues; ODE in black).
-all_methods = 'euler symplectic_euler verlet rk4 verlet_exact ode'
+# Okabe-Ito hues, then two of Paul Tol's for the adaptive methods, since
+# Okabe-Ito's remaining yellow would not show on white; ODE in black).
+# Adaptive methods: dashed lines and open markers, so they read as another
+# kind of curve (a tolerance sweep, not a step sweep); the overview's gd
+# terminal draws no dashes, so there the colours and markers carry it.
+# Shapes stay within 1-13, which both terminals have (gd repeats beyond).
+all_methods = 'euler symplectic_euler verlet rk4 verlet_exact implicit_euler dopri5 auto ode'
 colour(m) = m eq 'euler' ? '#D55E00' : m eq 'symplectic_euler' ? '#E69F00' : m eq 'verlet' ? '#0072B2' : \
-            m eq 'rk4' ? '#009E73' : m eq 'verlet_exact' ? '#CC79A7' : '#000000'
+            m eq 'rk4' ? '#009E73' : m eq 'verlet_exact' ? '#CC79A7' : m eq 'implicit_euler' ? '#56B4E9' : \
+            m eq 'dopri5' ? '#999933' : m eq 'auto' ? '#882255' : '#000000'
 shape(m) = m eq 'euler' ? 7 : m eq 'symplectic_euler' ? 5 : m eq 'verlet' ? 9 : \
-           m eq 'rk4' ? 13 : m eq 'verlet_exact' ? 11 : 4
-name(m) = m eq 'ode' ? 'ODE dWorldStep' : m
+           m eq 'rk4' ? 13 : m eq 'verlet_exact' ? 11 : m eq 'implicit_euler' ? 12 : \
+           m eq 'dopri5' ? 8 : m eq 'auto' ? 6 : 4
+adaptive(m) = m eq 'dopri5' || m eq 'auto'
+dash(m) = adaptive(m) ? 2 : 1
+name(m) = m eq 'ode' ? 'ODE dWorldStep' : adaptive(m) ? m.' (tol sweep)' : m
 # Failed runs are drawn above every stable error (<= 1), one row per
 # method so that crosses at the same cost do not hide each other.
-failed_y(m) = 2.5 * 1.5 ** (m eq 'euler' ? 0 : m eq 'symplectic_euler' ? 1 : m eq 'verlet' ? 2 : \
-                             m eq 'rk4' ? 3 : m eq 'verlet_exact' ? 4 : 5)
+failed_y(m) = 2.5 * 1.3 ** (m eq 'euler' ? 0 : m eq 'symplectic_euler' ? 1 : m eq 'verlet' ? 2 : \
+                             m eq 'rk4' ? 3 : m eq 'verlet_exact' ? 4 : m eq 'implicit_euler' ? 5 : \
+                             m eq 'dopri5' ? 6 : m eq 'auto' ? 7 : 8)
 
 set datafile separator comma
 set logscale xy
@@ -61,7 +74,7 @@ do for [s in scenes] {
     set title value('title_'.s) noenhanced
     set ylabel value('ylabel_'.s) noenhanced
     plot for [m in value('methods_'.s)] csv skip 1 using (stable_cost(s, m)):4 with linespoints \
-             lc rgb colour(m) pt shape(m) ps 1.1 lw 2 title value('key_'.s.'_'.m) noenhanced, \
+             lc rgb colour(m) dt dash(m) pt shape(m) ps 1.1 lw 2 title value('key_'.s.'_'.m) noenhanced, \
          for [m in value('methods_'.s)] csv skip 1 using (failed_cost(s, m)):(failed_y(m)) with points \
              lc rgb colour(m) pt 2 ps 1.4 lw 2 notitle, \
          NaN with points lc rgb '#444444' pt 2 ps 1.4 lw 2 title 'failed: error > 1, non-finite or refused'
@@ -92,7 +105,7 @@ do for [s in scenes] {
     set size panel_w, panel_h
     set title value('short_'.s) noenhanced
     plot for [m in value('methods_'.s)] csv skip 1 using (stable_cost(s, m)):4 with linespoints \
-             lc rgb colour(m) pt shape(m) ps 0.8 lw 1.5, \
+             lc rgb colour(m) dt dash(m) pt shape(m) ps 0.8 lw 1.5, \
          for [m in value('methods_'.s)] csv skip 1 using (failed_cost(s, m)):(failed_y(m)) with points \
              lc rgb colour(m) pt 2 ps 1.0 lw 1.5
     i = i + 1
@@ -112,7 +125,7 @@ unset logscale
 set xrange [0:1]
 set yrange [0:1]
 set key center center horizontal samplen 2 spacing 1 width 1 maxrows 1 nobox
-plot for [m in all_methods] 2 with linespoints lc rgb colour(m) pt shape(m) ps 1 lw 2 title name(m) noenhanced, \
+plot for [m in all_methods] 2 with linespoints lc rgb colour(m) dt dash(m) pt shape(m) ps 1 lw 2 title name(m) noenhanced, \
      2 with points lc rgb '#444444' pt 2 ps 1.2 lw 2 title 'failed run'
 unset multiplot
 unset output

@@ -22,7 +22,8 @@
    per substep, in force evaluations (Verlet's two kicks share one). */
 typedef struct candidate {
     const char *name;
-    double cost;
+    double cost;           /* per substep in a world of particles */
+    double body_cost;      /* ... and of bodies (measured, rk4 = 4) */
     int order;             /* on oscillations and decays */
     double c_oscillation;  /* local error (w s)^(p+1) times this */
     double c_decay;        /* local error (k s)^(p+1) times this */
@@ -39,10 +40,10 @@ typedef struct candidate {
    with a small constant (1.5e-7 (W s)^5 measured on the flip; 1e-6 kept).
    dopri5's controller keeps |y5 - y4| ~ (r s)^5 / 600 below the tolerance. */
 static const candidate candidates[] = {
-    { "verlet", 1.0, 2, 1.0 / 6, 1.0 / 6, 2, 1.0 / 12, 0 },
-    { "verlet_exact", 1.3, 2, 1.0 / 6, 1.0 / 6, 4, 1e-6, 0 },
-    { "rk4", 4.0, 4, 1.0 / 120, 1.0 / 120, 4, 1.0 / 120, 4 },
-    { "dopri5", 7.0, 4, 1.0 / 600, 1.0 / 600, 4, 1.0 / 600, 4 },
+    { "verlet", 1.6, 2.9, 2, 1.0 / 6, 1.0 / 6, 2, 1.0 / 12, 0 },
+    { "verlet_exact", 1.6, 8.5, 2, 1.0 / 6, 1.0 / 6, 4, 1e-6, 0 },
+    { "rk4", 4.0, 4.0, 4, 1.0 / 120, 1.0 / 120, 4, 1.0 / 120, 4 },
+    { "dopri5", 9.0, 17.0, 4, 1.0 / 600, 1.0 / 600, 4, 1.0 / 600, 4 },
 };
 #define CANDIDATES ((int)(sizeof candidates / sizeof candidates[0]))
 
@@ -51,7 +52,9 @@ typedef struct rates {
     double oscillation;    /* rad/s: springs, vortex fields */
     double decay;          /* 1/s: drag, spring and body damping */
     double spin;           /* rad/s: anisotropic bodies */
-    double iso_spin;       /* rad/s: isotropic bodies (only RK-type methods err) */
+    double iso_spin;       /* rad/s: isotropic bodies and symmetric tops, which
+                              the split methods turn exactly (only RK-type
+                              methods err) */
     int unknown;           /* callbacks: rates the plan cannot see */
 } rates;
 
@@ -71,6 +74,11 @@ static tb_status scene_rates(tb_world *w, rates *r)
             return st;
     }
     r->decay = tb__fastest_decay(w);
+    /* quadratic drag at rest has no rate yet; it reaches its largest near
+       terminal speed, sqrt(m g / c2), where d(c2 |v| v)/dv / m = 2 sqrt(g c2 / m) */
+    if (w->quadratic_drag > 0)
+        for (i = 0; i < w->particle_count; ++i)
+            r->decay = fmax(r->decay, 2 * sqrt(norm3(w->gravity) * w->quadratic_drag * w->inv_mass[i]));
     for (i = 0; i < w->spring_count; ++i) {
         const double ma = w->inv_mass[w->spring_a[i]];
         const double mb = w->spring_b[i] == TB__ANCHOR ? 0 : w->inv_mass[w->spring_b[i]];
@@ -79,7 +87,7 @@ static tb_status scene_rates(tb_world *w, rates *r)
     for (i = 0; i < w->body_count; ++i) {
         const double *inv = w->body_inv_inertia + 3 * i;
         const double spin = fmax(inv[0], fmax(inv[1], inv[2])) * norm3(w->y + w->off[TB__BODY_ANG] + 3 * i);
-        if (inv[0] == inv[1] && inv[1] == inv[2])
+        if (inv[0] == inv[1] || inv[1] == inv[2] || inv[0] == inv[2])
             r->iso_spin = fmax(r->iso_spin, spin);
         else
             r->spin = fmax(r->spin, spin);
@@ -137,7 +145,7 @@ tb_status tb__auto_plan(tb_world *w, double h)
                 n = fmax(n, rate * h / pow(w->tolerance / c->c_oscillation, 1.0 / (c->order + 1)));
         }
         n = ceil(n * (1 - 1e-12));
-        cost = n * c->cost;
+        cost = n * (w->body_count > w->particle_count ? c->body_cost : c->cost);
         if (cost < best_cost) {
             best_cost = cost;
             best = i;
