@@ -54,6 +54,7 @@ bench)
     ./build/default/bench/bench_particles
     ./build/default/bench/bench_bodies
     ./build/default/bench/bench_rotation
+    ./build/default/bench/bench_contacts
     ;;
 charts)
     install_missing

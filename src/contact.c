@@ -508,8 +508,9 @@ static void anchor(const tb__contacts *c, int32_t i, const double local[3], cons
         memcpy(out, local, 3 * sizeof(double));
     } else {
         const tb__solver_body *b = &c->bodies[i];
-        double turn[3];
-        cross(b->dtheta, r, turn);
+        double turn[3], angle[3];
+        angle[0] = b->turn[0] + b->dtheta[0], angle[1] = b->turn[1] + b->dtheta[1], angle[2] = b->turn[2] + b->dtheta[2];
+        cross(angle, r, turn);
         (void)local;
         out[0] = b->x0[0] + r[0] + b->dp[0] + turn[0];
         out[1] = b->x0[1] + r[1] + b->dp[1] + turn[1];
@@ -543,6 +544,14 @@ static void load_bodies(tb_world *w, tb__contacts *c)
             memcpy(b->P, w->y + w->off[TB__BODY_MOM] + 3 * b->slot, sizeof b->P);
             memcpy(b->L, w->y + w->off[TB__BODY_ANG] + 3 * b->slot, sizeof b->L);
             matrix_of(body_q(w, b->slot), b->R);
+            {   /* the free motion's turn, q q0^-1 = (cos, sin n) -> 2 sin n */
+                const double *q = body_q(w, b->slot);
+                const double q0c[4] = { b->q0[0], -b->q0[1], -b->q0[2], -b->q0[3] };
+                double dq[4];
+                quat_mul(q, q0c, dq);
+                for (k = 0; k < 3; ++k)
+                    b->turn[k] = (dq[0] < 0 ? -2 : 2) * dq[k + 1];
+            }
             for (k = 0; k < 3; ++k) { /* R diag(inv) R^T */
                 D[3 * k + 0] = b->R[3 * k + 0] * inv[0];
                 D[3 * k + 1] = b->R[3 * k + 1] * inv[1];
@@ -558,6 +567,7 @@ static void load_bodies(tb_world *w, tb__contacts *c)
             mul(b->inv_world, b->L, b->w);
         } else {
             const double *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * b->slot;
+            memset(b->turn, 0, sizeof b->turn);
             for (k = 0; k < 3; ++k) {
                 b->v[k] = v[k];
                 b->P[k] = v[k] / b->inv_mass;
@@ -610,11 +620,20 @@ static void set_up_points(tb_world *w, tb__contacts *c, double h)
                     const tb__solver_body *b = &c->bodies[bi];
                     const double *x = b->tier == TB__BODIES ? body_x(w, b->slot)
                                                             : w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot;
-                    if (b->tier == TB__BODIES)
-                        mul(b->R, local, r);
-                    else
+                    double R0[9], turn[3] = { 0, 0, 0 };
+                    if (b->tier == TB__BODIES) {
+                        /* the arm keeps its start-of-step direction: a rolling
+                           ball's contact stays under its centre, not on the
+                           material point carried round (whose arm would make
+                           the normal force spin it up); the free motion's turn
+                           moves the anchor to first order only */
+                        matrix_of(b->q0, R0);
+                        mul(R0, local, r);
+                        cross(b->turn, r, turn);
+                    } else {
                         memset(r, 0, 3 * sizeof(double));
-                    at[0] = x[0] + r[0], at[1] = x[1] + r[1], at[2] = x[2] + r[2];
+                    }
+                    at[0] = x[0] + r[0] + turn[0], at[1] = x[1] + r[1] + turn[1], at[2] = x[2] + r[2] + turn[2];
                 }
             }
             /* where the contact point was at the start is where both

@@ -72,6 +72,7 @@ typedef struct tb__solver_body {
     double inv_world[9];       /* R diag(inv_inertia) R^T */
     double v[3], w[3];         /* velocities during the velocity pass */
     double P[3], L[3];         /* their momenta, changed only by impulses */
+    double turn[3];            /* the free motion's rotation over the step (vector) */
     double dp[3], dtheta[3];   /* position and rotation corrections */
 } tb__solver_body;
 

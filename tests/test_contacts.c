@@ -358,7 +358,35 @@ static void bad_shapes_are_refused(void **state)
     tb_world_destroy(w);
 }
 
+
+/* A solid ball launched sliding at 1 m/s without spin: friction turns
+   sliding into rolling at v = 5/7 v0, w = v / r, after which nothing
+   changes: no speed-up, no sinking (a contact arm that followed the
+   rolling material would feed the spin). */
+static void sliding_ball_starts_rolling_at_five_sevenths(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double start[3] = { 0, 0, 0.25 }, v0[3] = { 1, 0, 0 };
+    tb_body_id id = add_ball(w, start, 0.25, 0);
+    double x[3], v[3], om[3];
+    int i;
+    (void)state;
+    assert_int_equal(tb_body_set_velocity(w, id, v0), TB_OK);
+    for (i = 0; i < 600; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_position(w, id, x);
+    tb_body_velocity(w, id, v);
+    tb_body_angular_velocity(w, id, om);
+    print_message("rolling ball after 10 s: v %.9f (5/7 = %.9f), w r %.9f, lowest point %.2e m\n", v[0], 5.0 / 7,
+                  om[1] * 0.25, x[2] - 0.25);
+    assert_rel(v[0], 5.0 / 7, 1e-6);
+    assert_rel(om[1] * 0.25, 5.0 / 7, 1e-6);
+    assert_below(fabs(x[2] - 0.25), 1e-9);
+    tb_world_destroy(w);
+}
+
 static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(sliding_ball_starts_rolling_at_five_sevenths),
     cmocka_unit_test(ball_bounces_to_e_squared),
     cmocka_unit_test(box_slides_to_v2_over_2_mu_g),
     cmocka_unit_test(box_rests_without_drift),

@@ -1,0 +1,290 @@
+/* contacts.c: contact throughput and stacking, tumble beside ODE on the
+   reference scenes of tests/ode_contacts.h (built there for ODE, here for
+   tumble from the same layouts).
+
+   - pyramid: 210 unit cubes of 1 kg in 20 levels, 1 cm apart in a level, on
+     a static plane, mu 0.6 on every shape (a pair uses sqrt(mu_a mu_b), so
+     0.6 as in ODE), tumble's default contact settings and integrator, 60 Hz,
+     10 s. Wall time of each tb_world_step (the whole step: broadphase,
+     narrowphase, integrator, velocity and position passes, events), median
+     over the steps, beside ODE's dSpaceCollide + dWorldQuickStep(20) +
+     emptying the contact group, timed the same way inside ode_pyramid().
+     Then the top cube's sink (z drop) and drift (horizontal) after 10 s.
+     Targets: ODE/tumble >= 5 and the top cube within 1 cm of where it
+     started (the length of its whole displacement).
+   - pile: ode_pile_scene()'s 1000 spheres, boxes and capsules, each with
+     ODE's mass, principal inertia and orientation, dropped from a grid;
+     the same number of steps as ODE. The pile's cost changes as it falls
+     and settles, so the mean over the steps is the figure (median beside
+     it); contacts are tumble's touching points (tb_world_contact_count)
+     against ODE's contact joints, means over the steps. Then how many of
+     tumble's centres end below the plane: none should, and a count there
+     means the timing is of a broken run.
+   - ns per contact point per velocity iteration, from the pyramid: the
+     median step over (mean touching points x velocity iterations). This
+     charges the whole step to the solver's sweeps, so it is an upper bound
+     on the sweep alone; the sweep's own cost is read from a second tumble
+     pyramid at twice the iterations (the difference of the two medians
+     over the difference in point-iterations), which needs no hook in the
+     library. The solver sweeps 4 times as often in a step where many
+     points start cold (the pyramid's first); the median leaves such rare
+     steps out.
+
+   The machine may be shared: runs alternate tumble and ODE, BENCH_RUNS
+   times each, and the figures are medians over those runs, so that a
+   burst of load elsewhere does not land on one engine only. The scenes are
+   deterministic (ODE's runs reset its random seed), so the runs differ in
+   time only. */
+#define _POSIX_C_SOURCE 200809L
+#define BENCH_NAME "bench_contacts"
+
+#include "bench.h"
+#include "ode_contacts.h"
+#include "tumble.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define BENCH_RUNS 3
+
+/* Box2D v3's published figure, for scale only: 2D, single precision, its
+   soft step solver with substeps rather than iterations. */
+#define BOX2D_NS_PER_CONTACT 23
+
+typedef struct timing {
+    double ms_median;     /* ms per step */
+    double ms_mean;
+    double contacts_mean; /* touching points after a step */
+} timing;
+
+static tb_world *new_world(double gravity, const char *what)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_world *w;
+    char message[TB_MESSAGE_SIZE];
+    def.gravity[0] = def.gravity[1] = 0;
+    def.gravity[2] = -gravity;
+    if (tb_world_create(&def, &w, message, sizeof message) != TB_OK) {
+        fprintf(stderr, BENCH_NAME ": %s world: %s\n", what, message);
+        exit(EXIT_FAILURE);
+    }
+    return w;
+}
+
+static void add_plane(tb_world *w, double friction)
+{
+    tb_shape_def plane = tb_default_shape_def();
+    plane.type = TB_SHAPE_PLANE;
+    plane.friction = friction;
+    check(tb_world_add_shape(w, &plane, NULL), w, "plane");
+}
+
+/* Steps w `steps` times at h, timing each step alone. */
+static void run_timed(tb_world *w, double h, int steps, timing *t)
+{
+    double *ms = xmalloc((size_t)steps * sizeof *ms), sum = 0, contacts = 0;
+    int n;
+    for (n = 0; n < steps; ++n) {
+        const double t0 = seconds();
+        check(tb_world_step(w, h), w, "step");
+        ms[n] = 1e3 * (seconds() - t0);
+        sum += ms[n];
+        contacts += (double)tb_world_contact_count(w);
+    }
+    t->ms_mean = sum / steps;
+    t->contacts_mean = contacts / steps;
+    t->ms_median = median_of(ms, steps);
+    free(ms);
+}
+
+/* ------------------------------------------------------------- pyramid -- */
+
+typedef struct pyramid_run {
+    timing t;
+    double sink, drift; /* m, top cube */
+} pyramid_run;
+
+static void tumble_pyramid(const ode_pyramid_def *d, int velocity_iterations, pyramid_run *out)
+{
+    const int count = ode_pyramid_boxes(d->levels);
+    const int steps = (int)ceil(d->duration * d->hz);
+    double(*pos)[3] = xmalloc((size_t)count * sizeof *pos);
+    tb_world *w = new_world(d->gravity, "pyramid");
+    tb_contact_settings cs = tb_default_contact_settings();
+    tb_body_def b = tb_default_body_def();
+    tb_shape_def s = tb_default_shape_def();
+    const double size[3] = { d->edge, d->edge, d->edge };
+    tb_body_id top = { 0, 0 };
+    double x[3];
+    int i;
+
+    if (ode_pyramid_positions(d, pos) != count) {
+        fprintf(stderr, BENCH_NAME ": pyramid refused\n");
+        exit(EXIT_FAILURE);
+    }
+    cs.velocity_iterations = velocity_iterations;
+    check(tb_world_set_contact_settings(w, &cs), w, "contact settings");
+    add_plane(w, d->mu);
+    check(tb_mass_box(d->mass / (d->edge * d->edge * d->edge), size, &b.mass, NULL), NULL, "box mass");
+    s.type = TB_SHAPE_BOX;
+    s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = d->edge / 2;
+    s.friction = d->mu;
+    for (i = 0; i < count; ++i) { /* ODE's order: the top cube is the last */
+        memcpy(b.position, pos[i], sizeof b.position);
+        check(tb_world_add_body(w, &b, &top), w, "cube");
+        s.body = top;
+        check(tb_world_add_shape(w, &s, NULL), w, "cube shape");
+    }
+    run_timed(w, 1 / d->hz, steps, &out->t);
+    check(tb_body_position(w, top, x), w, "top cube");
+    out->sink = pos[count - 1][2] - x[2];
+    out->drift = hypot(x[0] - pos[count - 1][0], x[1] - pos[count - 1][1]);
+    tb_world_destroy(w);
+    free(pos);
+}
+
+/* ---------------------------------------------------------------- pile -- */
+
+/* Returns how many centres are below the plane at the end: none should
+   be (the smallest shape reaches 0.1 m from its centre), so any count
+   says the run is not one to time. */
+static int tumble_pile(const ode_pile_def *d, const ode_shape *shapes, timing *t)
+{
+    tb_world *w = new_world(d->gravity, "pile");
+    const double *x;
+    int i, below = 0;
+    add_plane(w, d->mu);
+    for (i = 0; i < d->count; ++i) {
+        const ode_shape *o = &shapes[i];
+        tb_body_def b = tb_default_body_def();
+        tb_shape_def s = tb_default_shape_def();
+        tb_body_id id;
+        /* ODE's numbers, not tumble's own tb_mass_*: the same bodies to the
+           last bit. The principal frame is the shape's, so the shape sits at
+           the body's origin with no turn of its own. */
+        b.mass.mass = o->mass;
+        memcpy(b.mass.inertia, o->inertia, sizeof b.mass.inertia);
+        b.mass.centre[0] = b.mass.centre[1] = b.mass.centre[2] = 0;
+        b.mass.frame[0] = 1, b.mass.frame[1] = b.mass.frame[2] = b.mass.frame[3] = 0;
+        memcpy(b.position, o->position, sizeof b.position);
+        memcpy(b.orientation, o->orientation, sizeof b.orientation);
+        check(tb_world_add_body(w, &b, &id), w, "pile body");
+        s.body = id;
+        s.friction = d->mu;
+        switch (o->kind) {
+        case ODE_SHAPE_SPHERE:
+            s.type = TB_SHAPE_SPHERE;
+            s.radius = o->radius;
+            break;
+        case ODE_SHAPE_BOX:
+            s.type = TB_SHAPE_BOX;
+            memcpy(s.half_extents, o->half, sizeof s.half_extents);
+            break;
+        case ODE_SHAPE_CAPSULE: /* both along z; half[2] is half the core */
+            s.type = TB_SHAPE_CAPSULE;
+            s.radius = o->radius;
+            s.half_length = o->half[2];
+            break;
+        }
+        check(tb_world_add_shape(w, &s, NULL), w, "pile shape");
+    }
+    run_timed(w, 1 / d->hz, d->steps, t);
+    x = tb_world_body_positions(w);
+    for (i = 0; i < d->count; ++i)
+        below += x[3 * i + 2] < 0;
+    tb_world_destroy(w);
+    return below;
+}
+
+/* ---------------------------------------------------------------- main -- */
+
+static const char *met(int ok)
+{
+    return ok ? "met" : "NOT met";
+}
+
+int main(void)
+{
+    const ode_pyramid_def pd = ode_default_pyramid_def();
+    const ode_pile_def ld = ode_default_pile_def();
+    const int iterations = tb_default_contact_settings().velocity_iterations;
+    ode_shape *shapes = xmalloc((size_t)ld.count * sizeof *shapes);
+    /* per run: tumble, tumble at twice the iterations, ODE; medians of steps
+       for the pyramid, means for the pile */
+    double pyr_ms[BENCH_RUNS], pyr2_ms[BENCH_RUNS], pyr_ode_ms[BENCH_RUNS];
+    double pile_ms[BENCH_RUNS], pile_median_ms[BENCH_RUNS], pile_ode_ms[BENCH_RUNS], pile_ode_median_ms[BENCH_RUNS];
+    pyramid_run pyr, pyr2;
+    ode_pyramid_result pyr_ode;
+    timing pile;
+    ode_pile_result pile_ode;
+    double t_ms, t2_ms, o_ms, ratio, move;
+    int r, below = 0;
+
+    printf("tumble contacts beside ODE %s (double): medians over %d alternating runs of each scene\n", TB_BENCH_ODE,
+           BENCH_RUNS);
+    bench_print_build();
+    bench_print_asserts();
+    printf("\n");
+    fflush(stdout);
+
+    /* The scenes are deterministic: sink, drift and contact counts are the
+       same in every run, so the last run's are printed. */
+    for (r = 0; r < BENCH_RUNS; ++r) {
+        tumble_pyramid(&pd, iterations, &pyr);
+        if (!ode_pyramid(&pd, &pyr_ode)) {
+            fprintf(stderr, BENCH_NAME ": ODE pyramid refused or failed\n");
+            return EXIT_FAILURE;
+        }
+        tumble_pyramid(&pd, 2 * iterations, &pyr2);
+        pyr_ms[r] = pyr.t.ms_median;
+        pyr2_ms[r] = pyr2.t.ms_median;
+        pyr_ode_ms[r] = pyr_ode.timing.ms_median;
+    }
+    t_ms = median_of(pyr_ms, BENCH_RUNS);
+    t2_ms = median_of(pyr2_ms, BENCH_RUNS);
+    o_ms = median_of(pyr_ode_ms, BENCH_RUNS);
+    ratio = o_ms / t_ms;
+    move = hypot(pyr.sink, pyr.drift);
+    printf("pyramid   %d boxes  tumble %5.2f ms/step (median of steps over %g s)  top box sink %.3f m drift %.3f m | "
+           "ODE QuickStep(%d) %.2f ms/step sink %.3f m drift %.3f m | ODE/tumble %.1f (target >= 5): %s  "
+           "top box within 1 cm (moved %.3f m): %s\n",
+           ode_pyramid_boxes(pd.levels), t_ms, pd.duration, pyr.sink, pyr.drift, pd.iterations, o_ms,
+           pyr_ode.top_sink, pyr_ode.top_drift, ratio, met(ratio >= 5), move, met(move <= 0.01));
+    fflush(stdout);
+
+    if (ode_pile_scene(&ld, shapes) != ld.count) {
+        fprintf(stderr, BENCH_NAME ": pile scene refused\n");
+        return EXIT_FAILURE;
+    }
+    for (r = 0; r < BENCH_RUNS; ++r) {
+        below = tumble_pile(&ld, shapes, &pile);
+        if (!ode_pile(&ld, &pile_ode)) {
+            fprintf(stderr, BENCH_NAME ": ODE pile refused or failed\n");
+            return EXIT_FAILURE;
+        }
+        pile_ms[r] = pile.ms_mean;
+        pile_median_ms[r] = pile.ms_median;
+        pile_ode_ms[r] = pile_ode.timing.ms_mean;
+        pile_ode_median_ms[r] = pile_ode.timing.ms_median;
+    }
+    t_ms = median_of(pile_ms, BENCH_RUNS);
+    o_ms = median_of(pile_ode_ms, BENCH_RUNS);
+    printf("pile      %d shapes tumble %.2f ms/step (mean of %d steps; median %.2f), contacts per step %.0f, "
+           "centres below the plane at the end %d%s | ODE %.2f ms/step (median %.2f), contacts %.0f | ODE/tumble %.1f\n",
+           ld.count, t_ms, ld.steps, median_of(pile_median_ms, BENCH_RUNS), pile.contacts_mean, below,
+           below ? " (sank through the plane)" : "", o_ms, median_of(pile_ode_median_ms, BENCH_RUNS),
+           pile_ode.timing.contacts_mean, o_ms / t_ms);
+
+    /* t = fixed + k points iterations, at two iteration counts */
+    t_ms = median_of(pyr_ms, BENCH_RUNS);
+    printf("contacts  ns per contact point per velocity iteration: %.1f for the whole step (pyramid, %.0f points x %d "
+           "iterations; collision, integration, both passes, events), %.1f for the velocity sweep alone (from a rerun "
+           "at %d iterations: %.2f ms/step) (Box2D v3 publishes about %d ns per contact per substep, 2D float)\n",
+           1e6 * t_ms / (pyr.t.contacts_mean * iterations), pyr.t.contacts_mean, iterations,
+           1e6 * (t2_ms - t_ms) / (pyr2.t.contacts_mean * 2 * iterations - pyr.t.contacts_mean * iterations),
+           2 * iterations, t2_ms, BOX2D_NS_PER_CONTACT);
+    free(shapes);
+    return 0;
+}
