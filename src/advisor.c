@@ -158,12 +158,12 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
         if (limit > best_limit && !m->adaptive && !(m->split && w->tracer_count))
             best_limit = limit, best = m;
     }
-    if (w->method->adaptive && strcmp(w->method->name, "auto") == 0) {
-        if ((st = tb__auto_plan(w, h)) != TB_OK)
+    if (w->method->plan) {
+        if ((st = w->method->plan(w, h)) != TB_OK)
             return st;
         snprintf(advice->text, sizeof advice->text,
-                 "auto picks %s with %ld substep%s of %.4g s for tolerance %g (stiffest mode %.4g rad/s, "
-                 "decay %.4g 1/s, spin %.4g rad/s)", w->auto_method->name, w->auto_substeps,
+                 "%s picks %s with %ld substep%s of %.4g s for tolerance %g (stiffest mode %.4g rad/s, "
+                 "decay %.4g 1/s, spin %.4g rad/s)", w->method->name, w->auto_method->name, w->auto_substeps,
                  w->auto_substeps == 1 ? "" : "s", h / (double)w->auto_substeps, w->tolerance, advice->stiffest,
                  advice->decay, advice->fastest_spin);
     } else if (w->method->adaptive) {

@@ -14,6 +14,7 @@
    to "dopri5", which measures its own error. The plan is made when the step,
    the tolerance or the set of objects changes. */
 #include "world.h"
+#include "body_math.h"
 
 #include <math.h>
 #include <string.h>
@@ -57,11 +58,6 @@ typedef struct rates {
                               methods err) */
     int unknown;           /* callbacks: rates the plan cannot see */
 } rates;
-
-static double norm3(const double *v)
-{
-    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-}
 
 static tb_status scene_rates(tb_world *w, rates *r)
 {
@@ -155,6 +151,5 @@ tb_status tb__auto_plan(tb_world *w, double h)
     if (best < 0)
         return tb__fail(w, TB_ERR_ARGUMENT, "auto: no method can step this world");
     w->auto_method = tb__method_find(candidates[best].name);
-    w->auto_estimate = best_cost;
     return TB_OK;
 }

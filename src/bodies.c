@@ -425,10 +425,10 @@ tb_body_id tb_world_body_at(const tb_world *w, size_t slot)
 
 /* ---- diagnostics ----------------------------------------------------------------- */
 
-void tb__body_energy(const tb_world *w, tb_energy *e)
+void tb__body_energy(const tb_world *w, const double *y, tb_energy *e)
 {
-    const double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
-    const double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
+    const double *x = y + w->off[TB__BODY_POS], *q = y + w->off[TB__BODY_ROT];
+    const double *P = y + w->off[TB__BODY_MOM], *L = y + w->off[TB__BODY_ANG];
     const double *g = w->gravity;
     size_t s;
     for (s = 0; s < w->body_count; ++s) {

@@ -1,5 +1,6 @@
-/* body_math.h: small quaternion and matrix helpers shared by the body
-   tier's two files (bodies.c, body_step.c). q = (w, x, y, z). Internal. */
+/* body_math.h: small vector, quaternion and matrix helpers shared by the
+   body tier (bodies.c, body_step.c) and what moves bodies around it
+   (contact.c, auto.c). q = (w, x, y, z). Internal. */
 #ifndef TB_BODY_MATH_H
 #define TB_BODY_MATH_H
 
@@ -102,6 +103,16 @@ static inline void through_inertia(const double q[4], const double scale[3], con
     mul_transposed(R, v, b);
     b[0] *= scale[0], b[1] *= scale[1], b[2] *= scale[2];
     mul(R, b, out);
+}
+
+static inline double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static inline double norm3(const double a[3])
+{
+    return sqrt(dot3(a, a));
 }
 
 static inline void cross(const double a[3], const double b[3], double out[3])

@@ -8,15 +8,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static double dot(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static double norm(const double a[3])
-{
-    return sqrt(dot(a, a));
-}
 
 /* ---- placing shapes ------------------------------------------------------- */
 
@@ -126,18 +117,6 @@ static tb_status solver_body(tb_world *w, tb__contacts *c, enum tb__tier tier, u
     return TB_OK;
 }
 
-/* Velocity of the point at r from the body's centre (0 for static). */
-static void point_velocity(const tb__contacts *c, int32_t i, const double r[3], double v[3])
-{
-    if (i < 0) {
-        v[0] = v[1] = v[2] = 0;
-    } else {
-        const tb__solver_body *b = &c->bodies[i];
-        cross(b->w, r, v);
-        v[0] += b->v[0], v[1] += b->v[1], v[2] += b->v[2];
-    }
-}
-
 /* The body's velocities at the start of the step (before the solve has
    filled v and w): read from the state. */
 static void start_velocity(const tb_world *w, const tb__contacts *c, int32_t i, const double r[3], double v[3])
@@ -187,7 +166,7 @@ static void tangents(const double n[3], double t1[3], double t2[3])
     double a[3] = { 0, 0, 0 }, len;
     a[ax <= ay && ax <= az ? 0 : ay <= az ? 1 : 2] = 1;
     cross(n, a, t1);
-    len = norm(t1);
+    len = norm3(t1);
     t1[0] /= len, t1[1] /= len, t1[2] /= len;
     cross(n, t1, t2);
 }
@@ -250,38 +229,22 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
         tb__point *p = &e->point[k];
         const double *at = m->point[k].pos;
         double va[3], vb[3];
-        int j, side_k;
+        int j;
         p->feature = m->point[k].feature;
         p->separation = -m->point[k].depth;
-        for (side_k = 0; side_k < 2; ++side_k) {
-            const int32_t i = side_k ? e->body_b : e->body_a;
-            double *local = side_k ? p->local_b : p->local_a;
-            if (i < 0) {
-                memcpy(local, at, 3 * sizeof(double));
-            } else {
-                const tb__solver_body *sb = &c->bodies[i];
-                double r[3], R[9];
-                for (j = 0; j < 3; ++j)
-                    r[j] = at[j] - sb->x0[j];
-                matrix_of(sb->q0, R);
-                mul_transposed(R, r, local);
-            }
+        memcpy(p->point, at, sizeof p->point);
+        for (j = 0; j < 3; ++j) {
+            p->ra[j] = e->body_a >= 0 ? at[j] - c->bodies[e->body_a].x0[j] : 0;
+            p->rb[j] = e->body_b >= 0 ? at[j] - c->bodies[e->body_b].x0[j] : 0;
         }
-        {
-            double ra[3], rb[3];
-            for (j = 0; j < 3; ++j) {
-                ra[j] = e->body_a >= 0 ? at[j] - c->bodies[e->body_a].x0[j] : 0;
-                rb[j] = e->body_b >= 0 ? at[j] - c->bodies[e->body_b].x0[j] : 0;
-            }
-            start_velocity(w, c, e->body_a, ra, va);
-            start_velocity(w, c, e->body_b, rb, vb);
-            for (j = 0; j < 3; ++j)
-                vb[j] -= va[j];
-            p->approach = dot(vb, e->normal);
-        }
+        start_velocity(w, c, e->body_a, p->ra, va);
+        start_velocity(w, c, e->body_b, p->rb, vb);
+        for (j = 0; j < 3; ++j)
+            vb[j] -= va[j];
+        p->approach = dot3(vb, e->normal);
         /* warm start from last step's point: the same pair of features, or
            failing that (a clipped polygon may renumber its corners) the
-           nearest point on body a within the slop */
+           nearest point within the slop */
         if (old) {
             int best = -1;
             double nearest = c->settings.slop * c->settings.slop;
@@ -296,7 +259,7 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
                     break;
                 }
                 for (q = 0; q < 3; ++q)
-                    d2 += (o->local_a[q] - p->local_a[q]) * (o->local_a[q] - p->local_a[q]);
+                    d2 += (o->point[q] - p->point[q]) * (o->point[q] - p->point[q]);
                 if (d2 < nearest)
                     nearest = d2, best = j;
             }
@@ -315,10 +278,10 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
    step, and what gravity adds, plus the slop. */
 static double motion_margin(const tb_world *w, const tb__contacts *c, uint32_t proxy, double h)
 {
-    const double g = norm(w->gravity) * h * h;
+    const double g = norm3(w->gravity) * h * h;
     if (proxy & TB__PARTICLE_KEY) {
         const double *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * (proxy & ~TB__PARTICLE_KEY);
-        return h * norm(v) + g + c->settings.slop;
+        return h * norm3(v) + g + c->settings.slop;
     } else {
         const tb__shape *s = &c->shapes[proxy];
         uint32_t slot;
@@ -326,7 +289,7 @@ static double motion_margin(const tb_world *w, const tb__contacts *c, uint32_t p
         if (!s->body || !tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot))
             return c->settings.slop;
         body_velocity(w, slot, v, wv);
-        return h * (norm(v) + norm(wv) * s->reach) + g + c->settings.slop;
+        return h * (norm3(v) + norm3(wv) * s->reach) + g + c->settings.slop;
     }
 }
 
@@ -351,10 +314,10 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
     if ((st = map_reserve(w, c)) != TB_OK)
         return st;
     if (n + c->shape_count > c->proxy_cap) {
-        size_t old = c->proxy_cap, want = n + c->shape_count;
+        size_t old = c->proxy_cap, want = n;
         void **arrays[8];
         size_t sizes[8] = { 3 * sizeof(double), 3 * sizeof(double), sizeof(uint32_t), sizeof(uint32_t),
-                            sizeof(uint32_t), sizeof(uint32_t), sizeof(double), 2 * sizeof(tb__geom) };
+                            sizeof(uint32_t), sizeof(uint32_t), sizeof(double), sizeof(tb__geom) };
         size_t new_cap = old ? old : 16;
         while (new_cap < want)
             new_cap *= 2;
@@ -432,8 +395,7 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
             double nearest = 0;
             tb__manifold m;
             int j;
-            const uint32_t cat = (c->proxy[k] & TB__PARTICLE_KEY) ? 0xFFFFFFFFu : c->category[k];
-            if (!(s->category & c->mask[k]) || !(cat & s->mask) || c->group[k] == 0xFFFFFFFFu)
+            if (!(s->category & c->mask[k]) || !(c->category[k] & s->mask) || c->group[k] == 0xFFFFFFFFu)
                 continue;
             for (j = 0; j < 3; ++j) /* the box corner deepest along -n */
                 nearest += s->normal[j] * (s->normal[j] > 0 ? lo[j] : hi[j]);
@@ -471,73 +433,43 @@ static void shift(tb__contacts *c, int32_t i, const double r[3], const double J[
         b->dtheta[k] += scale * dw[k];
 }
 
-/* 1 / (J M^-1 J^T) along direction d at the two anchors. */
-static double effective_mass(const tb__contacts *c, const tb__entry *e, const tb__point *p, const double d[3])
-{
-    double k = 0, t[3], it[3];
-    int s;
-    for (s = 0; s < 2; ++s) {
-        const int32_t i = s ? e->body_b : e->body_a;
-        const tb__solver_body *b;
-        if (i < 0)
-            continue;
-        b = &c->bodies[i];
-        k += b->inv_mass;
-        if (b->tier != TB__BODIES)
-            continue;
-        cross(s ? p->rb : p->ra, d, t);
-        mul(b->inv_world, t, it);
-        k += dot(t, it);
-    }
-    return k > 0 ? 1 / k : 0;
-}
-
-static void relative_velocity(const tb__contacts *c, const tb__entry *e, const tb__point *p, double dv[3])
-{
-    double va[3], vb[3];
-    point_velocity(c, e->body_a, p->ra, va);
-    point_velocity(c, e->body_b, p->rb, vb);
-    dv[0] = vb[0] - va[0], dv[1] = vb[1] - va[1], dv[2] = vb[2] - va[2];
-}
-
 /* The anchor's current world position: the pose after the free motion,
    plus the corrections so far. */
-static void anchor(const tb__contacts *c, int32_t i, const double local[3], const double r[3], double out[3])
+static void anchor(const tb__contacts *c, int32_t i, const double fixed[3], const double r[3], double out[3])
 {
-    if (i < 0) {
-        memcpy(out, local, 3 * sizeof(double));
+    if (i < 0) { /* static: the contact point, where it was found */
+        memcpy(out, fixed, 3 * sizeof(double));
     } else {
         const tb__solver_body *b = &c->bodies[i];
         double turn[3], angle[3];
         angle[0] = b->turn[0] + b->dtheta[0], angle[1] = b->turn[1] + b->dtheta[1], angle[2] = b->turn[2] + b->dtheta[2];
         cross(angle, r, turn);
-        (void)local;
-        out[0] = b->x0[0] + r[0] + b->dp[0] + turn[0];
-        out[1] = b->x0[1] + r[1] + b->dp[1] + turn[1];
-        out[2] = b->x0[2] + r[2] + b->dp[2] + turn[2];
+        out[0] = b->x[0] + r[0] + b->dp[0] + turn[0];
+        out[1] = b->x[1] + r[1] + b->dp[1] + turn[1];
+        out[2] = b->x[2] + r[2] + b->dp[2] + turn[2];
     }
 }
 
-/* Separation of point p now: along n, between the two anchors. x0 holds
-   the pose after the free motion during the solve (see load_bodies). */
+/* Separation of point p now: along n, between the two anchors. */
 static double separation_now(const tb__contacts *c, const tb__entry *e, const tb__point *p)
 {
     double a[3], b[3], d[3];
-    anchor(c, e->body_a, p->local_a, p->ra, a);
-    anchor(c, e->body_b, p->local_b, p->rb, b);
+    anchor(c, e->body_a, p->point, p->ra, a);
+    anchor(c, e->body_b, p->point, p->rb, b);
     d[0] = b[0] - a[0], d[1] = b[1] - a[1], d[2] = b[2] - a[2];
-    return p->separation + dot(d, e->normal);
+    return p->separation + dot3(d, e->normal);
 }
 
-/* Bodies after the free motion: velocities, momenta, inverse inertia. The
-   start positions are kept in a copy (start_x) so that anchors can measure
-   how far the contact points moved. */
+/* Bodies after the free motion: position, turn, velocities, momenta,
+   inverse inertia. */
 static void load_bodies(tb_world *w, tb__contacts *c)
 {
     size_t i;
     for (i = 0; i < c->body_count; ++i) {
         tb__solver_body *b = &c->bodies[i];
         int k;
+        memcpy(b->x, b->tier == TB__BODIES ? body_x(w, b->slot) : w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot,
+               sizeof b->x);
         if (b->tier == TB__BODIES) {
             const double *inv = b->inv_inertia;
             double D[9];
@@ -598,106 +530,17 @@ static void set_rows(const tb__contacts *c, const tb__entry *e, tb__point *p)
     }
 }
 
-/* Where the free motion took each point; its impact timing and targets. */
-static void set_up_points(tb_world *w, tb__contacts *c, double h)
-{
-    const tb_contact_settings *s = &c->settings;
-    size_t i;
-    for (i = 0; i < c->entry_count; ++i) {
-        tb__entry *e = &c->entries[i];
-        int k, j;
-        for (k = 0; k < e->count; ++k) {
-            tb__point *p = &e->point[k];
-            double pa[3], pb[3], dv[3];
-            for (j = 0; j < 2; ++j) {
-                const int32_t bi = j ? e->body_b : e->body_a;
-                double *r = j ? p->rb : p->ra, *at = j ? pb : pa;
-                const double *local = j ? p->local_b : p->local_a;
-                if (bi < 0) {
-                    memset(r, 0, 3 * sizeof(double));
-                    memcpy(at, local, 3 * sizeof(double));
-                } else {
-                    const tb__solver_body *b = &c->bodies[bi];
-                    const double *x = b->tier == TB__BODIES ? body_x(w, b->slot)
-                                                            : w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot;
-                    double R0[9], turn[3] = { 0, 0, 0 };
-                    if (b->tier == TB__BODIES) {
-                        /* the arm keeps its start-of-step direction: a rolling
-                           ball's contact stays under its centre, not on the
-                           material point carried round (whose arm would make
-                           the normal force spin it up); the free motion's turn
-                           moves the anchor to first order only */
-                        matrix_of(b->q0, R0);
-                        mul(R0, local, r);
-                        cross(b->turn, r, turn);
-                    } else {
-                        memset(r, 0, 3 * sizeof(double));
-                    }
-                    at[0] = x[0] + r[0] + turn[0], at[1] = x[1] + r[1] + turn[1], at[2] = x[2] + r[2] + turn[2];
-                }
-            }
-            /* where the contact point was at the start is where both
-               anchors were; the separation grew by their relative motion */
-            {
-                double start[3], d[3];
-                for (j = 0; j < 3; ++j)
-                    d[j] = pb[j] - pa[j];
-                (void)start;
-                p->predicted = p->separation + dot(d, e->normal);
-            }
-            p->normal_mass = effective_mass(c, e, p, e->normal);
-            p->tangent_mass[0] = effective_mass(c, e, p, e->tangent[0]);
-            p->tangent_mass[1] = effective_mass(c, e, p, e->tangent[1]);
-            set_rows(c, e, p);
-            relative_velocity(c, e, p, dv);
-            /* closed, or within a fifth of the slop of it: a resting point
-               must not drop out of the solve for a rounding-sized gap */
-            p->active = p->predicted <= 0.2 * s->slop;
-            p->speed = 0;
-            p->position_impulse = 0;
-            if (!p->active) {
-                p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
-                continue;
-            }
-            if ((p->separation > 0 && !p->matched) || p->separation > 0.2 * s->slop) {
-                /* a new contact: when in the step did the gap close? Its
-                   normal motion, s + u t + a t^2 / 2 with the free motion's
-                   acceleration a, reaches 0 at tau */
-                const double u = p->approach, vn = dot(dv, e->normal), a = (vn - u) / h;
-                double tau, disc, vi;
-                disc = u * u - 2 * a * p->separation;
-                if (a != 0 && disc >= 0)
-                    tau = (-u - sqrt(disc)) / a;
-                else
-                    tau = u < 0 ? -p->separation / u : h;
-                if (!(tau >= 0 && tau <= h))
-                    tau = u < 0 ? fmin(h, -p->separation / u) : h;
-                vi = -(u + a * tau); /* approach speed at impact */
-                p->speed = fmax(vi, 0);
-                p->lever = h - tau;
-                p->target = vi > s->restitution_threshold && e->restitution > 0
-                                ? e->restitution * vi + a * (h - tau)
-                                : 0;
-                p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
-            } else {
-                p->lever = h / 2; /* a contact force acting through the step */
-                p->target = 0;
-            }
-        }
-    }
-}
-
 /* Relative velocity of the anchors along row d. */
 static double row_velocity(const tb__contacts *c, const tb__entry *e, const tb__point *p, int d, const double *dir)
 {
     double v = 0;
     if (e->body_b >= 0) {
         const tb__solver_body *b = &c->bodies[e->body_b];
-        v += dot(dir, b->v) + dot(p->arm_b[d], b->w);
+        v += dot3(dir, b->v) + dot3(p->arm_b[d], b->w);
     }
     if (e->body_a >= 0) {
         const tb__solver_body *a = &c->bodies[e->body_a];
-        v -= dot(dir, a->v) + dot(p->arm_a[d], a->w);
+        v -= dot3(dir, a->v) + dot3(p->arm_a[d], a->w);
     }
     return v;
 }
@@ -720,6 +563,80 @@ static void row_impulse(tb__contacts *c, const tb__entry *e, const tb__point *p,
             b->v[j] += l * dir[j] * b->inv_mass;
             b->L[j] += l * arm[j];
             b->w[j] += l * turn[j];
+        }
+    }
+}
+
+/* 1 / (J M^-1 J^T) of row d: the impulse that changes its velocity by 1. */
+static double row_mass(const tb__contacts *c, const tb__entry *e, const tb__point *p, int d)
+{
+    double k = 0;
+    if (e->body_a >= 0)
+        k += c->bodies[e->body_a].inv_mass + dot3(p->arm_a[d], p->turn_a[d]);
+    if (e->body_b >= 0)
+        k += c->bodies[e->body_b].inv_mass + dot3(p->arm_b[d], p->turn_b[d]);
+    return k > 0 ? 1 / k : 0;
+}
+
+/* Where the free motion took each point; its impact timing and targets. */
+static void set_up_points(tb__contacts *c, double h)
+{
+    const tb_contact_settings *s = &c->settings;
+    size_t i;
+    for (i = 0; i < c->entry_count; ++i) {
+        tb__entry *e = &c->entries[i];
+        int k, j;
+        for (k = 0; k < e->count; ++k) {
+            tb__point *p = &e->point[k];
+            double pa[3], pb[3], d[3];
+            /* the arms keep their start-of-step direction: a rolling ball's
+               contact stays under its centre, not on the material point
+               carried round (whose arm would make the normal force spin it
+               up); the free motion's turn moves the anchors to first order */
+            anchor(c, e->body_a, p->point, p->ra, pa);
+            anchor(c, e->body_b, p->point, p->rb, pb);
+            /* where the contact point was at the start is where both
+               anchors were; the separation grew by their relative motion */
+            for (j = 0; j < 3; ++j)
+                d[j] = pb[j] - pa[j];
+            p->predicted = p->separation + dot3(d, e->normal);
+            set_rows(c, e, p);
+            p->normal_mass = row_mass(c, e, p, 0);
+            p->tangent_mass[0] = row_mass(c, e, p, 1);
+            p->tangent_mass[1] = row_mass(c, e, p, 2);
+            /* closed, or within a fifth of the slop of it: a resting point
+               must not drop out of the solve for a rounding-sized gap */
+            p->active = p->predicted <= 0.2 * s->slop;
+            p->speed = 0;
+            p->position_impulse = 0;
+            if (!p->active) {
+                p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
+                continue;
+            }
+            if ((p->separation > 0 && !p->matched) || p->separation > 0.2 * s->slop) {
+                /* a new contact: when in the step did the gap close? Its
+                   normal motion, s + u t + a t^2 / 2 with the free motion's
+                   acceleration a, reaches 0 at tau */
+                const double u = p->approach, vn = row_velocity(c, e, p, 0, e->normal), a = (vn - u) / h;
+                double tau, disc, vi;
+                disc = u * u - 2 * a * p->separation;
+                if (a != 0 && disc >= 0)
+                    tau = (-u - sqrt(disc)) / a;
+                else
+                    tau = u < 0 ? -p->separation / u : h;
+                if (!(tau >= 0 && tau <= h))
+                    tau = u < 0 ? fmin(h, -p->separation / u) : h;
+                vi = -(u + a * tau); /* approach speed at impact */
+                p->speed = fmax(vi, 0);
+                p->lever = h - tau;
+                p->target = vi > s->restitution_threshold && e->restitution > 0
+                                ? e->restitution * vi + a * (h - tau)
+                                : 0;
+                p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
+            } else {
+                p->lever = h / 2; /* a contact force acting through the step */
+                p->target = 0;
+            }
         }
     }
 }
@@ -772,16 +689,10 @@ static void warm_start(tb__contacts *c)
 }
 
 /* Positions move as the impulses would have moved them over their lever
-   time; x0 becomes the pose after the free motion, so that anchors and
-   separations are measured from there. */
-static void apply_levers(tb_world *w, tb__contacts *c)
+   time. */
+static void apply_levers(tb__contacts *c)
 {
     size_t i;
-    for (i = 0; i < c->body_count; ++i) {
-        tb__solver_body *b = &c->bodies[i];
-        const double *x = b->tier == TB__BODIES ? body_x(w, b->slot) : w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot;
-        memcpy(b->x0, x, sizeof b->x0);
-    }
     for (i = 0; i < c->entry_count; ++i) {
         const tb__entry *e = &c->entries[i];
         int k, j;
@@ -864,6 +775,21 @@ static void store_bodies(tb_world *w, tb__contacts *c)
     }
 }
 
+/* A zeroed event of `type` between the keys, appended to the list. */
+static tb_status push_event(tb_world *w, tb__contacts *c, tb_contact_event_type type, const tb__entry *e,
+                            tb_contact_event **out)
+{
+    tb_status st = tb__contacts_reserve(w, (void **)&c->events, &c->event_cap, c->event_count + 1, sizeof **out);
+    if (st != TB_OK)
+        return st;
+    *out = &c->events[c->event_count++];
+    memset(*out, 0, sizeof **out);
+    (*out)->type = type;
+    (*out)->a.index1 = e->key_a;
+    (*out)->b.index1 = e->key_b;
+    return TB_OK;
+}
+
 /* Begin and end events: entries touching now against last step's. */
 static tb_status make_events(tb_world *w, tb__contacts *c)
 {
@@ -887,17 +813,9 @@ static tb_status make_events(tb_world *w, tb__contacts *c)
         while (j < c->previous_count &&
                (!e || entry_order(&c->previous[j], e) < 0)) { /* gone: ended if it touched */
             const tb__entry *old = &c->previous[j++];
-            if (old->touching) {
-                tb_contact_event *ev;
-                if ((st = tb__contacts_reserve(w, (void **)&c->events, &c->event_cap, c->event_count + 1,
-                                               sizeof *ev)) != TB_OK)
-                    return st;
-                ev = &c->events[c->event_count++];
-                memset(ev, 0, sizeof *ev);
-                ev->type = TB_CONTACT_END;
-                ev->a.index1 = old->key_a;
-                ev->b.index1 = old->key_b;
-            }
+            tb_contact_event *ev;
+            if (old->touching && (st = push_event(w, c, TB_CONTACT_END, old, &ev)) != TB_OK)
+                return st;
         }
         if (!e)
             break;
@@ -908,22 +826,14 @@ static tb_status make_events(tb_world *w, tb__contacts *c)
             if (e->touching != was) {
                 tb_contact_event *ev;
                 int k;
-                if ((st = tb__contacts_reserve(w, (void **)&c->events, &c->event_cap, c->event_count + 1,
-                                               sizeof *ev)) != TB_OK)
+                if ((st = push_event(w, c, e->touching ? TB_CONTACT_BEGIN : TB_CONTACT_END, e, &ev)) != TB_OK)
                     return st;
-                ev = &c->events[c->event_count++];
-                memset(ev, 0, sizeof *ev);
-                ev->type = e->touching ? TB_CONTACT_BEGIN : TB_CONTACT_END;
-                ev->a.index1 = e->key_a;
-                ev->b.index1 = e->key_b;
                 memcpy(ev->normal, e->normal, sizeof ev->normal);
                 for (k = 0; k < e->count; ++k)
                     if (e->point[k].active) {
-                        double pa[3];
                         ev->speed = fmax(ev->speed, e->point[k].speed > 0 ? e->point[k].speed
                                                                          : fmax(0, -e->point[k].approach));
-                        anchor(c, e->body_a, e->point[k].local_a, e->point[k].ra, pa);
-                        memcpy(ev->point, pa, sizeof pa);
+                        anchor(c, e->body_a, e->point[k].point, e->point[k].ra, ev->point);
                     }
             }
         }
@@ -944,43 +854,38 @@ static tb_status make_events(tb_world *w, tb__contacts *c)
     return TB_OK;
 }
 
-/* Touching points that were not touching last step, and all of them. */
-static size_t cold_points(const tb__contacts *c)
+/* Touching points, and those of them that did not touch last step. */
+static void count_points(const tb__contacts *c, size_t *active, size_t *cold)
 {
-    size_t i, n = 0;
+    size_t i;
     int k;
+    *active = *cold = 0;
     for (i = 0; i < c->entry_count; ++i)
-        for (k = 0; k < c->entries[i].count; ++k)
-            n += c->entries[i].point[k].active && !c->entries[i].point[k].matched;
-    return n;
-}
-
-static size_t active_points(const tb__contacts *c)
-{
-    size_t i, n = 0;
-    int k;
-    for (i = 0; i < c->entry_count; ++i)
-        for (k = 0; k < c->entries[i].count; ++k)
-            n += c->entries[i].point[k].active;
-    return n;
+        for (k = 0; k < c->entries[i].count; ++k) {
+            const tb__point *p = &c->entries[i].point[k];
+            *active += p->active;
+            *cold += p->active && !p->matched;
+        }
 }
 
 void tb__contacts_solve(tb_world *w, double h)
 {
     tb__contacts *c = w->contacts;
+    size_t active, cold;
     int it, iterations;
     if (!c->prepared)
         return;
     load_bodies(w, c);
-    set_up_points(w, c, h);
+    set_up_points(c, h);
     warm_start(c);
     /* a contact without last step's impulses to start from needs more
        sweeps to reach them: a stack built at rest would otherwise sink and
        lean in its first steps */
-    iterations = c->settings.velocity_iterations * (8 * cold_points(c) > active_points(c) ? 4 : 1);
+    count_points(c, &active, &cold);
+    iterations = c->settings.velocity_iterations * (8 * cold > active ? 4 : 1);
     for (it = 0; it < iterations; ++it)
         solve_velocities(c);
-    apply_levers(w, c);
+    apply_levers(c);
     for (it = 0; it < c->settings.position_iterations; ++it)
         solve_positions(c, h);
     store_bodies(w, c);

@@ -29,12 +29,12 @@ typedef struct tb__point {
     uint32_t feature;
     double normal_impulse;     /* N s, kept from step to step (warm start) */
     double tangent_impulse[2]; /* N s */
-    double local_a[3], local_b[3]; /* m: the point from each body's centre, in
-                                  its principal frame (static: world point) */
+    double point[3];           /* m, world: where the contact was found */
+    double ra[3], rb[3];       /* m: the point from each centre at the start of the
+                                  step, world (0 on a static side) */
     double separation;         /* m, at the start of the step (< 0: overlap) */
     double approach;           /* m/s: normal relative velocity at the start */
     /* filled by the solve */
-    double ra[3], rb[3];       /* m: the point from each centre, world, after the free motion */
     double normal_mass, tangent_mass[2];
     /* the rows of the velocity solve, per direction (normal, tangent 1,
        tangent 2): r x d at each anchor, and I^-1 (r x d) */
@@ -68,6 +68,7 @@ typedef struct tb__solver_body {
     double inv_mass;
     double inv_inertia[3];     /* principal moments' inverses (0 for particles) */
     double x0[3], q0[4];       /* pose at the start of the step */
+    double x[3];               /* position after the free motion */
     double R[9];               /* world from principal, after the free motion */
     double inv_world[9];       /* R diag(inv_inertia) R^T */
     double v[3], w[3];         /* velocities during the velocity pass */
@@ -89,7 +90,7 @@ struct tb__contacts {
     uint32_t *category, *mask, *group, *proxy; /* [proxy_cap]; proxy: shape slot, or
                                   particle slot | TB__PARTICLE_KEY */
     double *margin;            /* [proxy_cap] m: how far the proxy may move this step */
-    tb__geom *geoms;           /* [proxy_cap + shape_cap]: placed shapes */
+    tb__geom *geoms;           /* [proxy_cap]: the proxies' shapes placed in the world */
     size_t proxy_count, proxy_cap;
     tb__pair *pairs;
     size_t pair_count, pair_cap;

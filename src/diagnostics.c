@@ -1,11 +1,11 @@
 /* diagnostics.c: energies and momentum, computed on demand. */
 #include "world.h"
 
-tb_energy tb_world_energy(const tb_world *w)
+tb_energy tb__energy_of(const tb_world *w, const double *y)
 {
     tb_energy e = { 0, 0, 0, 0, 0 };
-    const double *x = w->y ? w->y + w->off[TB__PARTICLE_POS] : NULL;
-    const double *v = w->y ? w->y + w->off[TB__PARTICLE_VEL] : NULL;
+    const double *x = y ? y + w->off[TB__PARTICLE_POS] : NULL;
+    const double *v = y ? y + w->off[TB__PARTICLE_VEL] : NULL;
     const double *g = w->gravity;
     size_t i;
     for (i = 0; i < w->particle_count; ++i) {
@@ -13,11 +13,17 @@ tb_energy tb_world_energy(const tb_world *w)
         e.kinetic += 0.5 * w->mass[i] * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]);
         e.gravity -= w->mass[i] * (g[0] * xi[0] + g[1] * xi[1] + g[2] * xi[2]);
     }
-    e.spring = tb__spring_energy(w);
+    if (w->spring_count)
+        e.spring = tb__spring_energy(w, x);
     if (w->body_count)
-        tb__body_energy(w, &e);
+        tb__body_energy(w, y, &e);
     e.total = e.kinetic + e.rotational + e.gravity + e.spring;
     return e;
+}
+
+tb_energy tb_world_energy(const tb_world *w)
+{
+    return tb__energy_of(w, w->y);
 }
 
 /* Both momenta at once: particles m v and m x x v, then the bodies. */

@@ -220,7 +220,7 @@ static tb_status auto_step(tb_world *w, double h)
     tb_status st = TB_OK;
     long i;
     if (!w->auto_method || memcmp(key, w->auto_key, sizeof key) != 0) {
-        if ((st = tb__auto_plan(w, h)) != TB_OK)
+        if ((st = w->method->plan(w, h)) != TB_OK)
             return st;
         memcpy(w->auto_key, key, sizeof key);
     }
@@ -244,14 +244,14 @@ const char *tb_world_auto_choice(const tb_world *w, long *substeps)
    damp a decay for h k < 2; RK4's region reaches 2 sqrt 2 on the imaginary
    axis and 2.785 on the negative real axis. */
 static const tb__method methods[] = {
-    { "euler", 1, 0, 0, 1, euler, 0, 2, 0 },
-    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, 2, 2, 0 },
-    { "verlet", 2, 1, 1, 1, verlet, 2, 2, 0 },
-    { "rk4", 4, 0, 0, 3, rk4, 2.8284271247461903, 2.785293563405282, 0 },
-    { "verlet_exact", 2, 1, 1, 1, verlet_exact, 2, 2, 0 },
-    { "implicit_euler", 1, 1, 0, 4, implicit_euler, INFINITY, INFINITY, 0 },
-    { "dopri5", 5, 0, 0, 10, dopri5, INFINITY, INFINITY, 1 },
-    { "auto", 0, 0, 1, 10, auto_step, INFINITY, INFINITY, 1 },
+    { "euler", 1, 0, 0, 1, euler, 0, 2, 0, NULL },
+    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, 2, 2, 0, NULL },
+    { "verlet", 2, 1, 1, 1, verlet, 2, 2, 0, NULL },
+    { "rk4", 4, 0, 0, 3, rk4, 2.8284271247461903, 2.785293563405282, 0, NULL },
+    { "verlet_exact", 2, 1, 1, 1, verlet_exact, 2, 2, 0, NULL },
+    { "implicit_euler", 1, 1, 0, 4, implicit_euler, INFINITY, INFINITY, 0, NULL },
+    { "dopri5", 5, 0, 0, 10, dopri5, INFINITY, INFINITY, 1, NULL },
+    { "auto", 0, 0, 1, 10, auto_step, INFINITY, INFINITY, 1, tb__auto_plan },
 };
 #define METHOD_COUNT ((int)(sizeof methods / sizeof methods[0]))
 

@@ -82,7 +82,7 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->group, c->proxy_cap * sizeof(uint32_t), 0);
     tb__alloc(w, c->proxy, c->proxy_cap * sizeof(uint32_t), 0);
     tb__alloc(w, c->margin, c->proxy_cap * sizeof(double), 0);
-    tb__alloc(w, c->geoms, 2 * c->proxy_cap * sizeof(tb__geom), 0);
+    tb__alloc(w, c->geoms, c->proxy_cap * sizeof(tb__geom), 0);
     tb__alloc(w, c->pairs, c->pair_cap * sizeof *c->pairs, 0);
     tb__alloc(w, c->entries, c->entry_cap * sizeof *c->entries, 0);
     tb__alloc(w, c->previous, c->previous_cap * sizeof *c->previous, 0);

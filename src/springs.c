@@ -177,9 +177,8 @@ void tb__spring_forces(const tb_world *w, const double *pos, const double *vel, 
     }
 }
 
-double tb__spring_energy(const tb_world *w)
+double tb__spring_energy(const tb_world *w, const double *pos)
 {
-    const double *pos = w->y + w->off[TB__PARTICLE_POS];
     double e = 0;
     size_t s;
     for (s = 0; s < w->spring_count; ++s) {

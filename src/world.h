@@ -89,6 +89,9 @@ typedef struct tb__method {
     double oscillation_limit;
     double decay_limit;
     int adaptive;          /* chooses its own substeps: no limit on h */
+    /* chooses another method and its substeps for a step h (auto.c), NULL
+       for a method that steps by itself */
+    tb_status (*plan)(tb_world *w, double h);
 } tb__method;
 
 const tb__method *tb__method_find(const char *name);
@@ -112,7 +115,6 @@ struct tb_world {
        what it chose them for (step, tolerance, object counts) */
     const tb__method *auto_method;
     long auto_substeps;
-    double auto_estimate;  /* its cost estimate, force evaluations per step */
     double auto_key[8];
 
     /* the blow-up guard (guard.c): 0 off; INFINITY: finiteness only; > 1:
@@ -305,7 +307,7 @@ void tb__body_project(tb_world *w, double *y);
 void tb__body_motion(tb_world *w, const double *y, const double *seen);
 void tb__bodies_free(tb_world *w);
 /* Add the bodies' energies and momenta (about the origin) to the totals. */
-void tb__body_energy(const tb_world *w, tb_energy *e);
+void tb__body_energy(const tb_world *w, const double *y, tb_energy *e);
 void tb__body_momenta(const tb_world *w, double linear[3], double angular[3]);
 /* Forces not local to one object at positions from y, velocities from seen,
    into w->force (particles) and w->body_force (bodies). */
@@ -320,7 +322,9 @@ tb_status tb__implicit_particles(tb_world *w, double h);
 tb_status tb__implicit_step(tb_world *w, double h);
 void tb__springs_detach(tb_world *w, uint32_t slot);
 void tb__springs_move(tb_world *w, uint32_t from, uint32_t to);
-double tb__spring_energy(const tb_world *w);
+double tb__spring_energy(const tb_world *w, const double *pos);
+/* diagnostics.c: the energies of state y (any state vector of the world) */
+tb_energy tb__energy_of(const tb_world *w, const double *y);
 tb_status tb__user_forces(tb_world *w, double t, const double *y, const double *seen);
 tb_status tb__field_velocities(tb_world *w, double t, size_t n, const double *pos, double *vel);
 void tb__springs_free(tb_world *w);

@@ -97,40 +97,44 @@ static void near_callback(void *data, dGeomID a, dGeomID b)
     c->contacts += n;
 }
 
-/* One timed step of the pyramid or the pile; adds to the timing sums. */
-static void timed_step(dWorldID world, dSpaceID space, near_ctx *c, double h, double *step_ms,
-                       double *collide_ms_sum, long *contacts_sum, int *contacts_max)
+/* The timed run of the pyramid and the pile: `steps` steps of collision
+   (up to max_contacts per pair, friction mu) and dWorldQuickStep, each step
+   timed into step_ms, summed up in t. */
+static void run_quick(dWorldID world, dSpaceID space, double mu, int max_contacts, double h, int steps,
+                      double *step_ms, ode_timing *t)
 {
-    double t0, t1, t2;
+    near_ctx c;
+    double collide_ms_sum = 0, sum = 0;
+    long contacts_sum = 0;
+    int n;
 
-    c->contacts = 0;
-    t0 = seconds();
-    dSpaceCollide(space, c, near_callback);
-    t1 = seconds();
-    dWorldQuickStep(world, h);
-    dJointGroupEmpty(c->group);
-    t2 = seconds();
-    *step_ms = 1e3 * (t2 - t0);
-    *collide_ms_sum += 1e3 * (t1 - t0);
-    *contacts_sum += c->contacts;
-    if (c->contacts > *contacts_max)
-        *contacts_max = c->contacts;
-}
-
-static void finish_timing(ode_timing *t, double *step_ms, int steps, double collide_ms_sum,
-                          long contacts_sum, int contacts_max)
-{
-    double sum = 0;
-    int i;
-
-    for (i = 0; i < steps; ++i)
-        sum += step_ms[i];
+    memset(t, 0, sizeof *t);
+    c.world = world;
+    c.group = dJointGroupCreate(0);
+    c.mu = mu;
+    c.max_contacts = max_contacts;
+    for (n = 0; n < steps; ++n) {
+        double t0, t1, t2;
+        c.contacts = 0;
+        t0 = seconds();
+        dSpaceCollide(space, &c, near_callback);
+        t1 = seconds();
+        dWorldQuickStep(world, h);
+        dJointGroupEmpty(c.group);
+        t2 = seconds();
+        step_ms[n] = 1e3 * (t2 - t0);
+        sum += step_ms[n];
+        collide_ms_sum += 1e3 * (t1 - t0);
+        contacts_sum += c.contacts;
+        if (c.contacts > t->contacts_max)
+            t->contacts_max = c.contacts;
+    }
+    dJointGroupDestroy(c.group);
     t->steps = steps;
     t->ms_mean = steps ? sum / steps : 0;
     t->ms_median = steps ? median(step_ms, steps) : 0;
     t->ms_collide_mean = steps ? collide_ms_sum / steps : 0;
     t->contacts_mean = steps ? (double)contacts_sum / steps : 0;
-    t->contacts_max = contacts_max;
 }
 
 /* The world every contact scene uses: ODE's defaults, named here so that a
@@ -416,11 +420,9 @@ int ode_pyramid(const ode_pyramid_def *def, ode_pyramid_result *out)
     dBodyID *bodies;
     double(*pos)[3];
     double *step_ms;
-    near_ctx ctx;
     dMass mass;
-    double h, collide_sum = 0;
-    long contacts_sum = 0;
-    int count, steps, n, i, contacts_max = 0;
+    double h;
+    int count, steps, i;
 
     memset(out, 0, sizeof *out);
     if (!pyramid_def_ok(def))
@@ -451,15 +453,7 @@ int ode_pyramid(const ode_pyramid_def *def, ode_pyramid_result *out)
         dGeomSetBody(g, bodies[i]);
         dBodySetPosition(bodies[i], pos[i][0], pos[i][1], pos[i][2]);
     }
-    ctx.world = world;
-    ctx.group = dJointGroupCreate(0);
-    ctx.mu = def->mu;
-    ctx.max_contacts = def->max_contacts;
-
-    for (n = 0; n < steps; ++n)
-        timed_step(world, space, &ctx, h, &step_ms[n], &collide_sum, &contacts_sum,
-                   &contacts_max);
-    finish_timing(&out->timing, step_ms, steps, collide_sum, contacts_sum, contacts_max);
+    run_quick(world, space, def->mu, def->max_contacts, h, steps, step_ms, &out->timing);
 
     out->boxes = count;
     for (i = 0; i < count; ++i) {
@@ -475,7 +469,6 @@ int ode_pyramid(const ode_pyramid_def *def, ode_pyramid_result *out)
     }
 
     /* The space destroys its geoms (cleanup mode is on by default). */
-    dJointGroupDestroy(ctx.group);
     dSpaceDestroy(space);
     dWorldDestroy(world);
     dCloseODE();
@@ -586,10 +579,8 @@ int ode_pile(const ode_pile_def *def, ode_pile_result *out)
     dBodyID *bodies;
     ode_shape *shapes;
     double *step_ms;
-    near_ctx ctx;
-    double h, collide_sum = 0;
-    long contacts_sum = 0;
-    int n, i, contacts_max = 0;
+    double h;
+    int i;
 
     memset(out, 0, sizeof *out);
     if (!pile_def_ok(def))
@@ -633,15 +624,7 @@ int ode_pile(const ode_pile_def *def, ode_pile_result *out)
         q[3] = s->orientation[3];
         dBodySetQuaternion(bodies[i], q);
     }
-    ctx.world = world;
-    ctx.group = dJointGroupCreate(0);
-    ctx.mu = def->mu;
-    ctx.max_contacts = def->max_contacts;
-
-    for (n = 0; n < def->steps; ++n)
-        timed_step(world, space, &ctx, h, &step_ms[n], &collide_sum, &contacts_sum,
-                   &contacts_max);
-    finish_timing(&out->timing, step_ms, def->steps, collide_sum, contacts_sum, contacts_max);
+    run_quick(world, space, def->mu, def->max_contacts, h, def->steps, step_ms, &out->timing);
 
     out->final_top = -INFINITY;
     for (i = 0; i < def->count; ++i) {
@@ -654,7 +637,6 @@ int ode_pile(const ode_pile_def *def, ode_pile_result *out)
             out->final_top = p[2];
     }
 
-    dJointGroupDestroy(ctx.group);
     dSpaceDestroy(space);
     dWorldDestroy(world);
     dCloseODE();

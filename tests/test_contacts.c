@@ -62,7 +62,10 @@ static tb_body_id add_ball(tb_world *w, const double centre[3], double radius, d
 /* A 0.1 m ball dropped with its lowest point 1 m above the plane,
    restitution 0.5, default settings. Two readings of each apex: `sampled`
    is ODE's (the first step past the top), `top` the top of the ballistic
-   arc through the last rising step, z + v^2 / 2g (exact between contacts). */
+   arc through the last rising step, z + v^2 / 2g (exact between contacts).
+   Verlet is exact under constant gravity and the impact is timed within
+   its step, so `top` must be e^2k h0 to rounding (1e-9 asserted); the
+   issue's 2 % is what ODE-like first-order contact handling would need. */
 static void drop_ball(double hz, double sampled[2], double top[2])
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -97,10 +100,10 @@ static void ball_bounces_to_e_squared(void **state)
     assert_int_equal(ode_ball_apexes(60, 0.5, 1, ode60), 2);
     assert_int_equal(ode_ball_apexes(240, 0.5, 1, ode240), 2);
     for (k = 0; k < 2; ++k) {
-        print_message("apex %d: truth %.4f | 60 Hz: tumble top %.6f sampled %.4f, ODE %.4f | 240 Hz: tumble %.4f, "
+        print_message("apex %d: truth %.4f | 60 Hz: tumble top %.12f sampled %.4f, ODE %.4f | 240 Hz: tumble %.4f, "
                       "ODE %.4f\n", k + 1, truth[k], top[k], sampled[k], ode60[k], s240[k], ode240[k]);
-        assert_rel(top[k], truth[k], 0.02);
-        assert_rel(t240[k], truth[k], 0.02);
+        assert_rel(top[k], truth[k], 1e-9);
+        assert_rel(t240[k], truth[k], 1e-9);
         /* where ODE is accurate, the two agree; at 60 Hz tumble is closer */
         assert_rel(s240[k], ode240[k], 0.02);
         assert_true(fabs(sampled[k] - truth[k]) < fabs(ode60[k] - truth[k]));
@@ -110,7 +113,9 @@ static void ball_bounces_to_e_squared(void **state)
 /* ---- sliding to rest, and resting ------------------------------------------ */
 
 /* A 1 m cube at 5 m/s with mu = 0.5 on both shapes (the pair uses
-   sqrt(mu_a mu_b) = 0.5) stops after v^2 / (2 mu g) = 2.548 m. */
+   sqrt(mu_a mu_b) = 0.5) stops after v^2 / (2 mu g) = 2.548 m. Friction
+   acts through each step (trapezoidal), so the only error is the last step,
+   in which the box stops part-way: at most mu g h^2 / 2 (0.68 mm at 60 Hz). */
 static double slide(double hz, tb_world **kept, tb_body_id *box)
 {
     tb_world *w = world_on_plane(0.5, 0);
@@ -140,15 +145,18 @@ static void box_slides_to_v2_over_2_mu_g(void **state)
     const double d60 = slide(60, NULL, NULL), d240 = slide(240, NULL, NULL);
     const double o60 = ode_slide_distance(60, 5, 0.5), o240 = ode_slide_distance(240, 5, 0.5);
     (void)state;
-    print_message("slide: truth %.4f m | 60 Hz: tumble %.5f, ODE %.4f | 240 Hz: tumble %.5f, ODE %.4f\n", truth, d60,
+    print_message("slide: truth %.6f m | 60 Hz: tumble %.9f, ODE %.4f | 240 Hz: tumble %.5f, ODE %.4f\n", truth, d60,
                   o60, d240, o240);
-    assert_rel(d60, truth, 0.01);
+    assert_below(fabs(d60 - truth), 0.5 * 0.5 * G / (60.0 * 60.0));
+    assert_below(fabs(d240 - truth), 0.5 * 0.5 * G / (240.0 * 240.0));
     assert_rel(d240, o240, 0.02);
     assert_true(fabs(d60 - truth) < fabs(o60 - truth));
 }
 
 /* After sliding to rest, 10 s more on the plane: it must not creep or
-   jitter. */
+   jitter. A resting contact's impulse cancels gravity's kick and its h/2
+   lever cancels gravity's drop exactly, so the drift is rounding: 1e-12 m
+   asserted (the issue asks 1e-4). */
 static void box_rests_without_drift(void **state)
 {
     tb_world *w;
@@ -170,8 +178,8 @@ static void box_rests_without_drift(void **state)
     tb_body_position(w, id, x);
     drift = sqrt((x[0] - x0[0]) * (x[0] - x0[0]) + (x[1] - x0[1]) * (x[1] - x0[1]) + (x[2] - x0[2]) * (x[2] - x0[2]));
     print_message("resting box: drift %.3g m in 10 s, height %.7f m\n", drift, x[2]);
-    assert_below(drift, 1e-4);
-    assert_rel(x[2], 0.5, 1e-3);
+    assert_below(drift, 1e-12);
+    assert_rel(x[2], 0.5, 1e-9);
     tb_world_destroy(w);
 }
 
@@ -179,7 +187,7 @@ static void box_rests_without_drift(void **state)
    box upright within 0.1 rad and resting on the one below with its centre
    within 0.1 m of that one's (a fifth of the half width: far from tipping),
    and the top box within 2 cm of its height. The whole column may wander
-   (measured: up to about 0.3 m over 30 s); that is reported, not hidden. */
+   (measured: 3 cm over 30 s, neighbours within 5 mm); that is reported. */
 static void stack_of_ten_stands(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -214,7 +222,8 @@ static void stack_of_ten_stands(void **state)
 /* ---- speed and momentum ----------------------------------------------------- */
 
 /* A 0.1 m sphere at 50 m/s towards a static box 5 cm thick, 60 Hz: it moves
-   0.83 m a step, 17 times the box's thickness, and must still stop at it. */
+   0.83 m a step, 17 times the box's thickness, and must still stop at it:
+   the speculative contact closes the gap exactly (1e-9 m asserted). */
 static void fast_sphere_does_not_tunnel(void **state)
 {
     tb_world_def def = tb_default_world_def();
@@ -235,10 +244,10 @@ static void fast_sphere_does_not_tunnel(void **state)
     for (i = 0; i < 30; ++i) {
         assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
         tb_body_position(w, ball, x);
-        assert_below(x[0], -0.125 + 1e-3); /* never past the near face */
+        assert_below(x[0], -0.125 + 1e-9); /* never past the near face */
     }
-    print_message("fast sphere: stopped at x = %.6f m (touching at -0.125)\n", x[0]);
-    assert_rel(x[0], -0.125, 1e-2);
+    print_message("fast sphere: stopped at x = %.15f m (touching at -0.125)\n", x[0]);
+    assert_below(fabs(x[0] + 0.125), 1e-9);
     tb_world_destroy(w);
 }
 
@@ -281,7 +290,8 @@ static void collision_keeps_momentum(void **state)
     tb_world_destroy(w);
 }
 
-/* The drop's first contact begins with the impact speed sqrt(2 g h0). */
+/* The drop's first contact begins with the impact speed sqrt(2 g h0),
+   found from the step's free motion, which Verlet makes exact: 1e-12. */
 static void events_report_impacts(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -303,8 +313,8 @@ static void events_report_impacts(void **state)
             assert_false(TB_ID_IS_NULL(ev[k].b));
         }
     }
-    print_message("first impact at %.5f m/s (sqrt(2 g h0) = %.5f)\n", speed, sqrt(2 * G));
-    assert_rel(speed, sqrt(2 * G), 1e-3);
+    print_message("first impact at %.15f m/s (sqrt(2 g h0) = %.15f)\n", speed, sqrt(2 * G));
+    assert_rel(speed, sqrt(2 * G), 1e-12);
     assert_true(begins >= 2 && ends >= 1);
     tb_world_destroy(w);
 }
