@@ -107,9 +107,11 @@ static tb_status solver_body(tb_world *w, tb__contacts *c, enum tb__tier tier, u
         memcpy(b->inv_inertia, w->body_inv_inertia + 3 * slot, sizeof b->inv_inertia);
         memcpy(b->x0, body_x(w, slot), sizeof b->x0);
         memcpy(b->q0, body_q(w, slot), sizeof b->q0);
+        body_velocity(w, slot, b->v0, b->w0);
     } else {
         b->inv_mass = w->inv_mass[slot];
         memcpy(b->x0, w->y + w->off[TB__PARTICLE_POS] + 3 * slot, sizeof b->x0);
+        memcpy(b->v0, w->y + w->off[TB__PARTICLE_VEL] + 3 * slot, sizeof b->v0);
         b->q0[0] = 1;
     }
     map[slot] = (int32_t)c->body_count;
@@ -117,46 +119,65 @@ static tb_status solver_body(tb_world *w, tb__contacts *c, enum tb__tier tier, u
     return TB_OK;
 }
 
-/* The body's velocities at the start of the step (before the solve has
-   filled v and w): read from the state. */
-static void start_velocity(const tb_world *w, const tb__contacts *c, int32_t i, const double r[3], double v[3])
+/* The sweeps' arrays for every solver body and the static world. */
+static tb_status reserve_motion(tb_world *w, tb__contacts *c)
 {
-    double lin[3] = { 0, 0, 0 }, ang[3] = { 0, 0, 0 };
-    if (i >= 0) {
+    const size_t need = c->body_count + 1;
+    size_t cap = c->motion_cap;
+    double *block;
+    if (need <= cap)
+        return TB_OK;
+    while (cap < need)
+        cap = cap ? 2 * cap : 64;
+    /* one block for both arrays; what they held is not needed again */
+    block = tb__alloc(w, NULL, 0, 2 * TB__MOTION * cap * sizeof *block);
+    if (!block)
+        return tb__fail(w, TB_ERR_MEMORY, "out of memory for the contact solver");
+    tb__alloc(w, c->velocity, 2 * TB__MOTION * c->motion_cap * sizeof *block, 0);
+    c->velocity = block;
+    c->motion = block + TB__MOTION * cap;
+    c->motion_cap = cap;
+    return TB_OK;
+}
+
+/* The velocity of the point at r from solver body i at the start of the step. */
+static void start_velocity(const tb__contacts *c, int32_t i, const double r[3], double v[3])
+{
+    if (i < 0) {
+        v[0] = v[1] = v[2] = 0;
+    } else {
         const tb__solver_body *b = &c->bodies[i];
-        if (b->tier == TB__BODIES)
-            body_velocity(w, b->slot, lin, ang);
-        else
-            memcpy(lin, w->y + w->off[TB__PARTICLE_VEL] + 3 * b->slot, sizeof lin);
+        cross(b->w0, r, v);
+        v[0] += b->v0[0], v[1] += b->v0[1], v[2] += b->v0[2];
     }
-    cross(ang, r, v);
-    v[0] += lin[0], v[1] += lin[1], v[2] += lin[2];
 }
 
 /* ---- finding contacts ------------------------------------------------------- */
 
-static int entry_order(const void *pa, const void *pb)
+static uint64_t key_of(uint32_t key_a, uint32_t key_b)
 {
-    const tb__entry *a = pa, *b = pb;
-    if (a->key_a != b->key_a)
-        return a->key_a < b->key_a ? -1 : 1;
-    return a->key_b < b->key_b ? -1 : a->key_b > b->key_b;
+    return (uint64_t)key_a << 32 | key_b;
+}
+
+static int key_order(const void *pa, const void *pb)
+{
+    const tb__key *a = pa, *b = pb;
+    return a->key < b->key ? -1 : a->key > b->key;
 }
 
 static const tb__entry *previous_entry(const tb__contacts *c, uint32_t key_a, uint32_t key_b)
 {
+    const uint64_t key = key_of(key_a, key_b);
     size_t lo = 0, hi = c->previous_count;
     while (lo < hi) {
         const size_t mid = (lo + hi) / 2;
-        const tb__entry *e = &c->previous[mid];
-        if (e->key_a < key_a || (e->key_a == key_a && e->key_b < key_b))
+        if (c->previous_order[mid].key < key)
             lo = mid + 1;
         else
             hi = mid;
     }
-    return lo < c->previous_count && c->previous[lo].key_a == key_a && c->previous[lo].key_b == key_b
-               ? &c->previous[lo]
-               : NULL;
+    return lo < c->previous_count && c->previous_order[lo].key == key ? &c->previous[c->previous_order[lo].index]
+                                                                      : NULL;
 }
 
 static void tangents(const double n[3], double t1[3], double t2[3])
@@ -237,8 +258,8 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
             p->ra[j] = e->body_a >= 0 ? at[j] - c->bodies[e->body_a].x0[j] : 0;
             p->rb[j] = e->body_b >= 0 ? at[j] - c->bodies[e->body_b].x0[j] : 0;
         }
-        start_velocity(w, c, e->body_a, p->ra, va);
-        start_velocity(w, c, e->body_b, p->rb, vb);
+        start_velocity(c, e->body_a, p->ra, va);
+        start_velocity(c, e->body_b, p->rb, vb);
         for (j = 0; j < 3; ++j)
             vb[j] -= va[j];
         p->approach = dot3(vb, e->normal);
@@ -301,12 +322,15 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
     const size_t n = bodies_shapes + (particles ? w->particle_count : 0);
     size_t i, k, cap;
     tb__entry *swap;
+    tb__key *swap_order;
     tb_status st;
     /* last step's entries become the previous ones (for warm starting and
        events), unless that step never got to solve them */
     if (c->solved) {
         swap = c->previous, c->previous = c->entries, c->entries = swap;
         cap = c->previous_cap, c->previous_cap = c->entry_cap, c->entry_cap = cap;
+        swap_order = c->previous_order, c->previous_order = c->order, c->order = swap_order;
+        cap = c->previous_order_cap, c->previous_order_cap = c->order_cap, c->order_cap = cap;
         c->previous_count = c->entry_count;
     }
     c->entry_count = 0;
@@ -406,189 +430,131 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
                 return st;
         }
     }
-    if (c->entry_count > 1) /* (qsort wants a valid pointer even for nothing) */
-        qsort(c->entries, c->entry_count, sizeof *c->entries, entry_order);
+    /* the entries in key order: for finding them next step, for events, and
+       for a sweep order that does not depend on how the broadphase found them */
+    if ((st = tb__contacts_reserve(w, (void **)&c->order, &c->order_cap, c->entry_count + 1, sizeof *c->order)) !=
+        TB_OK)
+        return st;
+    for (i = 0; i < c->entry_count; ++i) {
+        c->order[i].key = key_of(c->entries[i].key_a, c->entries[i].key_b);
+        c->order[i].index = (uint32_t)i;
+    }
+    qsort(c->order, c->entry_count, sizeof *c->order, key_order);
+    /* the solver's room: a row for every point, motion for every body */
+    if ((st = tb__contacts_reserve(w, (void **)&c->rows, &c->row_cap, TB__MANIFOLD_POINTS * c->entry_count + 1,
+                                   sizeof *c->rows)) != TB_OK ||
+        (st = reserve_motion(w, c)) != TB_OK)
+        return st;
     c->prepared = 1;
     return TB_OK;
 }
 
 /* ---- solving ---------------------------------------------------------------- */
 
-/* Move the body's pose as an impulse J at r would over `lever` seconds. */
-static void shift(tb__contacts *c, int32_t i, const double r[3], const double J[3], double scale)
-{
-    tb__solver_body *b;
-    double t[3], dw[3];
-    int k;
-    if (i < 0)
-        return;
-    b = &c->bodies[i];
-    for (k = 0; k < 3; ++k)
-        b->dp[k] += scale * J[k] * b->inv_mass;
-    if (b->tier != TB__BODIES)
-        return;
-    cross(r, J, t);
-    mul(b->inv_world, t, dw);
-    for (k = 0; k < 3; ++k)
-        b->dtheta[k] += scale * dw[k];
-}
-
-/* The anchor's current world position: the pose after the free motion,
-   plus the corrections so far. */
+/* The anchor of solver body i at r after the free motion, to first order in
+   its turn; static: the contact point, where it was found. */
 static void anchor(const tb__contacts *c, int32_t i, const double fixed[3], const double r[3], double out[3])
 {
-    if (i < 0) { /* static: the contact point, where it was found */
+    if (i < 0) {
         memcpy(out, fixed, 3 * sizeof(double));
     } else {
         const tb__solver_body *b = &c->bodies[i];
-        double turn[3], angle[3];
-        angle[0] = b->turn[0] + b->dtheta[0], angle[1] = b->turn[1] + b->dtheta[1], angle[2] = b->turn[2] + b->dtheta[2];
-        cross(angle, r, turn);
-        out[0] = b->x[0] + r[0] + b->dp[0] + turn[0];
-        out[1] = b->x[1] + r[1] + b->dp[1] + turn[1];
-        out[2] = b->x[2] + r[2] + b->dp[2] + turn[2];
+        double turn[3];
+        cross(b->turn, r, turn);
+        out[0] = b->x[0] + r[0] + turn[0];
+        out[1] = b->x[1] + r[1] + turn[1];
+        out[2] = b->x[2] + r[2] + turn[2];
     }
 }
 
-/* Separation of point p now: along n, between the two anchors. */
-static double separation_now(const tb__contacts *c, const tb__entry *e, const tb__point *p)
-{
-    double a[3], b[3], d[3];
-    anchor(c, e->body_a, p->point, p->ra, a);
-    anchor(c, e->body_b, p->point, p->rb, b);
-    d[0] = b[0] - a[0], d[1] = b[1] - a[1], d[2] = b[2] - a[2];
-    return p->separation + dot3(d, e->normal);
-}
-
-/* Bodies after the free motion: position, turn, velocities, momenta,
-   inverse inertia. */
+/* Bodies after the free motion: position, turn, momenta, inverse inertia,
+   and the sweeps' velocities. */
 static void load_bodies(tb_world *w, tb__contacts *c)
 {
     size_t i;
+    memset(c->velocity, 0, TB__MOTION * (c->body_count + 1) * sizeof *c->velocity);
+    memset(c->motion, 0, TB__MOTION * (c->body_count + 1) * sizeof *c->motion);
     for (i = 0; i < c->body_count; ++i) {
         tb__solver_body *b = &c->bodies[i];
+        double *v = c->velocity + TB__MOTION * (i + 1);
         int k;
-        memcpy(b->x, b->tier == TB__BODIES ? body_x(w, b->slot) : w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot,
-               sizeof b->x);
+        v[6] = c->motion[TB__MOTION * (i + 1) + 6] = b->inv_mass;
         if (b->tier == TB__BODIES) {
-            const double *inv = b->inv_inertia;
-            double D[9];
+            const double *inv = b->inv_inertia, *q = body_q(w, b->slot);
+            const double q0c[4] = { b->q0[0], -b->q0[1], -b->q0[2], -b->q0[3] };
+            double R[9], D[9], dq[4];
+            memcpy(b->x, body_x(w, b->slot), sizeof b->x);
             memcpy(b->P, w->y + w->off[TB__BODY_MOM] + 3 * b->slot, sizeof b->P);
             memcpy(b->L, w->y + w->off[TB__BODY_ANG] + 3 * b->slot, sizeof b->L);
-            matrix_of(body_q(w, b->slot), b->R);
-            {   /* the free motion's turn, q q0^-1 = (cos, sin n) -> 2 sin n */
-                const double *q = body_q(w, b->slot);
-                const double q0c[4] = { b->q0[0], -b->q0[1], -b->q0[2], -b->q0[3] };
-                double dq[4];
-                quat_mul(q, q0c, dq);
-                for (k = 0; k < 3; ++k)
-                    b->turn[k] = (dq[0] < 0 ? -2 : 2) * dq[k + 1];
-            }
+            matrix_of(q, R);
+            /* the free motion's turn, q q0^-1 = (cos, sin n) -> 2 sin n */
+            quat_mul(q, q0c, dq);
+            for (k = 0; k < 3; ++k)
+                b->turn[k] = (dq[0] < 0 ? -2 : 2) * dq[k + 1];
             for (k = 0; k < 3; ++k) { /* R diag(inv) R^T */
-                D[3 * k + 0] = b->R[3 * k + 0] * inv[0];
-                D[3 * k + 1] = b->R[3 * k + 1] * inv[1];
-                D[3 * k + 2] = b->R[3 * k + 2] * inv[2];
+                D[3 * k + 0] = R[3 * k + 0] * inv[0];
+                D[3 * k + 1] = R[3 * k + 1] * inv[1];
+                D[3 * k + 2] = R[3 * k + 2] * inv[2];
             }
             for (k = 0; k < 9; ++k) {
                 const int r = k / 3, col = k % 3;
-                b->inv_world[k] = D[3 * r] * b->R[3 * col] + D[3 * r + 1] * b->R[3 * col + 1] +
-                                  D[3 * r + 2] * b->R[3 * col + 2];
+                b->inv_world[k] = D[3 * r] * R[3 * col] + D[3 * r + 1] * R[3 * col + 1] + D[3 * r + 2] * R[3 * col + 2];
             }
             for (k = 0; k < 3; ++k)
-                b->v[k] = b->P[k] * b->inv_mass;
-            mul(b->inv_world, b->L, b->w);
+                v[k] = b->P[k] * b->inv_mass;
+            mul(b->inv_world, b->L, v + 3);
         } else {
-            const double *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * b->slot;
+            const double *vp = w->y + w->off[TB__PARTICLE_VEL] + 3 * b->slot;
+            memcpy(b->x, w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot, sizeof b->x);
             memset(b->turn, 0, sizeof b->turn);
-            for (k = 0; k < 3; ++k) {
-                b->v[k] = v[k];
-                b->P[k] = v[k] / b->inv_mass;
-            }
-        }
-        memset(b->dp, 0, sizeof b->dp);
-        memset(b->dtheta, 0, sizeof b->dtheta);
-    }
-}
-
-/* The precomputed rows of point p (see tb__point). */
-static void set_rows(const tb__contacts *c, const tb__entry *e, tb__point *p)
-{
-    int d, k;
-    for (d = 0; d < 3; ++d) {
-        const double *dir = d == 0 ? e->normal : e->tangent[d - 1];
-        for (k = 0; k < 2; ++k) {
-            const int32_t i = k ? e->body_b : e->body_a;
-            double *arm = k ? p->arm_b[d] : p->arm_a[d], *turn = k ? p->turn_b[d] : p->turn_a[d];
-            if (i < 0 || c->bodies[i].tier != TB__BODIES) {
-                memset(arm, 0, 3 * sizeof(double));
-                memset(turn, 0, 3 * sizeof(double));
-                continue;
-            }
-            cross(k ? p->rb : p->ra, dir, arm);
-            mul(c->bodies[i].inv_world, arm, turn);
+            memset(b->inv_world, 0, sizeof b->inv_world);
+            memcpy(v, vp, 3 * sizeof *v);
         }
     }
 }
 
-/* Relative velocity of the anchors along row d. */
-static double row_velocity(const tb__contacts *c, const tb__entry *e, const tb__point *p, int d, const double *dir)
+/* Relative velocity of the anchors along row d of r, with velocities (or
+   position changes) from the array m. */
+static double row_rate(const tb__row *r, const double *m, int d)
 {
-    double v = 0;
-    if (e->body_b >= 0) {
-        const tb__solver_body *b = &c->bodies[e->body_b];
-        v += dot3(dir, b->v) + dot3(p->arm_b[d], b->w);
-    }
-    if (e->body_a >= 0) {
-        const tb__solver_body *a = &c->bodies[e->body_a];
-        v -= dot3(dir, a->v) + dot3(p->arm_a[d], a->w);
-    }
-    return v;
+    const double *A = m + TB__MOTION * r->a, *B = m + TB__MOTION * r->b;
+    const double *n = r->dir[d], *ja = r->arm_a[d], *jb = r->arm_b[d];
+    return n[0] * (B[0] - A[0]) + n[1] * (B[1] - A[1]) + n[2] * (B[2] - A[2]) + jb[0] * B[3] + jb[1] * B[4] +
+           jb[2] * B[5] - ja[0] * A[3] - ja[1] * A[4] - ja[2] * A[5];
 }
 
-/* An impulse lambda along row d: -lambda on a, +lambda on b. */
-static void row_impulse(tb__contacts *c, const tb__entry *e, const tb__point *p, int d, const double *dir,
-                        double lambda)
+/* An impulse lambda along row d of r into the array m: -lambda on a,
+   +lambda on b. */
+static void row_push(const tb__row *r, double *m, int d, double lambda)
 {
-    int k, j;
-    for (k = 0; k < 2; ++k) {
-        const int32_t i = k ? e->body_b : e->body_a;
-        const double l = k ? lambda : -lambda;
-        const double *arm = k ? p->arm_b[d] : p->arm_a[d], *turn = k ? p->turn_b[d] : p->turn_a[d];
-        tb__solver_body *b;
-        if (i < 0)
-            continue;
-        b = &c->bodies[i];
-        for (j = 0; j < 3; ++j) {
-            b->P[j] += l * dir[j];
-            b->v[j] += l * dir[j] * b->inv_mass;
-            b->L[j] += l * arm[j];
-            b->w[j] += l * turn[j];
-        }
+    double *A = m + TB__MOTION * r->a, *B = m + TB__MOTION * r->b;
+    const double *n = r->dir[d], *ta = r->turn_a[d], *tb = r->turn_b[d];
+    const double la = lambda * A[6], lb = lambda * B[6];
+    int k;
+    for (k = 0; k < 3; ++k) {
+        A[k] -= la * n[k];
+        A[k + 3] -= lambda * ta[k];
+        B[k] += lb * n[k];
+        B[k + 3] += lambda * tb[k];
     }
 }
 
-/* 1 / (J M^-1 J^T) of row d: the impulse that changes its velocity by 1. */
-static double row_mass(const tb__contacts *c, const tb__entry *e, const tb__point *p, int d)
-{
-    double k = 0;
-    if (e->body_a >= 0)
-        k += c->bodies[e->body_a].inv_mass + dot3(p->arm_a[d], p->turn_a[d]);
-    if (e->body_b >= 0)
-        k += c->bodies[e->body_b].inv_mass + dot3(p->arm_b[d], p->turn_b[d]);
-    return k > 0 ? 1 / k : 0;
-}
-
-/* Where the free motion took each point; its impact timing and targets. */
-static void set_up_points(tb__contacts *c, double h)
+/* Each touching point's rows; where the free motion took it, its impact
+   timing and targets. */
+static void set_up_rows(tb__contacts *c, double h)
 {
     const tb_contact_settings *s = &c->settings;
+    const double omega = 2 * 3.14159265358979323846 * s->hertz;
+    const double fraction = fmin(1, h * omega / (2 * s->damping_ratio + h * omega));
     size_t i;
+    c->row_count = 0;
     for (i = 0; i < c->entry_count; ++i) {
-        tb__entry *e = &c->entries[i];
-        int k, j;
+        tb__entry *e = &c->entries[c->order[i].index];
+        int k, j, d;
         for (k = 0; k < e->count; ++k) {
             tb__point *p = &e->point[k];
-            double pa[3], pb[3], d[3];
+            tb__row *r = &c->rows[c->row_count];
+            double pa[3], pb[3], gap[3], sum;
             /* the arms keep their start-of-step direction: a rolling ball's
                contact stays under its centre, not on the material point
                carried round (whose arm would make the normal force spin it
@@ -598,26 +564,55 @@ static void set_up_points(tb__contacts *c, double h)
             /* where the contact point was at the start is where both
                anchors were; the separation grew by their relative motion */
             for (j = 0; j < 3; ++j)
-                d[j] = pb[j] - pa[j];
-            p->predicted = p->separation + dot3(d, e->normal);
-            set_rows(c, e, p);
-            p->normal_mass = row_mass(c, e, p, 0);
-            p->tangent_mass[0] = row_mass(c, e, p, 1);
-            p->tangent_mass[1] = row_mass(c, e, p, 2);
+                gap[j] = pb[j] - pa[j];
+            r->predicted = p->separation + dot3(gap, e->normal);
+            p->speed = 0;
             /* closed, or within a fifth of the slop of it: a resting point
                must not drop out of the solve for a rounding-sized gap */
-            p->active = p->predicted <= 0.2 * s->slop;
-            p->speed = 0;
-            p->position_impulse = 0;
+            p->active = r->predicted <= 0.2 * s->slop;
             if (!p->active) {
                 p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
                 continue;
             }
+            c->row_count++;
+            r->a = e->body_a + 1, r->b = e->body_b + 1;
+            r->point = p;
+            r->friction = e->friction;
+            memcpy(r->dir[0], e->normal, sizeof r->dir[0]);
+            memcpy(r->dir[1], e->tangent[0], sizeof r->dir[1]);
+            memcpy(r->dir[2], e->tangent[1], sizeof r->dir[2]);
+            for (d = 0; d < 3; ++d) {
+                sum = c->velocity[TB__MOTION * r->a + 6] + c->velocity[TB__MOTION * r->b + 6];
+                if (e->body_a >= 0) {
+                    cross(p->ra, r->dir[d], r->arm_a[d]);
+                    mul(c->bodies[e->body_a].inv_world, r->arm_a[d], r->turn_a[d]);
+                    sum += dot3(r->arm_a[d], r->turn_a[d]);
+                } else {
+                    memset(r->arm_a[d], 0, sizeof r->arm_a[d]);
+                    memset(r->turn_a[d], 0, sizeof r->turn_a[d]);
+                }
+                if (e->body_b >= 0) {
+                    cross(p->rb, r->dir[d], r->arm_b[d]);
+                    mul(c->bodies[e->body_b].inv_world, r->arm_b[d], r->turn_b[d]);
+                    sum += dot3(r->arm_b[d], r->turn_b[d]);
+                } else {
+                    memset(r->arm_b[d], 0, sizeof r->arm_b[d]);
+                    memset(r->turn_b[d], 0, sizeof r->turn_b[d]);
+                }
+                r->mass[d] = sum > 0 ? 1 / sum : 0;
+            }
+            r->position_impulse = 0;
+            /* overlap that was already there is taken back at the rate of a
+               spring-damper of the contact hertz and damping ratio, at most
+               max_push, so that what an unconverged velocity pass lets sink
+               each step settles at a small fixed overlap instead of adding up */
+            r->push_target =
+                p->separation >= 0 ? 0 : p->separation + fmin(fraction * -p->separation, h * s->max_push);
             if ((p->separation > 0 && !p->matched) || p->separation > 0.2 * s->slop) {
                 /* a new contact: when in the step did the gap close? Its
                    normal motion, s + u t + a t^2 / 2 with the free motion's
                    acceleration a, reaches 0 at tau */
-                const double u = p->approach, vn = row_velocity(c, e, p, 0, e->normal), a = (vn - u) / h;
+                const double u = p->approach, a = (row_rate(r, c->velocity, 0) - u) / h;
                 double tau, disc, vi;
                 disc = u * u - 2 * a * p->separation;
                 if (a != 0 && disc >= 0)
@@ -627,46 +622,19 @@ static void set_up_points(tb__contacts *c, double h)
                 if (!(tau >= 0 && tau <= h))
                     tau = u < 0 ? fmin(h, -p->separation / u) : h;
                 vi = -(u + a * tau); /* approach speed at impact */
-                p->speed = fmax(vi, 0);
-                p->lever = h - tau;
-                p->target = vi > s->restitution_threshold && e->restitution > 0
+                p->speed = vi > 0 ? vi : 0;
+                r->lever = h - tau;
+                r->target = vi > s->restitution_threshold && e->restitution > 0
                                 ? e->restitution * vi + a * (h - tau)
                                 : 0;
                 p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
             } else {
-                p->lever = h / 2; /* a contact force acting through the step */
-                p->target = 0;
+                r->lever = h / 2; /* a contact force acting through the step */
+                r->target = 0;
             }
-        }
-    }
-}
-
-/* One Gauss-Seidel sweep over the touching points: friction first, within
-   the circle mu * normal impulse, then the normal, v_n >= target. */
-static void solve_velocities(tb__contacts *c)
-{
-    size_t n;
-    for (n = 0; n < c->entry_count; ++n) {
-        tb__entry *e = &c->entries[n];
-        int k;
-        for (k = 0; k < e->count; ++k) {
-            tb__point *p = &e->point[k];
-            double lambda, total, limit, t0, t1, len;
-            if (!p->active)
-                continue;
-            limit = e->friction * p->normal_impulse;
-            t0 = p->tangent_impulse[0] - p->tangent_mass[0] * row_velocity(c, e, p, 1, e->tangent[0]);
-            t1 = p->tangent_impulse[1] - p->tangent_mass[1] * row_velocity(c, e, p, 2, e->tangent[1]);
-            len = sqrt(t0 * t0 + t1 * t1);
-            if (len > limit && len > 0)
-                t0 *= limit / len, t1 *= limit / len;
-            row_impulse(c, e, p, 1, e->tangent[0], t0 - p->tangent_impulse[0]);
-            row_impulse(c, e, p, 2, e->tangent[1], t1 - p->tangent_impulse[1]);
-            p->tangent_impulse[0] = t0, p->tangent_impulse[1] = t1;
-            lambda = -p->normal_mass * (row_velocity(c, e, p, 0, e->normal) - p->target);
-            total = fmax(p->normal_impulse + lambda, 0);
-            row_impulse(c, e, p, 0, e->normal, total - p->normal_impulse);
-            p->normal_impulse = total;
+            r->impulse[0] = p->normal_impulse;
+            r->impulse[1] = p->tangent_impulse[0];
+            r->impulse[2] = p->tangent_impulse[1];
         }
     }
 }
@@ -674,76 +642,83 @@ static void solve_velocities(tb__contacts *c)
 static void warm_start(tb__contacts *c)
 {
     size_t i;
-    for (i = 0; i < c->entry_count; ++i) {
-        const tb__entry *e = &c->entries[i];
-        int k;
-        for (k = 0; k < e->count; ++k) {
-            const tb__point *p = &e->point[k];
-            if (!p->active)
-                continue;
-            row_impulse(c, e, p, 0, e->normal, p->normal_impulse);
-            row_impulse(c, e, p, 1, e->tangent[0], p->tangent_impulse[0]);
-            row_impulse(c, e, p, 2, e->tangent[1], p->tangent_impulse[1]);
+    int d;
+    for (i = 0; i < c->row_count; ++i)
+        for (d = 0; d < 3; ++d)
+            row_push(&c->rows[i], c->velocity, d, c->rows[i].impulse[d]);
+}
+
+/* One Gauss-Seidel sweep over the touching points: friction first, within
+   the circle mu * normal impulse, then the normal, v_n >= target. */
+static void solve_velocities(tb__contacts *c)
+{
+    double *m = c->velocity;
+    size_t i;
+    for (i = 0; i < c->row_count; ++i) {
+        tb__row *r = &c->rows[i];
+        const double limit = r->friction * r->impulse[0];
+        double t0 = r->impulse[1] - r->mass[1] * row_rate(r, m, 1);
+        double t1 = r->impulse[2] - r->mass[2] * row_rate(r, m, 2);
+        double len2 = t0 * t0 + t1 * t1, total;
+        if (len2 > limit * limit) {
+            const double scale = limit / sqrt(len2);
+            t0 *= scale, t1 *= scale;
         }
+        row_push(r, m, 1, t0 - r->impulse[1]);
+        row_push(r, m, 2, t1 - r->impulse[2]);
+        r->impulse[1] = t0, r->impulse[2] = t1;
+        total = r->impulse[0] - r->mass[0] * (row_rate(r, m, 0) - r->target);
+        total = total > 0 ? total : 0;
+        row_push(r, m, 0, total - r->impulse[0]);
+        r->impulse[0] = total;
     }
 }
 
-/* Positions move as the impulses would have moved them over their lever
-   time. */
-static void apply_levers(tb__contacts *c)
+/* The impulses' whole effect, from their totals: the momenta change by
+   them, and positions move as they would have over their lever time. */
+static void apply_impulses(tb__contacts *c)
 {
     size_t i;
-    for (i = 0; i < c->entry_count; ++i) {
-        const tb__entry *e = &c->entries[i];
-        int k, j;
-        for (k = 0; k < e->count; ++k) {
-            const tb__point *p = &e->point[k];
-            double J[3];
-            if (!p->active)
+    for (i = 0; i < c->row_count; ++i) {
+        tb__row *r = &c->rows[i];
+        int d, k;
+        for (d = 0; d < 3; ++d)
+            row_push(r, c->motion, d, r->lever * r->impulse[d]);
+        for (k = 0; k < 2; ++k) {
+            const int32_t body = (k ? r->b : r->a) - 1;
+            const double sign = k ? 1 : -1;
+            tb__solver_body *b;
+            if (body < 0)
                 continue;
-            for (j = 0; j < 3; ++j)
-                J[j] = p->normal_impulse * e->normal[j] + p->tangent_impulse[0] * e->tangent[0][j] +
-                       p->tangent_impulse[1] * e->tangent[1][j];
-            shift(c, e->body_a, p->ra, J, -p->lever);
-            shift(c, e->body_b, p->rb, J, p->lever);
+            b = &c->bodies[body];
+            for (d = 0; d < 3; ++d) {
+                const double l = sign * r->impulse[d], *arm = k ? r->arm_b[d] : r->arm_a[d];
+                b->P[0] += l * r->dir[d][0], b->P[1] += l * r->dir[d][1], b->P[2] += l * r->dir[d][2];
+                b->L[0] += l * arm[0], b->L[1] += l * arm[1], b->L[2] += l * arm[2];
+            }
         }
+        r->point->normal_impulse = r->impulse[0];
+        r->point->tangent_impulse[0] = r->impulse[1];
+        r->point->tangent_impulse[1] = r->impulse[2];
     }
 }
 
-/* Push overlaps apart (positions only): gaps that closed this step are
-   closed rigidly; overlap that was already there is taken back at the rate
-   of a spring-damper of the contact hertz and damping ratio, at most
-   max_push, so that what an unconverged velocity pass lets sink each step
-   settles at a small fixed overlap instead of adding up. */
-static void solve_positions(tb__contacts *c, double h)
+/* Push overlaps apart (positions only, along the normal rows): gaps that
+   closed this step are closed rigidly, old overlap softly (push_target). */
+static void solve_positions(tb__contacts *c)
 {
-    const tb_contact_settings *s = &c->settings;
-    const double omega = 2 * 3.14159265358979323846 * s->hertz;
-    const double rate = omega / (2 * s->damping_ratio + h * omega); /* 1/s */
-    const double fraction = fmin(1, h * rate);
+    double *m = c->motion;
     size_t i;
-    for (i = 0; i < c->entry_count; ++i) {
-        tb__entry *e = &c->entries[i];
-        int k, j;
-        for (k = 0; k < e->count; ++k) {
-            tb__point *p = &e->point[k];
-            double target, now, lambda, total, J[3];
-            if (p->separation >= 0)
-                target = 0;
-            else
-                target = p->separation + fmin(fraction * -p->separation, h * s->max_push);
-            now = separation_now(c, e, p);
-            if (now >= target && p->position_impulse == 0)
-                continue;
-            lambda = -p->normal_mass * (now - target);
-            total = fmax(p->position_impulse + lambda, 0);
-            lambda = total - p->position_impulse;
-            p->position_impulse = total;
-            for (j = 0; j < 3; ++j)
-                J[j] = lambda * e->normal[j];
-            shift(c, e->body_a, p->ra, J, -1);
-            shift(c, e->body_b, p->rb, J, 1);
-        }
+    for (i = 0; i < c->row_count; ++i) {
+        tb__row *r = &c->rows[i];
+        const double now = r->predicted + row_rate(r, m, 0);
+        double total;
+        if (now >= r->push_target && r->position_impulse == 0)
+            continue;
+        total = r->position_impulse - r->mass[0] * (now - r->push_target);
+        total = total > 0 ? total : 0;
+        row_push(r, m, 0, total - r->position_impulse);
+        r->position_impulse = total;
     }
 }
 
@@ -752,13 +727,14 @@ static void store_bodies(tb_world *w, tb__contacts *c)
     size_t i;
     for (i = 0; i < c->body_count; ++i) {
         const tb__solver_body *b = &c->bodies[i];
+        const double *dp = c->motion + TB__MOTION * (i + 1), *dtheta = dp + 3;
         int k;
         if (b->tier == TB__BODIES) {
             double *x = w->y + w->off[TB__BODY_POS] + 3 * b->slot, *q = w->y + w->off[TB__BODY_ROT] + 4 * b->slot;
-            const double turn[4] = { 0, 0.5 * b->dtheta[0], 0.5 * b->dtheta[1], 0.5 * b->dtheta[2] };
+            const double turn[4] = { 0, 0.5 * dtheta[0], 0.5 * dtheta[1], 0.5 * dtheta[2] };
             double dq[4];
             for (k = 0; k < 3; ++k)
-                x[k] += b->dp[k];
+                x[k] += dp[k];
             quat_mul(turn, q, dq);
             for (k = 0; k < 4; ++k)
                 q[k] += dq[k];
@@ -768,8 +744,8 @@ static void store_bodies(tb_world *w, tb__contacts *c)
         } else {
             double *x = w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot, *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * b->slot;
             for (k = 0; k < 3; ++k) {
-                x[k] += b->dp[k];
-                v[k] = b->v[k];
+                x[k] += dp[k];
+                v[k] = c->velocity[TB__MOTION * (i + 1) + k];
             }
         }
     }
@@ -790,7 +766,20 @@ static tb_status push_event(tb_world *w, tb__contacts *c, tb_contact_event_type 
     return TB_OK;
 }
 
-/* Begin and end events: entries touching now against last step's. */
+/* Where point p of entry e is at the end of the step, on side a. */
+static void final_point(const tb__contacts *c, const tb__entry *e, const tb__point *p, double out[3])
+{
+    anchor(c, e->body_a, p->point, p->ra, out);
+    if (e->body_a >= 0) {
+        const double *dp = c->motion + TB__MOTION * (e->body_a + 1), *dtheta = dp + 3;
+        double turn[3];
+        cross(dtheta, p->ra, turn);
+        out[0] += dp[0] + turn[0], out[1] += dp[1] + turn[1], out[2] += dp[2] + turn[2];
+    }
+}
+
+/* Begin and end events: entries touching now against last step's, both
+   walked in key order. */
 static tb_status make_events(tb_world *w, tb__contacts *c)
 {
     size_t i, j = 0;
@@ -807,34 +796,32 @@ static tb_status make_events(tb_world *w, tb__contacts *c)
                 c->touching_points++;
             }
     }
-    /* merge the two sorted lists */
     for (i = 0; i <= c->entry_count; ++i) {
-        const tb__entry *e = i < c->entry_count ? &c->entries[i] : NULL;
-        while (j < c->previous_count &&
-               (!e || entry_order(&c->previous[j], e) < 0)) { /* gone: ended if it touched */
-            const tb__entry *old = &c->previous[j++];
+        const uint64_t key = i < c->entry_count ? c->order[i].key : UINT64_MAX;
+        const tb__entry *e = i < c->entry_count ? &c->entries[c->order[i].index] : NULL;
+        int was = 0;
+        while (j < c->previous_count && c->previous_order[j].key < key) { /* gone: ended if it touched */
+            const tb__entry *old = &c->previous[c->previous_order[j++].index];
             tb_contact_event *ev;
             if (old->touching && (st = push_event(w, c, TB_CONTACT_END, old, &ev)) != TB_OK)
                 return st;
         }
         if (!e)
             break;
-        {
-            const int was = j < c->previous_count && entry_order(&c->previous[j], e) == 0 && c->previous[j].touching;
-            if (j < c->previous_count && entry_order(&c->previous[j], e) == 0)
-                ++j;
-            if (e->touching != was) {
-                tb_contact_event *ev;
-                int k;
-                if ((st = push_event(w, c, e->touching ? TB_CONTACT_BEGIN : TB_CONTACT_END, e, &ev)) != TB_OK)
-                    return st;
-                memcpy(ev->normal, e->normal, sizeof ev->normal);
-                for (k = 0; k < e->count; ++k)
-                    if (e->point[k].active) {
-                        ev->speed = fmax(ev->speed, e->point[k].speed > 0 ? e->point[k].speed
-                                                                         : fmax(0, -e->point[k].approach));
-                        anchor(c, e->body_a, e->point[k].point, e->point[k].ra, ev->point);
-                    }
+        if (j < c->previous_count && c->previous_order[j].key == key)
+            was = c->previous[c->previous_order[j++].index].touching;
+        if (e->touching != was) {
+            tb_contact_event *ev;
+            int k;
+            if ((st = push_event(w, c, e->touching ? TB_CONTACT_BEGIN : TB_CONTACT_END, e, &ev)) != TB_OK)
+                return st;
+            memcpy(ev->normal, e->normal, sizeof ev->normal);
+            for (k = 0; k < e->count; ++k) {
+                const tb__point *p = &e->point[k];
+                if (!p->active)
+                    continue;
+                ev->speed = fmax(ev->speed, p->speed > 0 ? p->speed : fmax(0, -p->approach));
+                final_point(c, e, p, ev->point);
             }
         }
     }
@@ -854,40 +841,27 @@ static tb_status make_events(tb_world *w, tb__contacts *c)
     return TB_OK;
 }
 
-/* Touching points, and those of them that did not touch last step. */
-static void count_points(const tb__contacts *c, size_t *active, size_t *cold)
-{
-    size_t i;
-    int k;
-    *active = *cold = 0;
-    for (i = 0; i < c->entry_count; ++i)
-        for (k = 0; k < c->entries[i].count; ++k) {
-            const tb__point *p = &c->entries[i].point[k];
-            *active += p->active;
-            *cold += p->active && !p->matched;
-        }
-}
-
 void tb__contacts_solve(tb_world *w, double h)
 {
     tb__contacts *c = w->contacts;
-    size_t active, cold;
+    size_t i, cold = 0;
     int it, iterations;
     if (!c->prepared)
         return;
     load_bodies(w, c);
-    set_up_points(c, h);
+    set_up_rows(c, h);
     warm_start(c);
     /* a contact without last step's impulses to start from needs more
        sweeps to reach them: a stack built at rest would otherwise sink and
        lean in its first steps */
-    count_points(c, &active, &cold);
-    iterations = c->settings.velocity_iterations * (8 * cold > active ? 4 : 1);
+    for (i = 0; i < c->row_count; ++i)
+        cold += !c->rows[i].point->matched;
+    iterations = c->settings.velocity_iterations * (8 * cold > c->row_count ? 4 : 1);
     for (it = 0; it < iterations; ++it)
         solve_velocities(c);
-    apply_levers(c);
+    apply_impulses(c);
     for (it = 0; it < c->settings.position_iterations; ++it)
-        solve_positions(c, h);
+        solve_positions(c);
     store_bodies(w, c);
     if (make_events(w, c) != TB_OK)
         c->event_count = 0; /* out of memory for events: the step itself stands */

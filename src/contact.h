@@ -24,7 +24,7 @@ typedef struct tb__shape {
     double reach;          /* m: how far the shape reaches from the body's centre */
 } tb__shape;
 
-/* One contact point, as the solver sees it. */
+/* One contact point, as it is found and kept from step to step. */
 typedef struct tb__point {
     uint32_t feature;
     double normal_impulse;     /* N s, kept from step to step (warm start) */
@@ -34,19 +34,30 @@ typedef struct tb__point {
                                   step, world (0 on a static side) */
     double separation;         /* m, at the start of the step (< 0: overlap) */
     double approach;           /* m/s: normal relative velocity at the start */
-    /* filled by the solve */
-    double normal_mass, tangent_mass[2];
-    /* the rows of the velocity solve, per direction (normal, tangent 1,
-       tangent 2): r x d at each anchor, and I^-1 (r x d) */
+    double speed;              /* m/s: the approach speed of an impact, 0 otherwise */
+    int active;                /* touching after the free motion: solved */
+    int matched;               /* it touched last step too (warm started) */
+} tb__point;
+
+/* A touching point packed for the solver's sweeps: three rows (normal,
+   tangent 1, tangent 2), each with its direction, r x d at each anchor and
+   I^-1 (r x d). The bodies are indices into the velocity arrays, where 0 is
+   the static world (no motion, no inverse mass), so the sweeps never
+   branch on which side moves. */
+typedef struct tb__row {
+    int32_t a, b;
+    tb__point *point;          /* where the impulses go back to */
+    double dir[3][3];
     double arm_a[3][3], arm_b[3][3], turn_a[3][3], turn_b[3][3];
+    double mass[3];            /* 1 / (J M^-1 J^T) of each row */
+    double impulse[3];         /* N s, accumulated */
+    double friction;
     double target;             /* m/s: the normal velocity to reach */
     double lever;              /* s: how long its impulse acts on positions */
     double predicted;          /* m: separation after the free motion */
+    double push_target;        /* m: the separation the position pass aims for */
     double position_impulse;
-    double speed;              /* m/s: the approach speed of an impact, 0 otherwise */
-    int active;
-    int matched;               /* it touched last step too (warm started) */
-} tb__point;
+} tb__row;
 
 /* The points between two shapes (or a shape and a particle). */
 typedef struct tb__entry {
@@ -67,15 +78,24 @@ typedef struct tb__solver_body {
     uint32_t slot;
     double inv_mass;
     double inv_inertia[3];     /* principal moments' inverses (0 for particles) */
+    double inv_world[9];       /* R diag(inv_inertia) R^T, after the free motion */
     double x0[3], q0[4];       /* pose at the start of the step */
+    double v0[3], w0[3];       /* velocities at the start of the step */
     double x[3];               /* position after the free motion */
-    double R[9];               /* world from principal, after the free motion */
-    double inv_world[9];       /* R diag(inv_inertia) R^T */
-    double v[3], w[3];         /* velocities during the velocity pass */
-    double P[3], L[3];         /* their momenta, changed only by impulses */
     double turn[3];            /* the free motion's rotation over the step (vector) */
-    double dp[3], dtheta[3];   /* position and rotation corrections */
+    double P[3], L[3];         /* momenta after the free motion, then the impulses */
 } tb__solver_body;
+
+/* The sweeps' per-body arrays: TB__MOTION doubles per solver body + 1 (0 is
+   the static world): a velocity (v, w) or position change (dp, dtheta),
+   then the inverse mass; one cache line each. */
+#define TB__MOTION 8
+
+/* A contact entry's place in key order. */
+typedef struct tb__key {
+    uint64_t key;              /* key_a << 32 | key_b */
+    uint32_t index;            /* into entries */
+} tb__key;
 
 struct tb__contacts {
     tb__shape *shapes;         /* [shape_cap] */
@@ -95,9 +115,17 @@ struct tb__contacts {
     tb__pair *pairs;
     size_t pair_count, pair_cap;
 
-    /* contact entries of this step and of the last one, sorted by key */
+    /* contact entries of this step and of the last one, in the order found,
+       and their indices in key order */
     tb__entry *entries, *previous;
     size_t entry_count, entry_cap, previous_count, previous_cap;
+    tb__key *order, *previous_order;
+    size_t order_cap, previous_order_cap;
+
+    tb__row *rows;             /* the touching points of this step */
+    size_t row_count, row_cap;
+    double *velocity, *motion; /* [TB__MOTION * motion_cap] each, one block: see TB__MOTION */
+    size_t motion_cap;
 
     tb__solver_body *bodies;
     size_t body_count, body_cap;

@@ -86,6 +86,10 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->pairs, c->pair_cap * sizeof *c->pairs, 0);
     tb__alloc(w, c->entries, c->entry_cap * sizeof *c->entries, 0);
     tb__alloc(w, c->previous, c->previous_cap * sizeof *c->previous, 0);
+    tb__alloc(w, c->order, c->order_cap * sizeof *c->order, 0);
+    tb__alloc(w, c->previous_order, c->previous_order_cap * sizeof *c->previous_order, 0);
+    tb__alloc(w, c->rows, c->row_cap * sizeof *c->rows, 0);
+    tb__alloc(w, c->velocity, 2 * TB__MOTION * c->motion_cap * sizeof(double), 0); /* and motion */
     tb__alloc(w, c->bodies, c->body_cap * sizeof *c->bodies, 0);
     tb__alloc(w, c->body_map, c->body_map_cap * sizeof(int32_t), 0);
     tb__alloc(w, c->particle_map, c->particle_map_cap * sizeof(int32_t), 0);
