@@ -159,13 +159,13 @@ typedef void kernel_fn(double q[4], const double L[3], const double invI[3], dou
    frozen kernel straight on the arrays, the splitting kernels (accurate 0
    or 1) loaded into lanes in their frames and stored back. */
 static void step_lanes(int kernel, double *q, const double *L, const double *invI, const tb__split_frame *frames,
-                       double h)
+                       double h, int isa)
 {
     int b, i;
     for (b = 0; b < BODIES; b += TB__LANES) {
         tb__spin_lanes p;
         if (kernel == 0) {
-            tb__frozen_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, TB__LANES);
+            tb__frozen_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, TB__LANES, isa);
             continue;
         }
         p.h = h;
@@ -175,9 +175,9 @@ static void step_lanes(int kernel, double *q, const double *L, const double *inv
                 exit(EXIT_FAILURE);
             }
         if (kernel == 2)
-            tb__accurate_lanes(&p, TB__LANES);
+            tb__accurate_lanes(&p, TB__LANES, isa);
         else
-            tb__split2_lanes(&p, TB__LANES);
+            tb__split2_lanes(&p, TB__LANES, isa);
         for (i = 0; i < TB__LANES; ++i)
             tb__spin_store(&p, i, &frames[b + i], q + 4 * (b + i));
     }
@@ -231,7 +231,7 @@ static void run_kernel(result *r, kernel_fn *step, int lanes, const double ref[4
     for (k = 0; k < REPEATS; ++k) {
         const double t0 = seconds();
         for (s = 0; s < 4; ++s)
-            step_lanes(lanes, qs, Ls, Is, frames, H);
+            step_lanes(lanes, qs, Ls, Is, frames, H, tb__isa());
         many[k] = 1e9 * (seconds() - t0) / (4.0 * BODIES);
     }
     keep(qs[0]);

@@ -460,6 +460,10 @@ typedef struct tb_contact_settings {
                                      radius (0: points); < 0 (default -1): they do not */
     double particle_friction;     /* default 0.6 */
     double particle_restitution;  /* default 0 */
+    double sleep_speed;           /* m/s: a body slower than this (|v| + |w| times its
+                                     shapes' reach) is resting; default 0.05 */
+    double sleep_time;            /* s: an island of touching bodies that all rest this
+                                     long falls asleep; default 0.5, INFINITY: never */
 } tb_contact_settings;
 
 TB_API tb_contact_settings tb_default_contact_settings(void);
@@ -482,6 +486,20 @@ typedef struct tb_contact_event {
 TB_API const tb_contact_event *tb_world_contact_events(const tb_world *world, size_t *count);
 /* Points of contact that are touching now (after the last step). */
 TB_API size_t tb_world_contact_count(const tb_world *world);
+
+/* Sleep: bodies with shapes that rest together (an island: bodies joined
+   by touching contacts) for sleep_time fall asleep. A sleeping body keeps
+   its pose with zero velocity, costs no narrowphase and no solver work
+   (the integrator still passes over it), and acts as static ground for
+   slow particles. It wakes, with its whole island, when an awake body's
+   bounds (or a particle faster than sleep_speed) reach its own, when any of
+   its state is set or a force or torque applied, when a body of its island
+   is removed, and when gravity, shapes or contact settings change. Worlds
+   with force callbacks never sleep: a callback's force is unknown to the
+   rest test. */
+TB_API tb_status tb_body_asleep(const tb_world *world, tb_body_id id, int *asleep);
+TB_API tb_status tb_body_wake(tb_world *world, tb_body_id id);
+TB_API size_t tb_world_sleeping_count(const tb_world *world);
 
 /* --------------------------------------------------------------- advisor -- */
 /* Before a run: how large a step the world's integrator can take. The

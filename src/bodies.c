@@ -94,7 +94,7 @@ static tb_status check_def(tb_world *w, const tb_body_def *def)
 
 /* ---- adding and removing ----------------------------------------------------- */
 
-#define BODY_ARRAYS 9
+#define BODY_ARRAYS 11
 static void arrays_of(tb_world *w, void **arrays[BODY_ARRAYS], size_t sizes[BODY_ARRAYS])
 {
     arrays[0] = (void **)&w->body_mass;        sizes[0] = sizeof(double);
@@ -106,6 +106,8 @@ static void arrays_of(tb_world *w, void **arrays[BODY_ARRAYS], size_t sizes[BODY
     arrays[6] = (void **)&w->body_force;       sizes[6] = 6 * sizeof(double);
     arrays[7] = (void **)&w->body_motion;      sizes[7] = 6 * sizeof(double);
     arrays[8] = (void **)&w->body_frame;       sizes[8] = sizeof(tb__split_frame);
+    arrays[9] = (void **)&w->body_rest;        sizes[9] = sizeof(double);
+    arrays[10] = (void **)&w->body_island;     sizes[10] = sizeof(uint32_t);
 }
 
 static tb_status grow(tb_world *w)
@@ -184,6 +186,8 @@ tb_status tb_world_add_body(tb_world *w, const tb_body_def *def, tb_body_id *id)
     w->body_damping[2 * s + 1] = def->angular_damping;
     w->body_damped += def->linear_damping != 0 || def->angular_damping != 0;
     memset(w->body_applied + 6 * s, 0, 6 * sizeof(double));
+    w->body_rest[s] = 0;
+    w->body_island[s] = 0;
     tb__ids_acquire(&w->body_ids, s, &made.index1, &made.generation);
     if (id)
         *id = made;
@@ -208,6 +212,7 @@ tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
         return st;
     if ((st = find(w, id, &s)) != TB_OK)
         return st;
+    tb__wake_body(w, s); /* what it held up must fall */
     last = (uint32_t)w->body_count - 1;
     w->body_damped -= w->body_damping[2 * s] != 0 || w->body_damping[2 * s + 1] != 0;
     w->body_isotropic -= w->body_frame[s].isotropic;
@@ -305,8 +310,10 @@ tb_status tb_body_set_position(tb_world *w, tb_body_id id, const double position
 {
     uint32_t s;
     tb_status st = writable(w, id, position, 3, "position", &s);
-    if (st == TB_OK)
+    if (st == TB_OK) {
         memcpy(at(w, TB__BODY_POS, 3, s), position, 3 * sizeof(double));
+        tb__wake_body(w, s);
+    }
     return st;
 }
 
@@ -325,6 +332,7 @@ tb_status tb_body_set_orientation(tb_world *w, tb_body_id id, const double orien
     memcpy(q, orientation, 4 * sizeof(double));
     normalise(q);
     set_spin(w, s, omega);
+    tb__wake_body(w, s);
     return TB_OK;
 }
 
@@ -333,9 +341,11 @@ tb_status tb_body_set_velocity(tb_world *w, tb_body_id id, const double velocity
     uint32_t s;
     int k;
     tb_status st = writable(w, id, velocity, 3, "velocity", &s);
-    if (st == TB_OK)
+    if (st == TB_OK) {
         for (k = 0; k < 3; ++k)
             at(w, TB__BODY_MOM, 3, s)[k] = w->body_mass[s] * velocity[k] + 0.0; /* +0: see set_spin */
+        tb__wake_body(w, s);
+    }
     return st;
 }
 
@@ -343,8 +353,10 @@ tb_status tb_body_set_angular_velocity(tb_world *w, tb_body_id id, const double 
 {
     uint32_t s;
     tb_status st = writable(w, id, angular_velocity, 3, "angular velocity", &s);
-    if (st == TB_OK)
+    if (st == TB_OK) {
         set_spin(w, s, angular_velocity);
+        tb__wake_body(w, s);
+    }
     return st;
 }
 
@@ -373,6 +385,7 @@ static tb_status hold(tb_world *w, tb_body_id id, const double force[3], const d
         held[3 + k] += tau[k];
     }
     w->body_held = 1;
+    tb__wake_body(w, s);
     return TB_OK;
 }
 
@@ -396,6 +409,7 @@ tb_status tb_body_apply_torque(tb_world *w, tb_body_id id, const double torque[3
         for (k = 0; k < 3; ++k)
             w->body_applied[6 * s + 3 + k] += torque[k];
         w->body_held = 1;
+        tb__wake_body(w, s);
     }
     return st;
 }

@@ -169,7 +169,7 @@ TB__LANE void rk_stage(const rk_params *c, rk_block *r, int i, int isotropic, in
             RK_LANES(isotropic, local, 2);                         \
     } while (0)
 
-static void rk_stages(const rk_params *c, rk_block *restrict r, const tb__split_frame *frame, int kind, int local,
+TB__LANE void rk_stages(const rk_params *c, rk_block *restrict r, const tb__split_frame *frame, int kind, int local,
                       int m, double a, double b, int mode)
 {
     int i;
@@ -216,7 +216,7 @@ TB__LANE void rk_put(rk_block *r, int i, double *x, double *q, double *P, double
     q[4 * i] = qi[0] * f, q[4 * i + 1] = qi[1] * f, q[4 * i + 2] = qi[2] * f, q[4 * i + 3] = qi[3] * f;
 }
 
-static void rk_load(rk_block *restrict r, const double *restrict x, const double *restrict q,
+TB__LANE void rk_load(rk_block *restrict r, const double *restrict x, const double *restrict q,
                     const double *restrict P, const double *restrict L, const double *restrict held,
                     const rk_params *c, const double *restrict inv_inertia, int m, int local)
 {
@@ -233,7 +233,7 @@ static void rk_load(rk_block *restrict r, const double *restrict x, const double
             r->held[k][i] = held[6 * i + k];
 }
 
-static void rk_store(rk_block *restrict r, double *restrict x, double *restrict q, double *restrict P,
+TB__LANE void rk_store(rk_block *restrict r, double *restrict x, double *restrict q, double *restrict P,
                      double *restrict L, int m, int local)
 {
     int i, k;
@@ -254,7 +254,7 @@ static void rk_store(rk_block *restrict r, double *restrict x, double *restrict 
         }
 }
 
-static void rk4_block(tb_world *w, size_t b, int m, double h, int local)
+TB__LANE void rk4_block(tb_world *w, size_t b, int m, double h, int local)
 {
     double *x = w->y + w->off[TB__BODY_POS] + 3 * b, *q = w->y + w->off[TB__BODY_ROT] + 4 * b;
     double *P = w->y + w->off[TB__BODY_MOM] + 3 * b, *L = w->y + w->off[TB__BODY_ANG] + 3 * b;
@@ -279,12 +279,33 @@ static void rk4_block(tb_world *w, size_t b, int m, double h, int local)
     rk_store(&r, x, q, P, L, m, local);
 }
 
+/* The blocks, compiled for each instruction set (rotation.h); all give the
+   same bits. */
+#define RK4_BLOCKS(isa, attr)                                                                               \
+    attr static void rk4_##isa(tb_world *w, double h, int local)                                            \
+    {                                                                                                       \
+        size_t b;                                                                                           \
+        for (b = 0; b < w->body_count; b += TB__LANES)                                                      \
+            rk4_block(w, b, w->body_count - b < TB__LANES ? (int)(w->body_count - b) : TB__LANES, h, local); \
+    }
+RK4_BLOCKS(portable, )
+#if TB__X86_DISPATCH
+RK4_BLOCKS(avx2, TB__TARGET_AVX2)
+RK4_BLOCKS(avx512, TB__TARGET_AVX512)
+#endif
+
 void tb__body_rk4(tb_world *w, double h)
 {
     const int local = !gravity_only(w);
-    size_t b;
-    for (b = 0; b < w->body_count; b += TB__LANES)
-        rk4_block(w, b, w->body_count - b < TB__LANES ? (int)(w->body_count - b) : TB__LANES, h, local);
+#if TB__X86_DISPATCH
+    const int isa = tb__isa();
+    if (isa == TB__ISA_AVX512)
+        rk4_avx512(w, h, local);
+    else if (isa == TB__ISA_AVX2)
+        rk4_avx2(w, h, local);
+    else
+#endif
+        rk4_portable(w, h, local);
 }
 
 /* The sweep goes over blocks of TB__LANES consecutive bodies, applying the
@@ -300,6 +321,7 @@ typedef struct pending {
     uint32_t slot[TB__LANES];
     int count;
     int accurate;
+    int isa; /* tb__isa(), asked once a sweep */
 } pending;
 
 static void turn_pending(tb_world *w, pending *p)
@@ -309,9 +331,9 @@ static void turn_pending(tb_world *w, pending *p)
     if (!p->count)
         return;
     if (p->accurate)
-        tb__accurate_lanes(&p->lanes, p->count);
+        tb__accurate_lanes(&p->lanes, p->count, p->isa);
     else
-        tb__split2_lanes(&p->lanes, p->count);
+        tb__split2_lanes(&p->lanes, p->count, p->isa);
     for (i = 0; i < p->count; ++i)
         tb__spin_store(&p->lanes, i, &w->body_frame[p->slot[i]], q + 4 * p->slot[i]);
     p->count = 0;
@@ -331,11 +353,11 @@ static void turn(tb_world *w, size_t b, size_t m, const tb__split_op *op, pendin
     /* an isotropic body turns about a fixed axis, exactly and cheaply, with
        no gyroscopic work */
     if (iso == m) {
-        tb__isotropic_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, (int)m);
+        tb__isotropic_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, (int)m, p->isa);
         return;
     }
     if (op->rotation == TB__ROTATE_FROZEN && iso == 0) {
-        tb__frozen_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, (int)m);
+        tb__frozen_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, (int)m, p->isa);
         return;
     }
     for (s = b; s < b + m; ++s) {
@@ -444,6 +466,7 @@ void tb__body_sweep(tb_world *w, const tb__split_op *ops, int n)
         drifts += ops[i].drift;
     p.count = 0;
     p.accurate = 0;
+    p.isa = tb__isa();
     p.lanes.h = 0;
     for (b = 0; b < w->body_count; b += TB__LANES) {
         const size_t m = w->body_count - b < TB__LANES ? w->body_count - b : TB__LANES;

@@ -46,7 +46,7 @@ static const double *body_q(const tb_world *w, uint32_t slot)
 }
 
 /* v and w of body slot s from its momenta. */
-static void body_velocity(const tb_world *w, uint32_t s, double v[3], double wv[3])
+void tb__body_velocity(const tb_world *w, uint32_t s, double v[3], double wv[3])
 {
     const double *P = w->y + w->off[TB__BODY_MOM] + 3 * s, *L = w->y + w->off[TB__BODY_ANG] + 3 * s;
     const double *inv = w->body_inv_inertia + 3 * s;
@@ -107,7 +107,7 @@ static tb_status solver_body(tb_world *w, tb__contacts *c, enum tb__tier tier, u
         memcpy(b->inv_inertia, w->body_inv_inertia + 3 * slot, sizeof b->inv_inertia);
         memcpy(b->x0, body_x(w, slot), sizeof b->x0);
         memcpy(b->q0, body_q(w, slot), sizeof b->q0);
-        body_velocity(w, slot, b->v0, b->w0);
+        tb__body_velocity(w, slot, b->v0, b->w0);
     } else {
         b->inv_mass = w->inv_mass[slot];
         memcpy(b->x0, w->y + w->off[TB__PARTICLE_POS] + 3 * slot, sizeof b->x0);
@@ -216,7 +216,8 @@ static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
         s->friction = sh->friction;
         s->restitution = sh->restitution;
         s->body = -1;
-        if (sh->body && tb__ids_lookup(&w->body_ids, sh->body, sh->body_generation, &slot))
+        if (sh->body && tb__ids_lookup(&w->body_ids, sh->body, sh->body_generation, &slot) &&
+            !w->body_island[slot]) /* (a sleeping body is ground to a slow particle) */
             return solver_body(w, c, TB__BODIES, slot, &s->body);
         return TB_OK;
     }
@@ -295,6 +296,33 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
     return TB_OK;
 }
 
+/* Proxy k neither moves nor is moved this step: static, or asleep. */
+static int inert(const tb_world *w, const tb__contacts *c, size_t k)
+{
+    return c->group[k] == 0xFFFFFFFFu || tb__proxy_island(w, c, k) != 0;
+}
+
+/* The entry between two shapes that sleep (or are static) as it was last
+   step: touching as it was, its impulses kept for when they wake. */
+static tb_status carry_over(tb_world *w, tb__contacts *c, uint32_t shape_a, uint32_t shape_b)
+{
+    uint32_t key_a, key_b, gen;
+    const tb__entry *old;
+    tb__entry *e;
+    tb_status st;
+    tb__ids_at(&c->ids, shape_a, &key_a, &gen);
+    tb__ids_at(&c->ids, shape_b, &key_b, &gen);
+    if (!(old = previous_entry(c, key_a, key_b)))
+        return TB_OK;
+    if ((st = tb__contacts_reserve(w, (void **)&c->entries, &c->entry_cap, c->entry_count + 1, sizeof *e)) != TB_OK)
+        return st;
+    e = &c->entries[c->entry_count++];
+    *e = *old;
+    e->body_a = e->body_b = -1; /* (last step's solver bodies mean nothing now) */
+    e->asleep = 1;
+    return TB_OK;
+}
+
 /* How far a proxy may move in a step of h: its speed and spin over the
    step, and what gravity adds, plus the slop. */
 static double motion_margin(const tb_world *w, const tb__contacts *c, uint32_t proxy, double h)
@@ -309,7 +337,7 @@ static double motion_margin(const tb_world *w, const tb__contacts *c, uint32_t p
         double v[3], wv[3];
         if (!s->body || !tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot))
             return c->settings.slop;
-        body_velocity(w, slot, v, wv);
+        tb__body_velocity(w, slot, v, wv);
         return h * (norm3(v) + norm3(wv) * s->reach) + g + c->settings.slop;
     }
 }
@@ -339,16 +367,16 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
         return st;
     if (n + c->shape_count > c->proxy_cap) {
         size_t old = c->proxy_cap, want = n;
-        void **arrays[8];
-        size_t sizes[8] = { 3 * sizeof(double), 3 * sizeof(double), sizeof(uint32_t), sizeof(uint32_t),
-                            sizeof(uint32_t), sizeof(uint32_t), sizeof(double), sizeof(tb__geom) };
+        void **arrays[9];
+        size_t sizes[9] = { 3 * sizeof(double), 3 * sizeof(double), sizeof(uint32_t), sizeof(uint32_t),
+                            sizeof(uint32_t), sizeof(uint32_t), sizeof(double), sizeof(tb__geom), sizeof(uint32_t) };
         size_t new_cap = old ? old : 16;
         while (new_cap < want)
             new_cap *= 2;
         arrays[0] = (void **)&c->lo, arrays[1] = (void **)&c->hi, arrays[2] = (void **)&c->category;
         arrays[3] = (void **)&c->mask, arrays[4] = (void **)&c->group, arrays[5] = (void **)&c->proxy;
-        arrays[6] = (void **)&c->margin, arrays[7] = (void **)&c->geoms;
-        if ((st = tb__grow(w, arrays, sizes, 8, 0, old, new_cap)) != TB_OK)
+        arrays[6] = (void **)&c->margin, arrays[7] = (void **)&c->geoms, arrays[8] = (void **)&c->owner;
+        if ((st = tb__grow(w, arrays, sizes, 9, 0, old, new_cap)) != TB_OK)
             return st;
         c->proxy_cap = new_cap;
     }
@@ -362,10 +390,13 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
             continue;
         k = c->proxy_count++;
         g = &c->geoms[k];
-        if (s->body && tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot))
+        c->owner[k] = 0;
+        if (s->body && tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot)) {
             place(s, body_x(w, slot), body_q(w, slot), g);
-        else
+            c->owner[k] = slot + 1;
+        } else {
             place(s, NULL, NULL, g);
+        }
         c->proxy[k] = (uint32_t)i;
         c->category[k] = s->category;
         c->mask[k] = s->mask;
@@ -382,6 +413,7 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
             memcpy(g->pos, w->y + w->off[TB__PARTICLE_POS] + 3 * i, sizeof g->pos);
             g->rot[0] = g->rot[4] = g->rot[8] = 1;
             c->proxy[k] = (uint32_t)i | TB__PARTICLE_KEY;
+            c->owner[k] = 0;
             c->category[k] = 0xFFFFFFFFu;
             c->mask[k] = 0xFFFFFFFFu;
             c->group[k] = 0xFFFFFFFEu; /* particles never meet each other */
@@ -398,11 +430,18 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
     if ((st = tb__sap_pairs(w, &c->sap, c->proxy_count, c->lo, c->hi, c->category, c->mask, c->group, &c->pairs,
                             &c->pair_count, &c->pair_cap)) != TB_OK)
         return st;
+    if ((st = tb__sleep_prepare(w, c)) != TB_OK)
+        return st;
     for (i = 0; i < c->pair_count; ++i) {
         const uint32_t a = c->pairs[i].a, b = c->pairs[i].b;
         tb__manifold m;
         if ((c->proxy[a] & TB__PARTICLE_KEY) && (c->proxy[b] & TB__PARTICLE_KEY))
             continue;
+        if (inert(w, c, a) && inert(w, c, b)) {
+            if ((st = carry_over(w, c, c->proxy[a], c->proxy[b])) != TB_OK)
+                return st;
+            continue;
+        }
         if (tb__collide(&c->geoms[a], &c->geoms[b], c->margin[a] + c->margin[b], &m) &&
             (st = add_entry(w, c, c->proxy[a], c->proxy[b], &m)) != TB_OK)
             return st;
@@ -425,6 +464,11 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
                 nearest += s->normal[j] * (s->normal[j] > 0 ? lo[j] : hi[j]);
             if (nearest > s->offset)
                 continue;
+            if (inert(w, c, k)) {
+                if ((st = carry_over(w, c, (uint32_t)i, c->proxy[k])) != TB_OK)
+                    return st;
+                continue;
+            }
             if (tb__collide(&plane, &c->geoms[k], c->margin[k], &m) &&
                 (st = add_entry(w, c, (uint32_t)i, c->proxy[k], &m)) != TB_OK)
                 return st;
@@ -515,7 +559,7 @@ static void load_bodies(tb_world *w, tb__contacts *c)
 
 /* Relative velocity of the anchors along row d of r, with velocities (or
    position changes) from the array m. */
-static double row_rate(const tb__row *r, const double *m, int d)
+static inline double row_rate(const tb__row *r, const double *m, int d)
 {
     const double *A = m + TB__MOTION * r->a, *B = m + TB__MOTION * r->b;
     const double *n = r->dir[d], *ja = r->arm_a[d], *jb = r->arm_b[d];
@@ -525,7 +569,7 @@ static double row_rate(const tb__row *r, const double *m, int d)
 
 /* An impulse lambda along row d of r into the array m: -lambda on a,
    +lambda on b. */
-static void row_push(const tb__row *r, double *m, int d, double lambda)
+static inline void row_push(const tb__row *r, double *m, int d, double lambda)
 {
     double *A = m + TB__MOTION * r->a, *B = m + TB__MOTION * r->b;
     const double *n = r->dir[d], *ta = r->turn_a[d], *tb = r->turn_b[d];
@@ -551,6 +595,8 @@ static void set_up_rows(tb__contacts *c, double h)
     for (i = 0; i < c->entry_count; ++i) {
         tb__entry *e = &c->entries[c->order[i].index];
         int k, j, d;
+        if (e->asleep)
+            continue;
         for (k = 0; k < e->count; ++k) {
             tb__point *p = &e->point[k];
             tb__row *r = &c->rows[c->row_count];
@@ -648,6 +694,33 @@ static void warm_start(tb__contacts *c)
             row_push(&c->rows[i], c->velocity, d, c->rows[i].impulse[d]);
 }
 
+/* The velocities of a row's two sides, held in locals through a point's
+   three rows. */
+typedef struct pair_motion {
+    double va[3], wa[3], vb[3], wb[3], ma, mb;
+} pair_motion;
+
+static inline double pair_rate(const tb__row *r, const pair_motion *s, int d)
+{
+    const double *n = r->dir[d], *ja = r->arm_a[d], *jb = r->arm_b[d];
+    return n[0] * (s->vb[0] - s->va[0]) + n[1] * (s->vb[1] - s->va[1]) + n[2] * (s->vb[2] - s->va[2]) +
+           jb[0] * s->wb[0] + jb[1] * s->wb[1] + jb[2] * s->wb[2] - ja[0] * s->wa[0] - ja[1] * s->wa[1] -
+           ja[2] * s->wa[2];
+}
+
+static inline void pair_push(const tb__row *r, pair_motion *s, int d, double lambda)
+{
+    const double *n = r->dir[d], *ta = r->turn_a[d], *tb = r->turn_b[d];
+    const double la = lambda * s->ma, lb = lambda * s->mb;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        s->va[k] -= la * n[k];
+        s->wa[k] -= lambda * ta[k];
+        s->vb[k] += lb * n[k];
+        s->wb[k] += lambda * tb[k];
+    }
+}
+
 /* One Gauss-Seidel sweep over the touching points: friction first, within
    the circle mu * normal impulse, then the normal, v_n >= target. */
 static void solve_velocities(tb__contacts *c)
@@ -656,21 +729,30 @@ static void solve_velocities(tb__contacts *c)
     size_t i;
     for (i = 0; i < c->row_count; ++i) {
         tb__row *r = &c->rows[i];
+        double *A = m + TB__MOTION * r->a, *B = m + TB__MOTION * r->b;
         const double limit = r->friction * r->impulse[0];
-        double t0 = r->impulse[1] - r->mass[1] * row_rate(r, m, 1);
-        double t1 = r->impulse[2] - r->mass[2] * row_rate(r, m, 2);
-        double len2 = t0 * t0 + t1 * t1, total;
+        pair_motion s;
+        double t0, t1, len2, total;
+        memcpy(s.va, A, 3 * sizeof *A), memcpy(s.wa, A + 3, 3 * sizeof *A), s.ma = A[6];
+        memcpy(s.vb, B, 3 * sizeof *B), memcpy(s.wb, B + 3, 3 * sizeof *B), s.mb = B[6];
+        t0 = r->impulse[1] - r->mass[1] * pair_rate(r, &s, 1);
+        t1 = r->impulse[2] - r->mass[2] * pair_rate(r, &s, 2);
+        len2 = t0 * t0 + t1 * t1;
         if (len2 > limit * limit) {
             const double scale = limit / sqrt(len2);
             t0 *= scale, t1 *= scale;
         }
-        row_push(r, m, 1, t0 - r->impulse[1]);
-        row_push(r, m, 2, t1 - r->impulse[2]);
+        pair_push(r, &s, 1, t0 - r->impulse[1]);
+        pair_push(r, &s, 2, t1 - r->impulse[2]);
         r->impulse[1] = t0, r->impulse[2] = t1;
-        total = r->impulse[0] - r->mass[0] * (row_rate(r, m, 0) - r->target);
+        total = r->impulse[0] - r->mass[0] * (pair_rate(r, &s, 0) - r->target);
         total = total > 0 ? total : 0;
-        row_push(r, m, 0, total - r->impulse[0]);
+        pair_push(r, &s, 0, total - r->impulse[0]);
         r->impulse[0] = total;
+        /* (the static world at 0 gets its zeros back: its rows have no
+           mass and no turn) */
+        memcpy(A, s.va, 3 * sizeof *A), memcpy(A + 3, s.wa, 3 * sizeof *A);
+        memcpy(B, s.vb, 3 * sizeof *B), memcpy(B + 3, s.wb, 3 * sizeof *B);
     }
 }
 
@@ -848,6 +930,7 @@ void tb__contacts_solve(tb_world *w, double h)
     int it, iterations;
     if (!c->prepared)
         return;
+    tb__sleep_restore(w, c);
     load_bodies(w, c);
     set_up_rows(c, h);
     warm_start(c);
@@ -865,6 +948,7 @@ void tb__contacts_solve(tb_world *w, double h)
     store_bodies(w, c);
     if (make_events(w, c) != TB_OK)
         c->event_count = 0; /* out of memory for events: the step itself stands */
+    tb__sleep_update(w, c, h);
     c->prepared = 0;
     c->solved = 1;
 }

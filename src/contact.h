@@ -67,6 +67,7 @@ typedef struct tb__entry {
     double friction, restitution;
     int count;
     int touching;
+    int asleep;                /* carried over unsolved: both sides sleep or are static */
     tb__point point[TB__MANIFOLD_POINTS];
 } tb__entry;
 
@@ -91,6 +92,12 @@ typedef struct tb__solver_body {
    then the inverse mass; one cache line each. */
 #define TB__MOTION 8
 
+/* A sleeping body's pose, put back after the free motion. */
+typedef struct tb__pose {
+    uint32_t slot;
+    double x[3], q[4];
+} tb__pose;
+
 /* A contact entry's place in key order. */
 typedef struct tb__key {
     uint64_t key;              /* key_a << 32 | key_b */
@@ -110,6 +117,7 @@ struct tb__contacts {
     uint32_t *category, *mask, *group, *proxy; /* [proxy_cap]; proxy: shape slot, or
                                   particle slot | TB__PARTICLE_KEY */
     double *margin;            /* [proxy_cap] m: how far the proxy may move this step */
+    uint32_t *owner;           /* [proxy_cap] body slot + 1; 0: static or a particle */
     tb__geom *geoms;           /* [proxy_cap]: the proxies' shapes placed in the world */
     size_t proxy_count, proxy_cap;
     tb__pair *pairs;
@@ -136,9 +144,29 @@ struct tb__contacts {
     tb_contact_event *events;
     size_t event_count, event_cap;
     size_t touching_points;
+
+    /* sleep.c */
+    size_t sleeping;           /* bodies asleep */
+    uint32_t next_island;      /* the last tag given to an island */
+    tb__pose *poses;
+    size_t pose_count, pose_cap;
+    double *island_scratch;
+    size_t island_scratch_cap;
     int prepared;              /* entries hold this step's contacts, to solve */
     int solved;                /* entries hold the last step's solved contacts */
 };
+
+/* contact.c: v and w of body slot s from its momenta */
+void tb__body_velocity(const tb_world *w, uint32_t s, double v[3], double omega[3]);
+
+/* sleep.c: the sleep tag of proxy k's body (0: awake, static, particle);
+   before the narrowphase, wake what moving proxies reach and keep the
+   sleeping poses; after the integrator, put them back; after the solve,
+   rest times and islands. */
+uint32_t tb__proxy_island(const tb_world *w, const tb__contacts *c, size_t k);
+tb_status tb__sleep_prepare(tb_world *w, tb__contacts *c);
+void tb__sleep_restore(tb_world *w, tb__contacts *c);
+void tb__sleep_update(tb_world *w, tb__contacts *c, double h);
 
 /* shapes.c: grow an array to hold `need` items of `size` bytes */
 tb_status tb__contacts_reserve(tb_world *w, void **array, size_t *cap, size_t need, size_t size);

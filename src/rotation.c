@@ -85,10 +85,13 @@ static inline void tb__sincos8(double x, double *s, double *c)
 
 static inline void tb__sinc_cos4(double u, double *sinc, double *c)
 {
-    *sinc = 1 + u * (-1.0 / 6 + u * (1.0 / 120 + u * (-1.0 / 5040 + u * (1.0 / 362880
-            + u * (-1.0 / 39916800 + u * (1.0 / 6227020800.0))))));
-    *c = 1 + u * (-1.0 / 2 + u * (1.0 / 24 + u * (-1.0 / 720 + u * (1.0 / 40320
-         + u * (-1.0 / 3628800 + u * (1.0 / 479001600.0))))));
+    const double u2 = u * u, u4 = u2 * u2;
+    /* Estrin's scheme, as in tb__sincos8: Horner's chain of 12 dependent
+       operations was the critical path of the lanes */
+    *sinc = (1 + u * (-1.0 / 6)) + u2 * (1.0 / 120 + u * (-1.0 / 5040))
+            + u4 * ((1.0 / 362880 + u * (-1.0 / 39916800)) + u2 * (1.0 / 6227020800.0));
+    *c = (1 + u * (-1.0 / 2)) + u2 * (1.0 / 24 + u * (-1.0 / 720))
+         + u4 * ((1.0 / 40320 + u * (-1.0 / 3628800)) + u2 * (1.0 / 479001600.0));
 }
 
 /* The quaternion (cos x, (sin x / x) k v) of a rotation by 2 x about v, for
@@ -253,15 +256,24 @@ static inline int tb__turns_small(const tb__turn_lanes *t)
     return 1;
 }
 
-void tb__isotropic_lanes(double *restrict q, const double *restrict L, const double *restrict invI, double h, int n)
+/* The two kernels in lanes, as templates for each instruction set
+   (TB__KERNELS below). */
+TB__LANE void tb__isotropic_lanes_t(double *restrict q, const double *restrict L, const double *restrict invI,
+                                    double h, int n)
 {
     const double k = 0.5 * h;
     int i;
     if (n == TB__LANES) {
+        double l[3][TB__LANES], inv[TB__LANES];
         tb__turn_lanes t;
+        /* L and invI one array per component first: the turns then run
+           on whole vectors, not on the stride of 3 */
+        for (i = 0; i < TB__LANES; ++i)
+            l[0][i] = L[3 * i], l[1][i] = L[3 * i + 1], l[2][i] = L[3 * i + 2], inv[i] = invI[3 * i];
         for (i = 0; i < TB__LANES; ++i) {
-            double w[3];
-            tb__turn_put(&t, i, tb__isotropic_turn(L + 3 * i, invI[3 * i], k, w), k, w);
+            double w[3], li[3];
+            li[0] = l[0][i], li[1] = l[1][i], li[2] = l[2][i];
+            tb__turn_put(&t, i, tb__isotropic_turn(li, inv[i], k, w), k, w);
         }
         if (tb__turns_small(&t)) {
             for (i = 0; i < TB__LANES; ++i) {
@@ -277,21 +289,32 @@ void tb__isotropic_lanes(double *restrict q, const double *restrict L, const dou
         tb__rotation_isotropic(q + 4 * i, L + 3 * i, invI[3 * i], h);
 }
 
-void tb__frozen_lanes(double *restrict q, const double *restrict L, const double *restrict invI, double h, int n)
+TB__LANE void tb__frozen_lanes_t(double *restrict q, const double *restrict L, const double *restrict invI,
+                                 double h, int n)
 {
     const double k = 0.5 * h;
     int i;
     if (n == TB__LANES) {
+        double v[10][TB__LANES];
         tb__turn_lanes t;
+        for (i = 0; i < TB__LANES; ++i) { /* one array per component, as above */
+            v[0][i] = q[4 * i], v[1][i] = q[4 * i + 1], v[2][i] = q[4 * i + 2], v[3][i] = q[4 * i + 3];
+            v[4][i] = L[3 * i], v[5][i] = L[3 * i + 1], v[6][i] = L[3 * i + 2];
+            v[7][i] = invI[3 * i], v[8][i] = invI[3 * i + 1], v[9][i] = invI[3 * i + 2];
+        }
         for (i = 0; i < TB__LANES; ++i) {
-            double w[3];
-            tb__turn_put(&t, i, tb__frozen_turn(q + 4 * i, L + 3 * i, invI + 3 * i, k, w), k, w);
+            double w[3], qi[4], li[3], ii[3];
+            qi[0] = v[0][i], qi[1] = v[1][i], qi[2] = v[2][i], qi[3] = v[3][i];
+            li[0] = v[4][i], li[1] = v[5][i], li[2] = v[6][i];
+            ii[0] = v[7][i], ii[1] = v[8][i], ii[2] = v[9][i];
+            tb__turn_put(&t, i, tb__frozen_turn(qi, li, ii, k, w), k, w);
         }
         if (tb__turns_small(&t)) {
             for (i = 0; i < TB__LANES; ++i) {
-                double r[4];
+                double r[4], qi[4];
+                qi[0] = v[0][i], qi[1] = v[1][i], qi[2] = v[2][i], qi[3] = v[3][i];
                 r[0] = t.w[i], r[1] = t.x[i], r[2] = t.y[i], r[3] = t.z[i];
-                tb__qmul(q + 4 * i, r, r);
+                tb__qmul(qi, r, r);
                 tb__newton(r, q + 4 * i);
             }
             return;
@@ -490,13 +513,13 @@ TB__LANE void tb__lane_end(tb__spin_lanes *lanes, int i)
     lanes->w[i] = q[0], lanes->x[i] = q[1], lanes->y[i] = q[2], lanes->z[i] = q[3];
 }
 
-static void tb__lanes_begin(tb__spin_lanes *restrict p, int n)
+TB__LANE void tb__lanes_begin(tb__spin_lanes *restrict p, int n)
 {
     int i;
     TB__EACH_LANE(i, n, tb__lane_begin(p, i));
 }
 
-static void tb__lanes_a_last(tb__spin_lanes *restrict p, int n, double g)
+TB__LANE void tb__lanes_a_last(tb__spin_lanes *restrict p, int n, double g)
 {
     int i;
     TB__EACH_LANE(i, n, tb__lane_a(p, i, g, 1));
@@ -504,19 +527,19 @@ static void tb__lanes_a_last(tb__spin_lanes *restrict p, int n, double g)
 
 /* One loop a turn. (Two turns a loop halve the loads and stores between
    turns, but double the chain of an iteration: 15% slower, measured.) */
-static void tb__lanes_a(tb__spin_lanes *restrict p, int n, double g)
+TB__LANE void tb__lanes_a(tb__spin_lanes *restrict p, int n, double g)
 {
     int i;
     TB__EACH_LANE(i, n, tb__lane_a(p, i, g, 0));
 }
 
-static void tb__lanes_b(tb__spin_lanes *restrict p, int n, double g)
+TB__LANE void tb__lanes_b(tb__spin_lanes *restrict p, int n, double g)
 {
     int i;
     TB__EACH_LANE(i, n, tb__lane_b(p, i, g));
 }
 
-static void tb__lanes_end(tb__spin_lanes *restrict p, int n)
+TB__LANE void tb__lanes_end(tb__spin_lanes *restrict p, int n)
 {
     int i;
     TB__EACH_LANE(i, n, tb__lane_end(p, i));
@@ -601,7 +624,7 @@ static void tb__split_any(double q[4], const double L[3], const tb__split_frame 
 #define TB__ONE_B(g) tb__lane_b(p, 0, g)
 #define TB__ONE_A_LAST(g) tb__lane_a(p, 0, g, 1)
 
-void tb__split2_lanes(tb__spin_lanes *p, int n)
+TB__LANE void tb__split2_lanes_t(tb__spin_lanes *p, int n)
 {
     TB__SPLIT2(tb__lanes_begin(p, n), TB__LANES_A, TB__LANES_B, TB__LANES_A_LAST, tb__lanes_end(p, n));
 }
@@ -632,7 +655,7 @@ static const double tb__bm_a[7] = { TB__BM_A1, TB__BM_A2, TB__BM_A3, TB__BM_A4,
 static const double tb__bm_b[6] = { TB__BM_B1, TB__BM_B2, TB__BM_B3,
                                     TB__BM_B3, TB__BM_B2, TB__BM_B1 };
 
-void tb__accurate_lanes(tb__spin_lanes *p, int n)
+TB__LANE void tb__accurate_lanes_t(tb__spin_lanes *p, int n)
 {
     TB__ACCURATE(tb__lanes_begin(p, n), TB__LANES_A, TB__LANES_B, TB__LANES_A_LAST, tb__lanes_end(p, n));
 }
@@ -641,6 +664,85 @@ static void tb__accurate_one(tb__spin_lanes *p)
 {
     TB__ACCURATE(tb__lane_begin(p, 0), TB__ONE_A, TB__ONE_B, TB__ONE_A_LAST, tb__lane_end(p, 0));
 }
+
+/* ------------------------------------------------ instruction sets -- */
+
+/* The lanes kernels are compiled once for each instruction set (the same C
+   through the templates above) and chosen at run time. Contraction stays
+   off (-ffp-contract=off, and C99 mode's default): every variant does the
+   same IEEE operations in the same order, so all give the same bits, and
+   the wider ones only do more lanes per instruction. */
+#define TB__KERNELS(isa, attr)                                                                          \
+    attr static void tb__isotropic_##isa(double *q, const double *L, const double *invI, double h, int n) \
+    {                                                                                                   \
+        tb__isotropic_lanes_t(q, L, invI, h, n);                                                        \
+    }                                                                                                   \
+    attr static void tb__frozen_##isa(double *q, const double *L, const double *invI, double h, int n) \
+    {                                                                                                   \
+        tb__frozen_lanes_t(q, L, invI, h, n);                                                           \
+    }                                                                                                   \
+    attr static void tb__split2_##isa(tb__spin_lanes *p, int n)                                         \
+    {                                                                                                   \
+        tb__split2_lanes_t(p, n);                                                                       \
+    }                                                                                                   \
+    attr static void tb__accurate_##isa(tb__spin_lanes *p, int n)                                       \
+    {                                                                                                   \
+        tb__accurate_lanes_t(p, n);                                                                     \
+    }
+
+TB__KERNELS(portable, )
+#if TB__X86_DISPATCH
+TB__KERNELS(avx2, TB__TARGET_AVX2)
+TB__KERNELS(avx512, TB__TARGET_AVX512)
+#endif
+
+int tb__isa(void)
+{
+#if TB__X86_DISPATCH
+    __builtin_cpu_init(); /* cheap once done; needed if called before constructors */
+    if (__builtin_cpu_supports("avx512f"))
+        return TB__ISA_AVX512;
+    if (__builtin_cpu_supports("avx2"))
+        return TB__ISA_AVX2;
+#endif
+    return TB__ISA_PORTABLE;
+}
+
+#if TB__X86_DISPATCH
+#define TB__DISPATCH(kernel, args)        \
+    do {                                  \
+        if (isa == TB__ISA_AVX512)        \
+            tb__##kernel##_avx512 args;   \
+        else if (isa == TB__ISA_AVX2)     \
+            tb__##kernel##_avx2 args;     \
+        else                              \
+            tb__##kernel##_portable args; \
+    } while (0)
+#else
+#define TB__DISPATCH(kernel, args) ((void)isa, tb__##kernel##_portable args)
+#endif
+
+void tb__isotropic_lanes(double *q, const double *L, const double *invI, double h, int n, int isa)
+{
+    TB__DISPATCH(isotropic, (q, L, invI, h, n));
+}
+
+void tb__frozen_lanes(double *q, const double *L, const double *invI, double h, int n, int isa)
+{
+    TB__DISPATCH(frozen, (q, L, invI, h, n));
+}
+
+void tb__split2_lanes(tb__spin_lanes *p, int n, int isa)
+{
+    TB__DISPATCH(split2, (p, n));
+}
+
+void tb__accurate_lanes(tb__spin_lanes *p, int n, int isa)
+{
+    TB__DISPATCH(accurate, (p, n));
+}
+
+/* --------------------------------------------------------- one body -- */
 
 /* One body by the lanes code (so it gets the bits it would get in a block),
    or the general way for a q off unit length or turns too large for the

@@ -73,6 +73,28 @@ void tb__rotation_accurate(double q[4], const double L[3], const double invI[3],
 #define TB__LANE static inline
 #endif
 
+/* The loops over lanes are compiled for several instruction sets and
+   chosen at run time (tb__isa): portable C (SSE2 on x86-64, two lanes an
+   instruction), AVX2 (four) and AVX-512 (eight), on x86-64 with GCC or
+   Clang. Every variant gives the same bits (rotation.c). */
+enum { TB__ISA_PORTABLE = 0, TB__ISA_AVX2 = 1, TB__ISA_AVX512 = 2 };
+#if defined(__GNUC__) && defined(__x86_64__)
+#define TB__X86_DISPATCH 1
+#define TB__TARGET_AVX2 __attribute__((target("avx2,fma")))
+#if defined(__clang__)
+#define TB__TARGET_AVX512 __attribute__((target("avx512f")))
+#else
+/* GCC's generic tuning would split AVX-512 loops into 256-bit halves */
+#define TB__TARGET_AVX512 __attribute__((target("avx512f,prefer-vector-width=512")))
+#endif
+#else
+#define TB__X86_DISPATCH 0
+#endif
+
+/* The widest instruction set this processor runs, for the isa arguments
+   below (which take any value up to it). */
+int tb__isa(void);
+
 /* Lanes hold unit q only (within 5e-9, as the world keeps them): they
    renormalise with the Newton step alone, which the one-body kernels take
    for such q too. */
@@ -81,8 +103,8 @@ void tb__rotation_accurate(double q[4], const double L[3], const double invI[3],
    the world stores them: q[4 k], L[3 k], invI[3 k] (for isotropic bodies
    only invI[3 k] is read). A body whose turn is beyond the polynomials
    sends its block of lanes through the one-body kernel. */
-void tb__isotropic_lanes(double *q, const double *L, const double *invI, double h, int n);
-void tb__frozen_lanes(double *q, const double *L, const double *invI, double h, int n);
+void tb__isotropic_lanes(double *q, const double *L, const double *invI, double h, int n, int isa);
+void tb__frozen_lanes(double *q, const double *L, const double *invI, double h, int n, int isa);
 
 /* What the splitting kernels need to know of a body that only its moments
    decide: which axes play A, middle and B (rotation.c), and the rates.
@@ -140,8 +162,8 @@ static inline int tb__spin_load(tb__spin_lanes *p, int i, const double q[4], con
 }
 
 /* Turn lanes 0 to n - 1 (n <= TB__LANES) by split2 or accurate over p->h. */
-void tb__split2_lanes(tb__spin_lanes *p, int n);
-void tb__accurate_lanes(tb__spin_lanes *p, int n);
+void tb__split2_lanes(tb__spin_lanes *p, int n, int isa);
+void tb__accurate_lanes(tb__spin_lanes *p, int n, int isa);
 
 /* Lane i's new orientation, back in the body's own axes. */
 static inline void tb__spin_store(const tb__spin_lanes *p, int i, const tb__split_frame *f, double q[4])

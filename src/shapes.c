@@ -34,6 +34,8 @@ tb_contact_settings tb_default_contact_settings(void)
     s.position_iterations = 4;
     s.particle_radius = -1;
     s.particle_friction = 0.6;
+    s.sleep_speed = 0.05;
+    s.sleep_time = 0.5;
     return s;
 }
 
@@ -89,6 +91,9 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->order, c->order_cap * sizeof *c->order, 0);
     tb__alloc(w, c->previous_order, c->previous_order_cap * sizeof *c->previous_order, 0);
     tb__alloc(w, c->rows, c->row_cap * sizeof *c->rows, 0);
+    tb__alloc(w, c->owner, c->proxy_cap * sizeof(uint32_t), 0);
+    tb__alloc(w, c->poses, c->pose_cap * sizeof *c->poses, 0);
+    tb__alloc(w, c->island_scratch, c->island_scratch_cap * sizeof(double), 0);
     tb__alloc(w, c->velocity, 2 * TB__MOTION * c->motion_cap * sizeof(double), 0); /* and motion */
     tb__alloc(w, c->bodies, c->body_cap * sizeof *c->bodies, 0);
     tb__alloc(w, c->body_map, c->body_map_cap * sizeof(int32_t), 0);
@@ -196,6 +201,7 @@ tb_status tb_world_add_shape(tb_world *w, const tb_shape_def *def, tb_shape_id *
     c->planes += s->kind == TB__SHAPE_PLANE;
     tb__ids_acquire(&c->ids, (uint32_t)c->shape_count, &made.index1, &made.generation);
     c->shape_count++;
+    tb__wake_all(w); /* it may reach into what sleeps */
     if (id)
         *id = made;
     return TB_OK;
@@ -225,6 +231,7 @@ tb_status tb_world_remove_shape(tb_world *w, tb_shape_id id)
         return tb__fail(w, TB_ERR_STALE_ID, "shape id %u.%u is null, removed or from another world", id.index1,
                         id.generation);
     remove_slot(w->contacts, slot);
+    tb__wake_all(w); /* what it held up must fall */
     return TB_OK;
 }
 
@@ -259,13 +266,16 @@ tb_status tb_world_set_contact_settings(tb_world *w, const tb_contact_settings *
         !positive(s->max_push) || !(isfinite(s->restitution_threshold) && s->restitution_threshold >= 0) ||
         !(isfinite(s->slop) && s->slop >= 0) || s->velocity_iterations < 1 || s->position_iterations < 0 ||
         !isfinite(s->particle_radius) || !(isfinite(s->particle_friction) && s->particle_friction >= 0) ||
-        !(s->particle_restitution >= 0 && s->particle_restitution <= 1))
+        !(s->particle_restitution >= 0 && s->particle_restitution <= 1) ||
+        !(isfinite(s->sleep_speed) && s->sleep_speed >= 0) || !(s->sleep_time > 0))
         return tb__fail(w, TB_ERR_ARGUMENT,
                         "contact settings: hertz and max_push must be > 0, damping_ratio, threshold, slop and "
-                        "particle friction >= 0, at least 1 velocity iteration, restitution in [0, 1]");
+                        "particle friction >= 0, at least 1 velocity iteration, restitution in [0, 1], "
+                        "sleep_speed finite and >= 0, sleep_time > 0 (INFINITY: never sleep)");
     if ((st = contacts_of(w, &c)) != TB_OK)
         return st;
     c->settings = *s;
+    tb__wake_all(w); /* what rests under the old settings may not under the new */
     return TB_OK;
 }
 

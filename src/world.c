@@ -105,6 +105,7 @@ tb_status tb_world_set_gravity(tb_world *w, const double gravity[3])
     if (!gravity || !tb__finite3(gravity))
         return tb__fail(w, TB_ERR_ARGUMENT, "gravity must be finite");
     memcpy(w->gravity, gravity, sizeof w->gravity);
+    tb__wake_all(w); /* resting was under the old gravity */
     return TB_OK;
 }
 

@@ -173,6 +173,9 @@ struct tb_world {
                                  callbacks */
     tb__split_frame *body_frame; /* [body_cap] the axes and rates the rotation
                                  kernels need, fixed by the moments */
+    double *body_rest;        /* [body_cap] s: how long the body has been slow
+                                 (sleep.c) */
+    uint32_t *body_island;    /* [body_cap] the sleeping island it is in; 0: awake */
     size_t body_damped;       /* bodies with linear or angular damping */
     size_t body_isotropic;    /* bodies with I1 = I2 = I3 */
     int body_held;            /* some body_applied may be nonzero (cleared
@@ -293,6 +296,9 @@ tb_status tb__contacts_prepare(tb_world *w, double h);
 void tb__contacts_solve(tb_world *w, double h);
 void tb__contacts_free(tb_world *w);
 void tb__shapes_of_body_removed(tb_world *w, uint32_t body_index1);
+/* sleep.c: wake body slot s and the island it sleeps in (if it sleeps). */
+void tb__wake_body(tb_world *w, uint32_t s);
+void tb__wake_all(tb_world *w);
 
 /* ---- the tiers' parts ----------------------------------------------------- */
 tb_status tb__tracer_derive(tb_world *w, double t, const double *y, double *dy);

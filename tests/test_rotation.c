@@ -640,16 +640,16 @@ static void lane_body(unsigned long long *s, int k, double q[4], double L[3], do
     normalize(q);
 }
 
-/* The kernels in lanes give every body the bits of the one-body kernel:
-   full blocks and partial ones, with bodies beyond the polynomials among
-   them, over many steps. */
-static void lanes_give_the_one_body_bits(void **state)
+/* The kernels in lanes, compiled for instruction set `isa`, give every
+   body the bits of the one-body kernel (portable C): full blocks and
+   partial ones, with bodies beyond the polynomials among them, over many
+   steps. */
+static void lanes_match_one_body(int isa)
 {
     enum { N = 3 * TB__LANES + 5, STEPS = 50 };
     static double q[N][4], L[N][3], invI[N][3], one[N][4];
     unsigned long long seed = 42;
     int kind, k, s;
-    (void)state;
     for (kind = 0; kind < 4; ++kind) {
         for (k = 0; k < N; ++k) {
             lane_body(&seed, k, q[k], L[k], invI[k]);
@@ -663,9 +663,9 @@ static void lanes_give_the_one_body_bits(void **state)
             for (b = 0; b < N; b += TB__LANES) {
                 const int n = N - b < TB__LANES ? N - b : TB__LANES;
                 if (kind == 0)
-                    tb__isotropic_lanes(q[b], L[b], invI[b], h, n);
+                    tb__isotropic_lanes(q[b], L[b], invI[b], h, n, isa);
                 else if (kind == 1)
-                    tb__frozen_lanes(q[b], L[b], invI[b], h, n);
+                    tb__frozen_lanes(q[b], L[b], invI[b], h, n, isa);
                 else {
                     tb__split_frame f[TB__LANES];
                     tb__spin_lanes p;
@@ -682,9 +682,9 @@ static void lanes_give_the_one_body_bits(void **state)
                             tb__split2_framed(q[b + i], L[b + i], &f[i], h);
                     }
                     if (kind == 3)
-                        tb__accurate_lanes(&p, m);
+                        tb__accurate_lanes(&p, m, isa);
                     else
-                        tb__split2_lanes(&p, m);
+                        tb__split2_lanes(&p, m, isa);
                     for (i = 0, m = 0; i < n; ++i)
                         if (loaded[i])
                             tb__spin_store(&p, m++, &f[i], q[b + i]);
@@ -699,6 +699,20 @@ static void lanes_give_the_one_body_bits(void **state)
         }
         for (k = 0; k < N; ++k)
             assert_memory_equal(q[k], one[k], sizeof q[k]);
+    }
+}
+
+/* ... for every instruction set this processor runs: the wider ones must
+   give the portable bits (rotation.c), so a world's results do not depend
+   on the machine's vector unit. */
+static void lanes_give_the_one_body_bits(void **state)
+{
+    int isa;
+    (void)state;
+    for (isa = TB__ISA_PORTABLE; isa <= tb__isa(); ++isa) {
+        lanes_match_one_body(isa);
+        print_message("lanes for %s: the one-body bits\n",
+                      isa == TB__ISA_AVX512 ? "AVX-512" : isa == TB__ISA_AVX2 ? "AVX2" : "portable C");
     }
 }
 
