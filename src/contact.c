@@ -723,12 +723,12 @@ static inline void pair_push(const tb__row *r, pair_motion *s, int d, double lam
 
 /* One Gauss-Seidel sweep over the touching points: friction first, within
    the circle mu * normal impulse, then the normal, v_n >= target. */
-static void solve_velocities(tb__contacts *c)
+static void solve_velocities(tb__contacts *c, int backwards)
 {
     double *m = c->velocity;
     size_t i;
     for (i = 0; i < c->row_count; ++i) {
-        tb__row *r = &c->rows[i];
+        tb__row *r = &c->rows[backwards ? c->row_count - 1 - i : i];
         double *A = m + TB__MOTION * r->a, *B = m + TB__MOTION * r->b;
         const double limit = r->friction * r->impulse[0];
         pair_motion s;
@@ -941,7 +941,7 @@ void tb__contacts_solve(tb_world *w, double h)
         cold += !c->rows[i].point->matched;
     iterations = c->settings.velocity_iterations * (8 * cold > c->row_count ? 4 : 1);
     for (it = 0; it < iterations; ++it)
-        solve_velocities(c);
+        solve_velocities(c, it & 1);
     apply_impulses(c);
     for (it = 0; it < c->settings.position_iterations; ++it)
         solve_positions(c);

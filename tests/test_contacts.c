@@ -164,7 +164,9 @@ static void box_slides_to_v2_over_2_mu_g(void **state)
 /* After sliding to rest, 10 s more on the plane, awake: it must not creep or
    jitter. A resting contact's impulse cancels gravity's kick and its h/2
    lever cancels gravity's drop exactly, so the drift is rounding: 1e-12 m
-   asserted (the issue asks 1e-4). */
+   asserted (the issue asks 1e-4). The height it rests at is what the slide
+   left: corners whose impulses converge sweep by sweep may leave a gap
+   below the slop, measured 7e-10 m; 1e-8 m asserted. */
 static void box_rests_without_drift(void **state)
 {
     tb_world *w;
@@ -188,7 +190,7 @@ static void box_rests_without_drift(void **state)
     drift = sqrt((x[0] - x0[0]) * (x[0] - x0[0]) + (x[1] - x0[1]) * (x[1] - x0[1]) + (x[2] - x0[2]) * (x[2] - x0[2]));
     print_message("resting box: drift %.3g m in 10 s, height %.7f m\n", drift, x[2]);
     assert_below(drift, 1e-12);
-    assert_rel(x[2], 0.5, 1e-9);
+    assert_below(fabs(x[2] - 0.5), 1e-8);
     tb_world_destroy(w);
 }
 
@@ -545,7 +547,53 @@ static void sleep_settings(void **state)
     tb_world_destroy(w);
 }
 
+/* The issue's pyramid (tests/ode_contacts.c's layout: 20 levels, 210 unit
+   cubes 1 cm apart, mu 0.6), default settings, 10 s at 60 Hz. Standing
+   means no cube sinks 1 cm (ODE's top cube sinks 5 cm) and none moves 0.1 m
+   (a fifth of the half width it rests on); the pyramid must also fall
+   asleep. The top cube's motion is printed: the first steps start cold, and
+   a 20 m wall one cube deep rocks a little before it settles (measured
+   7 mm to 4 cm, depending on rounding). */
+static void pyramid_stands_and_sleeps(void **state)
+{
+    const ode_pyramid_def d = ode_default_pyramid_def();
+    const int count = ode_pyramid_boxes(d.levels);
+    double(*pos)[3] = test_malloc((size_t)count * sizeof *pos);
+    tb_body_id *ids = test_malloc((size_t)count * sizeof *ids);
+    tb_world *w = world_on_plane(d.mu, 0);
+    double worst = 0, sink = 0, top = 0;
+    int i, asleep_at = -1;
+    (void)state;
+    assert_int_equal(ode_pyramid_positions(&d, pos), count);
+    for (i = 0; i < count; ++i)
+        ids[i] = add_box(w, pos[i], d.edge, d.mu);
+    for (i = 0; i < (int)(d.duration * d.hz); ++i) {
+        assert_int_equal(tb_world_step(w, 1 / d.hz), TB_OK);
+        if (asleep_at < 0 && tb_world_sleeping_count(w) == (size_t)count)
+            asleep_at = i + 1;
+    }
+    for (i = 0; i < count; ++i) {
+        double x[3], moved;
+        tb_body_position(w, ids[i], x);
+        moved = sqrt((x[0] - pos[i][0]) * (x[0] - pos[i][0]) + (x[1] - pos[i][1]) * (x[1] - pos[i][1]) +
+                     (x[2] - pos[i][2]) * (x[2] - pos[i][2]));
+        worst = fmax(worst, moved);
+        sink = fmax(sink, pos[i][2] - x[2]);
+        if (i == count - 1)
+            top = moved;
+    }
+    print_message("pyramid of %d: asleep after %d steps, top cube moved %.4f m, most any cube moved %.4f m, deepest "
+                  "sink %.4f m\n", count, asleep_at, top, worst, sink);
+    assert_in_range(asleep_at, 1, (int)(d.duration * d.hz));
+    assert_below(sink, 0.01);
+    assert_below(worst, 0.1);
+    test_free(pos);
+    test_free(ids);
+    tb_world_destroy(w);
+}
+
 static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(pyramid_stands_and_sleeps),
     cmocka_unit_test(resting_box_falls_asleep_and_stays_put),
     cmocka_unit_test(sleeping_box_wakes_when_a_ball_lands),
     cmocka_unit_test(islands_wake_together),
