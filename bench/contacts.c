@@ -30,6 +30,12 @@
      points start cold (the pyramid's first); the median leaves such rare
      steps out.
 
+   - sleep: the pyramid and the pile are run twice, with sleep off (every
+     body solved every step: the solver's own cost, the figure held against
+     the target) and with the default settings, where resting islands fall
+     asleep; that line gives the mean over all steps (waking included) and
+     when every body was asleep. ODE runs without its auto-disable.
+
    The machine may be shared: runs alternate tumble and ODE, BENCH_RUNS
    times each, and the figures are medians over those runs, so that a
    burst of load elsewhere does not land on one engine only. The scenes are
@@ -57,6 +63,7 @@ typedef struct timing {
     double ms_median;     /* ms per step */
     double ms_mean;
     double contacts_mean; /* touching points after a step */
+    int asleep_after;     /* steps until every body slept; -1: never */
 } timing;
 
 static tb_world *new_world(double gravity, const char *what)
@@ -86,12 +93,15 @@ static void run_timed(tb_world *w, double h, int steps, timing *t)
 {
     double *ms = xmalloc((size_t)steps * sizeof *ms), sum = 0, contacts = 0;
     int n;
+    t->asleep_after = -1;
     for (n = 0; n < steps; ++n) {
         const double t0 = seconds();
         check(tb_world_step(w, h), w, "step");
         ms[n] = 1e3 * (seconds() - t0);
         sum += ms[n];
         contacts += (double)tb_world_contact_count(w);
+        if (t->asleep_after < 0 && tb_world_sleeping_count(w) == tb_world_body_count(w))
+            t->asleep_after = n + 1;
     }
     t->ms_mean = sum / steps;
     t->contacts_mean = contacts / steps;
@@ -106,13 +116,22 @@ typedef struct pyramid_run {
     double sink, drift; /* m, top cube */
 } pyramid_run;
 
-static void tumble_pyramid(const ode_pyramid_def *d, int velocity_iterations, pyramid_run *out)
+/* Sleep on (the default) or off (every body solved every step). */
+static void set_sleep(tb_world *w, int velocity_iterations, int sleep)
+{
+    tb_contact_settings cs = tb_default_contact_settings();
+    cs.velocity_iterations = velocity_iterations;
+    if (!sleep)
+        cs.sleep_time = INFINITY;
+    check(tb_world_set_contact_settings(w, &cs), w, "contact settings");
+}
+
+static void tumble_pyramid(const ode_pyramid_def *d, int velocity_iterations, int sleep, pyramid_run *out)
 {
     const int count = ode_pyramid_boxes(d->levels);
     const int steps = (int)ceil(d->duration * d->hz);
     double(*pos)[3] = xmalloc((size_t)count * sizeof *pos);
     tb_world *w = new_world(d->gravity, "pyramid");
-    tb_contact_settings cs = tb_default_contact_settings();
     tb_body_def b = tb_default_body_def();
     tb_shape_def s = tb_default_shape_def();
     const double size[3] = { d->edge, d->edge, d->edge };
@@ -124,8 +143,7 @@ static void tumble_pyramid(const ode_pyramid_def *d, int velocity_iterations, py
         fprintf(stderr, BENCH_NAME ": pyramid refused\n");
         exit(EXIT_FAILURE);
     }
-    cs.velocity_iterations = velocity_iterations;
-    check(tb_world_set_contact_settings(w, &cs), w, "contact settings");
+    set_sleep(w, velocity_iterations, sleep);
     add_plane(w, d->mu);
     check(tb_mass_box(d->mass / (d->edge * d->edge * d->edge), size, &b.mass, NULL), NULL, "box mass");
     s.type = TB_SHAPE_BOX;
@@ -150,11 +168,12 @@ static void tumble_pyramid(const ode_pyramid_def *d, int velocity_iterations, py
 /* Returns how many centres are below the plane at the end: none should
    be (the smallest shape reaches 0.1 m from its centre), so any count
    says the run is not one to time. */
-static int tumble_pile(const ode_pile_def *d, const ode_shape *shapes, timing *t)
+static int tumble_pile(const ode_pile_def *d, const ode_shape *shapes, int sleep, timing *t)
 {
     tb_world *w = new_world(d->gravity, "pile");
     const double *x;
     int i, below = 0;
+    set_sleep(w, tb_default_contact_settings().velocity_iterations, sleep);
     add_plane(w, d->mu);
     for (i = 0; i < d->count; ++i) {
         const ode_shape *o = &shapes[i];
@@ -213,11 +232,12 @@ int main(void)
     ode_shape *shapes = xmalloc((size_t)ld.count * sizeof *shapes);
     /* per run: tumble, tumble at twice the iterations, ODE; medians of steps
        for the pyramid, means for the pile */
-    double pyr_ms[BENCH_RUNS], pyr2_ms[BENCH_RUNS], pyr_ode_ms[BENCH_RUNS];
+    double pyr_ms[BENCH_RUNS], pyr2_ms[BENCH_RUNS], pyr_ode_ms[BENCH_RUNS], pyr_ode_mean[BENCH_RUNS];
+    double pyr_sleep_ms[BENCH_RUNS], pile_sleep_ms[BENCH_RUNS];
     double pile_ms[BENCH_RUNS], pile_median_ms[BENCH_RUNS], pile_ode_ms[BENCH_RUNS], pile_ode_median_ms[BENCH_RUNS];
-    pyramid_run pyr, pyr2;
+    pyramid_run pyr, pyr2, pyr_sleep;
     ode_pyramid_result pyr_ode;
-    timing pile;
+    timing pile, pile_sleep;
     ode_pile_result pile_ode;
     double t_ms, t2_ms, o_ms, ratio, move;
     int r, below = 0;
@@ -232,26 +252,37 @@ int main(void)
     /* The scenes are deterministic: sink, drift and contact counts are the
        same in every run, so the last run's are printed. */
     for (r = 0; r < BENCH_RUNS; ++r) {
-        tumble_pyramid(&pd, iterations, &pyr);
+        tumble_pyramid(&pd, iterations, 0, &pyr);
         if (!ode_pyramid(&pd, &pyr_ode)) {
             fprintf(stderr, BENCH_NAME ": ODE pyramid refused or failed\n");
             return EXIT_FAILURE;
         }
-        tumble_pyramid(&pd, 2 * iterations, &pyr2);
+        tumble_pyramid(&pd, 2 * iterations, 0, &pyr2);
+        tumble_pyramid(&pd, iterations, 1, &pyr_sleep);
         pyr_ms[r] = pyr.t.ms_median;
         pyr2_ms[r] = pyr2.t.ms_median;
+        pyr_sleep_ms[r] = pyr_sleep.t.ms_mean;
         pyr_ode_ms[r] = pyr_ode.timing.ms_median;
+        pyr_ode_mean[r] = pyr_ode.timing.ms_mean;
     }
     t_ms = median_of(pyr_ms, BENCH_RUNS);
     t2_ms = median_of(pyr2_ms, BENCH_RUNS);
     o_ms = median_of(pyr_ode_ms, BENCH_RUNS);
     ratio = o_ms / t_ms;
     move = hypot(pyr.sink, pyr.drift);
-    printf("pyramid   %d boxes  tumble %5.2f ms/step (median of steps over %g s)  top box sink %.3f m drift %.3f m | "
+    printf("pyramid   %d boxes  awake (sleep off) tumble %5.2f ms/step (median of steps over %g s)  top box sink %.3f m drift %.3f m | "
            "ODE QuickStep(%d) %.2f ms/step sink %.3f m drift %.3f m | ODE/tumble %.1f (target >= 5): %s  "
            "top box within 1 cm (moved %.3f m): %s\n",
            ode_pyramid_boxes(pd.levels), t_ms, pd.duration, pyr.sink, pyr.drift, pd.iterations, o_ms,
            pyr_ode.top_sink, pyr_ode.top_drift, ratio, met(ratio >= 5), move, met(move <= 0.01));
+    t_ms = median_of(pyr_sleep_ms, BENCH_RUNS);
+    o_ms = median_of(pyr_ode_mean, BENCH_RUNS);
+    move = hypot(pyr_sleep.sink, pyr_sleep.drift);
+    printf("pyramid   %d boxes  default (sleep on) tumble %5.2f ms/step (mean over %g s; median %.3f), all asleep after "
+           "%d steps, top box sink %.3f m drift %.3f m | ODE %.2f ms/step (mean; its auto-disable off) | ODE/tumble "
+           "%.1f  top box within 1 cm (moved %.3f m): %s\n",
+           ode_pyramid_boxes(pd.levels), t_ms, pd.duration, pyr_sleep.t.ms_median, pyr_sleep.t.asleep_after,
+           pyr_sleep.sink, pyr_sleep.drift, o_ms, o_ms / t_ms, move, met(move <= 0.01));
     fflush(stdout);
 
     if (ode_pile_scene(&ld, shapes) != ld.count) {
@@ -259,7 +290,9 @@ int main(void)
         return EXIT_FAILURE;
     }
     for (r = 0; r < BENCH_RUNS; ++r) {
-        below = tumble_pile(&ld, shapes, &pile);
+        below = tumble_pile(&ld, shapes, 0, &pile);
+        below += tumble_pile(&ld, shapes, 1, &pile_sleep);
+        pile_sleep_ms[r] = pile_sleep.ms_mean;
         if (!ode_pile(&ld, &pile_ode)) {
             fprintf(stderr, BENCH_NAME ": ODE pile refused or failed\n");
             return EXIT_FAILURE;
@@ -271,11 +304,15 @@ int main(void)
     }
     t_ms = median_of(pile_ms, BENCH_RUNS);
     o_ms = median_of(pile_ode_ms, BENCH_RUNS);
-    printf("pile      %d shapes tumble %.2f ms/step (mean of %d steps; median %.2f), contacts per step %.0f, "
+    printf("pile      %d shapes awake (sleep off) tumble %.2f ms/step (mean of %d steps; median %.2f), contacts per step %.0f, "
            "centres below the plane at the end %d%s | ODE %.2f ms/step (median %.2f), contacts %.0f | ODE/tumble %.1f\n",
            ld.count, t_ms, ld.steps, median_of(pile_median_ms, BENCH_RUNS), pile.contacts_mean, below,
            below ? " (sank through the plane)" : "", o_ms, median_of(pile_ode_median_ms, BENCH_RUNS),
            pile_ode.timing.contacts_mean, o_ms / t_ms);
+    t_ms = median_of(pile_sleep_ms, BENCH_RUNS);
+    printf("pile      %d shapes default (sleep on) tumble %.2f ms/step (mean of %d steps; median %.3f), all asleep after "
+           "%d steps | ODE/tumble %.1f\n",
+           ld.count, t_ms, ld.steps, pile_sleep.ms_median, pile_sleep.asleep_after, o_ms / t_ms);
 
     /* t = fixed + k points iterations, at two iteration counts */
     t_ms = median_of(pyr_ms, BENCH_RUNS);

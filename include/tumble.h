@@ -414,11 +414,14 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    moves positions as those impulses would have over the step: by h/2 for
    resting and sliding contact (a force acting through the step), by the
    time left after impact for a new contact (the impact is timed within the
-   step, so a ball bounces to e^2 of its height at any step size); (4) a
+   step, so a ball bounces to e^2 of its height at any step size); the
+   sweeps alternate direction, so weight reaches the bottom of a stack
+   within a pair of sweeps whatever order the points come in; (4) a
    position pass pushes overlaps apart without adding velocity: rigidly for
    gaps that closed, softly (contact_hertz, damping ratio) for overlaps
    that were already there. Momentum is exchanged by equal and opposite
-   impulses, so it is conserved to rounding. */
+   impulses, so it is conserved to rounding. Sleeping bodies (see "Sleep"
+   below) are left out of (1) to (4) and keep their pose. */
 typedef enum tb_shape_type { TB_SHAPE_SPHERE, TB_SHAPE_CAPSULE, TB_SHAPE_BOX, TB_SHAPE_PLANE } tb_shape_type;
 
 typedef struct tb_shape_def {

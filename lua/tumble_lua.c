@@ -320,6 +320,27 @@ static int body_set_vel(lua_State *L) { return body_set(L, tb_body_set_velocity,
 static int body_set_omega(lua_State *L) { return body_set(L, tb_body_set_angular_velocity, "body:set_omega"); }
 static int body_torque(lua_State *L) { return body_set(L, tb_body_apply_torque, "body:torque"); }
 
+/* body:asleep(): true while it sleeps; body:wake() */
+static int body_asleep(lua_State *L)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    int asleep;
+    if (tb_body_asleep(lw->world, body_id(h), &asleep) != TB_OK)
+        return fail(L, lw, "body:asleep");
+    lua_pushboolean(L, asleep);
+    return 1;
+}
+
+static int body_wake(lua_State *L)
+{
+    lua_world *lw;
+    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    if (tb_body_wake(lw->world, body_id(h)) != TB_OK)
+        return fail(L, lw, "body:wake");
+    return 0;
+}
+
 static int body_rot(lua_State *L)
 {
     lua_world *lw;
@@ -507,7 +528,8 @@ static const luaL_Reg body_methods[] = {
     { "momentum", body_momentum }, { "mass", body_mass },
     { "set_pos", body_set_pos }, { "set_rot", body_set_rot }, { "set_vel", body_set_vel },
     { "set_omega", body_set_omega }, { "push", body_push }, { "push_local", body_push_local },
-    { "torque", body_torque }, { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
+    { "torque", body_torque }, { "asleep", body_asleep }, { "wake", body_wake },
+    { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
 };
 static const luaL_Reg plain_methods[] = {
     { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
@@ -986,11 +1008,12 @@ static int world_shape(lua_State *L)
 
 /* world:contacts{ hertz, damping_ratio, max_push, restitution_threshold,
    slop, velocity_iterations, position_iterations, particle_radius,
-   particle_friction, particle_restitution }: change the contact settings */
+   particle_friction, particle_restitution, sleep_speed, sleep_time }:
+   change the contact settings (sleep_time = math.huge: never sleep) */
 static const char *const contact_options[] = { "hertz", "damping_ratio", "max_push", "restitution_threshold",
                                                "slop", "velocity_iterations", "position_iterations",
                                                "particle_radius", "particle_friction", "particle_restitution",
-                                               NULL };
+                                               "sleep_speed", "sleep_time", NULL };
 
 static int world_contacts(lua_State *L)
 {
@@ -1008,6 +1031,8 @@ static int world_contacts(lua_State *L)
     opt_number(L, 2, "particle_radius", "world:contacts", &cs.particle_radius);
     opt_number(L, 2, "particle_friction", "world:contacts", &cs.particle_friction);
     opt_number(L, 2, "particle_restitution", "world:contacts", &cs.particle_restitution);
+    opt_number(L, 2, "sleep_speed", "world:contacts", &cs.sleep_speed);
+    opt_number(L, 2, "sleep_time", "world:contacts", &cs.sleep_time);
     cs.velocity_iterations = vi >= 0 && vi < 1e6 ? (int)vi : 0;
     cs.position_iterations = pi >= 0 && pi < 1e6 ? (int)pi : -1;
     if (tb_world_set_contact_settings(lw->world, &cs) != TB_OK)

@@ -354,6 +354,15 @@ static void shapes_and_events(void **state)
     expect_error(L, "w:shape{ type = 'cone' }", "cone");
     expect_error(L, "w:shape{ type = 'sphere', radius = 1, colour = 'red' }", "colour");
     expect_error(L, "w:contacts{ hertz = -1 }", "hertz");
+    expect_error(L, "w:contacts{ sleep_time = 0 }", "sleep_time");
+    /* the ball rests after its bounces and falls asleep; a push wakes it */
+    expect_ok(L, "for i = 1, 300 do w:step() end\n"
+                 "assert(ball:asleep(), 'the resting ball should sleep')\n"
+                 "ball:set_vel{1, 0, 0}\n"
+                 "assert(not ball:asleep())\n"
+                 "w:contacts{ sleep_time = math.huge }\n"
+                 "for i = 1, 300 do w:step() end\n"
+                 "assert(not ball:asleep())\n");
     expect_ok(L, "s:remove(); assert(not pcall(s.remove, s))");
     lua_close(L);
 }
