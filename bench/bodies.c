@@ -356,6 +356,36 @@ static void free_ode_world(ode_case *c, size_t n, enum kind kind)
     }
 }
 
+/* The memory bound of a verlet step at 10^5 bodies, whose state (about
+   30 MB) has left the caches of a core: the bytes a step must move per
+   body, streamed at the bandwidth measured beside it. The first sweep
+   reads x, P, q and L (13 doubles), the mass, the inverse mass and what the
+   turn needs (the frame of a box, tb__split_frame, 56 bytes; the inverse
+   moments of a sphere, 24: the stride brings whole lines) and writes x, P
+   and q back (10 doubles); the second sweep reads P and the mass and
+   writes P (7 doubles). */
+#define VERLET_BYTES_SPHERE ((13 + 2 + 3 + 10 + 7) * 8)
+#define VERLET_BYTES_BOX ((13 + 2 + 7 + 10 + 7) * 8)
+
+typedef struct stream_case {
+    double *x, *y;
+    size_t n;
+} stream_case;
+
+/* y += s x: two doubles read and one written, 24 bytes an element, the
+   mix of a sweep. GCC vectorises it; it runs at the memory's pace. */
+static void run_stream(void *ctx, long steps)
+{
+    stream_case *c = ctx;
+    long k;
+    size_t i;
+    for (k = 0; k < steps; ++k) {
+        const double s = 1e-9 * (double)(k + 1);
+        for (i = 0; i < c->n; ++i)
+            c->y[i] += s * c->x[i];
+    }
+}
+
 typedef struct verdict {
     double verlet_ratio, rk4_ratio;
 } verdict;
@@ -363,12 +393,15 @@ typedef struct verdict {
 static verdict part_throughput(size_t n, enum kind kind)
 {
     static const char *const names[] = { "spheres", "boxes" };
-    bench_case cases[METHOD_COUNT + 1];
+    const size_t bytes = kind == SPHERES ? VERLET_BYTES_SPHERE : VERLET_BYTES_BOX;
+    bench_case cases[METHOD_COUNT + 2];
     tumble_case tumble[METHOD_COUNT];
     ode_case ode;
+    stream_case stream;
     verdict v = { 0, 0 };
-    double ode_ns;
-    int m;
+    double ode_ns, bound = 0;
+    int m, count = METHOD_COUNT + 1;
+    size_t i;
 
     tumble[0].world = free_world(n, kind);
     for (m = 0; m < METHOD_COUNT; ++m) {
@@ -378,12 +411,28 @@ static verdict part_throughput(size_t n, enum kind kind)
     }
     free_ode_world(&ode, n, kind);
     cases[METHOD_COUNT].run = run_ode, cases[METHOD_COUNT].ctx = &ode, cases[METHOD_COUNT].items = (double)n;
-    measure(cases, METHOD_COUNT + 1);
+    /* a pass over bytes per body times n bytes, timed per body: the time a
+       body-step's bytes take at the measured bandwidth */
+    stream.n = n * bytes / 24;
+    stream.x = xmalloc(stream.n * sizeof *stream.x);
+    stream.y = xmalloc(stream.n * sizeof *stream.y);
+    for (i = 0; i < stream.n; ++i)
+        stream.x[i] = stream.y[i] = 1;
+    if (n >= 100000) {
+        cases[count].run = run_stream, cases[count].ctx = &stream, cases[count++].items = (double)n;
+    }
+    measure(cases, count);
+    if (count > METHOD_COUNT + 1)
+        bound = median(&cases[METHOD_COUNT + 1]);
 
     ode_ns = median(&cases[METHOD_COUNT]);
     for (m = 0; m < METHOD_COUNT; ++m) {
         const double ns = median(&cases[m]);
-        printf("%-8zu %-8s %-18s %12.2f %11.1f\n", n, names[kind], METHODS[m], ns, ode_ns / ns);
+        printf("%-8zu %-8s %-18s %12.2f %11.1f", n, names[kind], METHODS[m], ns, ode_ns / ns);
+        if (bound > 0 && !strcmp(METHODS[m], "verlet"))
+            printf("   memory bound %.2f ns (%zu B at %.1f GB/s)%s", bound, bytes, (double)bytes / bound,
+                   ns < 1.25 * bound ? ": at the bound" : "");
+        printf("\n");
         if (!strcmp(METHODS[m], "verlet"))
             v.verlet_ratio = ode_ns / ns;
         if (!strcmp(METHODS[m], "rk4"))
@@ -391,6 +440,9 @@ static verdict part_throughput(size_t n, enum kind kind)
     }
     printf("%-8zu %-8s %-18s %12.2f   (%ld steps a repeat)\n\n", n, names[kind], "ODE dWorldStep", ode_ns,
            cases[METHOD_COUNT].steps);
+    keep(stream.y[0]);
+    free(stream.x);
+    free(stream.y);
     tumble_free(tumble[0].world);
     ode_free(&ode);
     return v;
@@ -405,6 +457,13 @@ static void print_header(void)
            BENCH_REPEAT_SECONDS);
     bench_print_build();
     bench_print_asserts();
+    /* the same test as tb__isa() (src/rotation.c), which is internal */
+#if defined(__GNUC__) && defined(__x86_64__)
+    printf("lanes     %s (chosen at run time; every choice gives the same bits)\n",
+           __builtin_cpu_supports("avx512f") ? "AVX-512" : __builtin_cpu_supports("avx2") ? "AVX2" : "portable C");
+#else
+    printf("lanes     portable C\n");
+#endif
     printf("\n");
 }
 

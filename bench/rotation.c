@@ -20,7 +20,9 @@
      last: latency), median of REPEATS runs; for the kernels and RK4, ns per
      body-step over 1024 independent bodies one call per body, also a
      median; and for tumble's kernels, ns per body-step over the same bodies
-     in lanes, TB__LANES at a time, as a world steps them (rotation.h). */
+     in lanes, TB__LANES at a time, as a world steps them (rotation.h):
+     compiled as portable C, then for the widest instruction set this
+     processor runs, which the world chooses (the same bits). */
 #define _POSIX_C_SOURCE 200809L
 #define BENCH_NAME "bench_rotation"
 
@@ -41,6 +43,7 @@
 #define BODIES 1024
 
 static const double I_BODY[3] = { 1, 2, 3 };
+static const char *const isa_names[] = { "portable", "AVX2", "AVX-512" };
 static const double W0[3] = { 0.01, 5, 0.01 };
 
 /* ------------------------------------------------------- quaternions -- */
@@ -127,7 +130,7 @@ static void rk4_fixed_l(double q[4], const double L[3], const double invI[3], do
 
 typedef struct result {
     const char *name;
-    double l_drift, e_end, e_worst, angle, ns, ns_many, ns_lanes;
+    double l_drift, e_end, e_worst, angle, ns, ns_many, ns_portable, ns_lanes;
 } result;
 
 static void flip_state(double invI[3], double L[3], double q[4])
@@ -189,7 +192,7 @@ static void run_kernel(result *r, kernel_fn *step, int lanes, const double ref[4
     static tb__split_frame frames[BODIES];
     double invI[3], L[3], q[4], lb[3], e0, e = 0, ns[REPEATS], many[REPEATS];
     long s;
-    int k, b;
+    int k, b, isa;
     flip_state(invI, L, q);
     e0 = energy_b(L, invI);
     r->l_drift = r->e_worst = 0;
@@ -222,20 +225,26 @@ static void run_kernel(result *r, kernel_fn *step, int lanes, const double ref[4
     }
     keep(qs[0]);
     r->ns_many = median_of(many, REPEATS);
-    r->ns_lanes = -1;
+    r->ns_portable = r->ns_lanes = -1;
     if (lanes < 0)
         return;
-    many_states(qs, Ls, Is);
-    for (b = 0; b < BODIES; ++b)
-        tb__split_frame_of(Is + 3 * b, &frames[b]);
-    for (k = 0; k < REPEATS; ++k) {
-        const double t0 = seconds();
-        for (s = 0; s < 4; ++s)
-            step_lanes(lanes, qs, Ls, Is, frames, H, tb__isa());
-        many[k] = 1e9 * (seconds() - t0) / (4.0 * BODIES);
+    for (isa = TB__ISA_PORTABLE; isa <= tb__isa(); isa = isa == TB__ISA_PORTABLE ? tb__isa() : isa + 1) {
+        many_states(qs, Ls, Is);
+        for (b = 0; b < BODIES; ++b)
+            tb__split_frame_of(Is + 3 * b, &frames[b]);
+        for (k = 0; k < REPEATS; ++k) {
+            const double t0 = seconds();
+            for (s = 0; s < 4; ++s)
+                step_lanes(lanes, qs, Ls, Is, frames, H, isa);
+            many[k] = 1e9 * (seconds() - t0) / (4.0 * BODIES);
+        }
+        keep(qs[0]);
+        if (isa == TB__ISA_PORTABLE)
+            r->ns_portable = median_of(many, REPEATS);
+        r->ns_lanes = median_of(many, REPEATS);
+        if (isa == TB__ISA_PORTABLE && tb__isa() == TB__ISA_PORTABLE)
+            break;
     }
-    keep(qs[0]);
-    r->ns_lanes = median_of(many, REPEATS);
 }
 
 static void run_rk4_carried(result *r, const double ref[4])
@@ -277,7 +286,7 @@ static void run_rk4_carried(result *r, const double ref[4])
     }
     keep(qs[0]);
     r->ns_many = median_of(many, REPEATS);
-    r->ns_lanes = -1;
+    r->ns_portable = r->ns_lanes = -1;
 }
 
 static void rk4_fixed_l_kernel(double q[4], const double L[3], const double invI[3], double h)
@@ -345,7 +354,7 @@ static void run_ode(result *r, const double ref[4])
         dWorldDestroy(world);
     }
     r->ns = median_of(ns, REPEATS);
-    r->ns_many = r->ns_lanes = -1;
+    r->ns_many = r->ns_portable = r->ns_lanes = -1;
 }
 
 /* ----------------------------------------------------------------- main -- */
@@ -396,10 +405,10 @@ int main(void)
     r[n].name = "ODE dWorldStep";
     run_ode(&r[n++], ref);
 
-    printf("%-30s %10s %10s %10s %12s %9s %13s %9s\n", "method", "|L| drift", "E drift", "E worst", "orientation",
-           "ns/step", "ns/body-step", "in lanes");
-    printf("%-30s %10s %10s %10s %12s %9s %13s %9s\n", "", "(worst)", "(at 20 s)", "", "(rad)", "(1 body)",
-           "(1024 bodies)", "(1024)");
+    printf("%-30s %10s %10s %10s %12s %9s %13s %9s %9s\n", "method", "|L| drift", "E drift", "E worst",
+           "orientation", "ns/step", "ns/body-step", "lanes", "lanes");
+    printf("%-30s %10s %10s %10s %12s %9s %13s %9s %9s\n", "", "(worst)", "(at 20 s)", "", "(rad)", "(1 body)",
+           "(1024 bodies)", "portable", isa_names[tb__isa()]);
     for (i = 0; i < n; ++i) {
         printf("%-30s %10.1e %10.1e %10.1e %12.1e %9.1f ", r[i].name, r[i].l_drift, r[i].e_end, r[i].e_worst,
                r[i].angle, r[i].ns);
@@ -408,9 +417,9 @@ int main(void)
         else
             printf("%13s ", "-");
         if (r[i].ns_lanes >= 0)
-            printf("%9.1f\n", r[i].ns_lanes);
+            printf("%9.1f %9.1f\n", r[i].ns_portable, r[i].ns_lanes);
         else
-            printf("%9s\n", "-");
+            printf("%9s %9s\n", "-", "-");
     }
     printf("\nmedians of %d repeats; tumble's targets for its best method: |L| drift <= 1e-12, energy drift\n"
            "<= 1e-9, orientation <= 1e-6 rad, <= 50 ns per step\n", REPEATS);

@@ -347,6 +347,7 @@ static void turn(tb_world *w, size_t b, size_t m, const tb__split_op *op, pendin
     const tb__split_frame *frame = w->body_frame;
     const double h = op->h;
     size_t s, iso = w->body_isotropic == w->body_count ? m : 0;
+    int accurate;
     if (w->body_isotropic && iso == 0)
         for (s = b; s < b + m; ++s)
             iso += frame[s].isotropic;
@@ -360,26 +361,28 @@ static void turn(tb_world *w, size_t b, size_t m, const tb__split_op *op, pendin
         tb__frozen_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, (int)m, p->isa);
         return;
     }
+    accurate = op->rotation == TB__ROTATE_ACCURATE;
+    if (op->rotation != TB__ROTATE_FROZEN) {
+        /* the lanes turn with one kernel and one step: settled once a
+           block, not once a body (this loop is most of a sweep's cost) */
+        if (p->accurate != accurate || p->lanes.h != h)
+            turn_pending(w, p);
+        p->accurate = accurate;
+        p->lanes.h = h;
+    }
     for (s = b; s < b + m; ++s) {
-        const int accurate = op->rotation == TB__ROTATE_ACCURATE;
         if (frame[s].isotropic) {
             tb__rotation_isotropic(q + 4 * s, L + 3 * s, invI[3 * s], h);
         } else if (op->rotation == TB__ROTATE_FROZEN) {
             tb__rotation_frozen(q + 4 * s, L + 3 * s, invI + 3 * s, h);
-        } else {
-            if (p->accurate != accurate || p->lanes.h != h)
+        } else if (tb__spin_load(&p->lanes, p->count, q + 4 * s, L + 3 * s, &frame[s], h * h, accurate)) {
+            p->slot[p->count++] = (uint32_t)s;
+            if (p->count == TB__LANES)
                 turn_pending(w, p);
-            p->accurate = accurate;
-            p->lanes.h = h;
-            if (tb__spin_load(&p->lanes, p->count, q + 4 * s, L + 3 * s, &frame[s], h * h, accurate)) {
-                p->slot[p->count++] = (uint32_t)s;
-                if (p->count == TB__LANES)
-                    turn_pending(w, p);
-            } else if (accurate) {
-                tb__accurate_framed(q + 4 * s, L + 3 * s, &frame[s], h);
-            } else {
-                tb__split2_framed(q + 4 * s, L + 3 * s, &frame[s], h);
-            }
+        } else if (accurate) {
+            tb__accurate_framed(q + 4 * s, L + 3 * s, &frame[s], h);
+        } else {
+            tb__split2_framed(q + 4 * s, L + 3 * s, &frame[s], h);
         }
     }
 }

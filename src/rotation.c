@@ -41,11 +41,12 @@
    and 5e-6 on near-symmetric ones, where the splittings are nearly exact.
    (The ns column is for one body alone, then latency-bound.) For one body
    the cost is the chain of turns: each needs the momentum the previous one
-   left, about 16 ns a turn here. In lanes (below) the turns of 8 bodies
-   overlap and a turn costs about 4 ns a body with SSE2: S6 about 56 ns, a
+   left, about 16 ns a turn here. In lanes (below) the turns of 32 bodies
+   overlap and a turn costs about 4 ns a body with SSE2 (S6 about 55 ns, a
    body's floor at about 47 floating-point operations a turn, two per
-   instruction. Yoshida + projection meets the flip's targets (1e-6 rad, energy
-   1e-9) at 2/3 of S6's cost but with a margin of 2 and errors up to 1.4e-4
+   instruction), under 2 ns with AVX-512 (S6 about 22 ns). Yoshida +
+   projection meets the flip's targets (1e-6 rad, energy 1e-9) at 2/3 of
+   S6's cost but with a margin of 2 and errors up to 1.4e-4
    rad on other bodies; S6 meets them with margins of 1300 and 9, stays
    within 2.7e-7 rad on every other body tried (12 random bodies at up to 9
    rad/s), and unlike a projected method it stays symplectic and

@@ -20,15 +20,17 @@
 
    Each kernel comes twice: for one body, and for TB__LANES bodies side by
    side ("lanes", one array per quantity) in loops of fixed length that GCC
-   vectorises at -O2 (two lanes per SSE2 instruction), where the turns of
-   different bodies also overlap instead of each waiting for the last. A
+   vectorises at -O2 (two lanes per SSE2 instruction, eight per AVX-512
+   one: see tb__isa), where the turns of different bodies also overlap
+   instead of each waiting for the last. A
    lane does the arithmetic of the one-body kernel in the same order, so a
    body gets the same bits alone or in lanes, whatever its neighbours
    (tests/test_rotation.c checks it). The world steps its bodies in lanes.
 
    Costs: per body-step on this project's 2-core x86-64 (gcc -O2, no
-   -march), in lanes over 1024 bodies (what a world pays), then for one
-   body stepped alone (each step waiting for the last), +-20% run to run.
+   -march), in lanes over 1024 bodies (what a world pays) with AVX-512 and
+   with portable C, then for one body stepped alone (each step waiting for
+   the last), +-20% run to run.
    Accuracy: on the intermediate-axis flip of NOTES.md at h = 1/60 s over
    20 s (bench/rotation.c). */
 #ifndef TB_ROTATION_H
@@ -37,32 +39,35 @@
 /* q <- exp(h w / 2) q with w frozen at the start of the step: one exact turn
    about the start's angular velocity. Order 1 for an asymmetric body (it
    misses the turning of w), exact for an isotropic one, where w is constant.
-   libm beyond |w| h = 0.5 rad. 11 ns in lanes (45 ns alone). */
+   libm beyond |w| h = 0.5 rad. 4.5 / 10.5 ns in lanes (40 ns alone). */
 void tb__rotation_frozen(double q[4], const double L[3], const double invI[3], double h);
 
 /* An isotropic body (I1 = I2 = I3 = 1 / inv_inertia) turns about the fixed
    world w = L / I: q <- exp(h w / 2) q, exact. It skips the body-frame
-   transform that tb__rotation_frozen needs. 7.5 ns in lanes. */
+   transform that tb__rotation_frozen needs. 3 / 6 ns in lanes. */
 void tb__rotation_isotropic(double q[4], const double L[3], double inv_inertia, double h);
 
 /* Order 2: Strang splitting of T into a turn about the world L and turns
    about two principal axes (rotation.c), A(h/2) B(h) A(h/2). A Poisson map:
    energy error bounded with no drift (6.0e-5 on the flip), exact for
    isotropic bodies and symmetric tops, time-reversible; 1.7e-4 rad on the
-   flip. libm beyond max |invI_i - invI_mid| |L| h = 0.25 rad. 22 ns in
-   lanes (80 ns alone). */
+   flip. libm beyond max |invI_i - invI_mid| |L| h = 0.25 rad. 11 / 21 ns
+   in lanes (70 ns alone). */
 void tb__rotation_split2(double q[4], const double L[3], const double invI[3], double h);
 
 /* Order 4: the same splitting composed by Blanes and Moan's S6, 13 axis
    turns a step. Also a Poisson map, exact for isotropic bodies and
    symmetric tops, time-reversible. On the flip: energy within 1.1e-10 at
    every step, 7.5e-10 rad after 20 s. libm beyond max |invI_i - invI_mid|
-   |L| h = 0.57 rad. 56 ns in lanes (240 ns alone: 13 dependent turns). */
+   |L| h = 0.57 rad. 22 / 55 ns in lanes (220 ns alone: 13 dependent turns). */
 void tb__rotation_accurate(double q[4], const double L[3], const double invI[3], double h);
 
 /* ---- bodies in lanes ----------------------------------------------------- */
 
-#define TB__LANES 8
+/* 32: with eight lanes an AVX-512 instruction, four independent chains of
+   turns per piece keep the units busy (at 8 lanes the turns were
+   latency-bound: 57 ns for accurate against 22 at 32). */
+#define TB__LANES 32
 
 /* For the definition of a piece of the work of one lane: it must be
    inlined into the loops over lanes for GCC to vectorise those, whatever
