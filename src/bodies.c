@@ -194,7 +194,7 @@ tb_status tb_world_add_body(tb_world *w, const tb_body_def *def, tb_body_id *id)
     return TB_OK;
 }
 
-static tb_status find(const tb_world *w, tb_body_id id, uint32_t *slot)
+tb_status tb__body_find(const tb_world *w, tb_body_id id, uint32_t *slot)
 {
     if (!tb__ids_lookup(&w->body_ids, id.index1, id.generation, slot))
         return tb__fail((tb_world *)w, TB_ERR_STALE_ID, "body id %u.%u is null, removed or from another world",
@@ -210,7 +210,7 @@ tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
     tb_status st;
     if ((st = tb__check_busy(w, "remove a body")) != TB_OK)
         return st;
-    if ((st = find(w, id, &s)) != TB_OK)
+    if ((st = tb__body_find(w, id, &s)) != TB_OK)
         return st;
     tb__wake_body(w, s); /* what it held up must fall */
     last = (uint32_t)w->body_count - 1;
@@ -236,7 +236,7 @@ tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
 tb_status tb_body_position(const tb_world *w, tb_body_id id, double position[3])
 {
     uint32_t s;
-    tb_status st = find(w, id, &s);
+    tb_status st = tb__body_find(w, id, &s);
     if (st == TB_OK)
         memcpy(position, at(w, TB__BODY_POS, 3, s), 3 * sizeof(double));
     return st;
@@ -245,7 +245,7 @@ tb_status tb_body_position(const tb_world *w, tb_body_id id, double position[3])
 tb_status tb_body_orientation(const tb_world *w, tb_body_id id, double orientation[4])
 {
     uint32_t s;
-    tb_status st = find(w, id, &s);
+    tb_status st = tb__body_find(w, id, &s);
     if (st == TB_OK)
         memcpy(orientation, at(w, TB__BODY_ROT, 4, s), 4 * sizeof(double));
     return st;
@@ -254,7 +254,7 @@ tb_status tb_body_orientation(const tb_world *w, tb_body_id id, double orientati
 tb_status tb_body_velocity(const tb_world *w, tb_body_id id, double velocity[3])
 {
     uint32_t s;
-    tb_status st = find(w, id, &s);
+    tb_status st = tb__body_find(w, id, &s);
     int k;
     if (st == TB_OK)
         for (k = 0; k < 3; ++k)
@@ -265,7 +265,7 @@ tb_status tb_body_velocity(const tb_world *w, tb_body_id id, double velocity[3])
 tb_status tb_body_angular_velocity(const tb_world *w, tb_body_id id, double angular_velocity[3])
 {
     uint32_t s;
-    tb_status st = find(w, id, &s);
+    tb_status st = tb__body_find(w, id, &s);
     if (st == TB_OK)
         through_inertia(at(w, TB__BODY_ROT, 4, s), w->body_inv_inertia + 3 * s, at(w, TB__BODY_ANG, 3, s),
                         angular_velocity);
@@ -275,7 +275,7 @@ tb_status tb_body_angular_velocity(const tb_world *w, tb_body_id id, double angu
 tb_status tb_body_momentum(const tb_world *w, tb_body_id id, double linear[3], double angular[3])
 {
     uint32_t s;
-    tb_status st = find(w, id, &s);
+    tb_status st = tb__body_find(w, id, &s);
     if (st == TB_OK && linear)
         memcpy(linear, at(w, TB__BODY_MOM, 3, s), 3 * sizeof(double));
     if (st == TB_OK && angular)
@@ -286,7 +286,7 @@ tb_status tb_body_momentum(const tb_world *w, tb_body_id id, double linear[3], d
 tb_status tb_body_mass(const tb_world *w, tb_body_id id, double *mass, double inertia[3])
 {
     uint32_t s;
-    tb_status st = find(w, id, &s);
+    tb_status st = tb__body_find(w, id, &s);
     if (st == TB_OK && mass)
         *mass = w->body_mass[s];
     if (st == TB_OK && inertia)
@@ -300,7 +300,7 @@ static tb_status writable(tb_world *w, tb_body_id id, const double *v, int n, co
 {
     tb_status st = tb__check_busy(w, "set a body's state");
     if (st == TB_OK)
-        st = find(w, id, s);
+        st = tb__body_find(w, id, s);
     if (st == TB_OK && (!v || !finite_n(v, n)))
         st = tb__fail(w, TB_ERR_ARGUMENT, "body %s must be finite", what);
     return st;

@@ -583,6 +583,22 @@ static inline void row_push(const tb__row *r, double *m, int d, double lambda)
     }
 }
 
+/* One side's part of a row along dir: r x dir and I^-1 (r x dir), zero on
+   the static side; returns their dot, the side's turning share of the
+   row's 1 / mass. */
+static double side_row(const tb__contacts *c, int32_t body, const double r[3], const double dir[3], double arm[3],
+                       double turn[3])
+{
+    if (body < 0) {
+        memset(arm, 0, 3 * sizeof *arm);
+        memset(turn, 0, 3 * sizeof *turn);
+        return 0;
+    }
+    cross(r, dir, arm);
+    mul(c->bodies[body].inv_world, arm, turn);
+    return dot3(arm, turn);
+}
+
 /* Each touching point's rows; where the free motion took it, its impact
    timing and targets. */
 static void set_up_rows(tb__contacts *c, double h)
@@ -627,25 +643,11 @@ static void set_up_rows(tb__contacts *c, double h)
             memcpy(r->dir[0], e->normal, sizeof r->dir[0]);
             memcpy(r->dir[1], e->tangent[0], sizeof r->dir[1]);
             memcpy(r->dir[2], e->tangent[1], sizeof r->dir[2]);
+            sum = c->velocity[TB__MOTION * r->a + 6] + c->velocity[TB__MOTION * r->b + 6]; /* inverse masses */
             for (d = 0; d < 3; ++d) {
-                sum = c->velocity[TB__MOTION * r->a + 6] + c->velocity[TB__MOTION * r->b + 6];
-                if (e->body_a >= 0) {
-                    cross(p->ra, r->dir[d], r->arm_a[d]);
-                    mul(c->bodies[e->body_a].inv_world, r->arm_a[d], r->turn_a[d]);
-                    sum += dot3(r->arm_a[d], r->turn_a[d]);
-                } else {
-                    memset(r->arm_a[d], 0, sizeof r->arm_a[d]);
-                    memset(r->turn_a[d], 0, sizeof r->turn_a[d]);
-                }
-                if (e->body_b >= 0) {
-                    cross(p->rb, r->dir[d], r->arm_b[d]);
-                    mul(c->bodies[e->body_b].inv_world, r->arm_b[d], r->turn_b[d]);
-                    sum += dot3(r->arm_b[d], r->turn_b[d]);
-                } else {
-                    memset(r->arm_b[d], 0, sizeof r->arm_b[d]);
-                    memset(r->turn_b[d], 0, sizeof r->turn_b[d]);
-                }
-                r->mass[d] = sum > 0 ? 1 / sum : 0;
+                const double k = sum + side_row(c, e->body_a, p->ra, r->dir[d], r->arm_a[d], r->turn_a[d]) +
+                                 side_row(c, e->body_b, p->rb, r->dir[d], r->arm_b[d], r->turn_b[d]);
+                r->mass[d] = k > 0 ? 1 / k : 0;
             }
             r->position_impulse = 0;
             /* overlap that was already there is taken back at the rate of a

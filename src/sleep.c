@@ -185,9 +185,9 @@ void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
 tb_status tb_body_asleep(const tb_world *w, tb_body_id id, int *asleep)
 {
     uint32_t s;
-    if (!tb__ids_lookup(&w->body_ids, id.index1, id.generation, &s))
-        return tb__fail((tb_world *)w, TB_ERR_STALE_ID, "body id %u.%u is null, removed or from another world",
-                        id.index1, id.generation);
+    tb_status st = tb__body_find(w, id, &s);
+    if (st != TB_OK)
+        return st;
     if (!asleep)
         return tb__fail((tb_world *)w, TB_ERR_ARGUMENT, "tb_body_asleep needs an output pointer");
     *asleep = w->body_island[s] != 0;
@@ -198,11 +198,8 @@ tb_status tb_body_wake(tb_world *w, tb_body_id id)
 {
     uint32_t s;
     tb_status st;
-    if ((st = tb__check_busy(w, "wake a body")) != TB_OK)
+    if ((st = tb__check_busy(w, "wake a body")) != TB_OK || (st = tb__body_find(w, id, &s)) != TB_OK)
         return st;
-    if (!tb__ids_lookup(&w->body_ids, id.index1, id.generation, &s))
-        return tb__fail(w, TB_ERR_STALE_ID, "body id %u.%u is null, removed or from another world", id.index1,
-                        id.generation);
     tb__wake_body(w, s);
     return TB_OK;
 }

@@ -296,6 +296,8 @@ tb_status tb__contacts_prepare(tb_world *w, double h);
 void tb__contacts_solve(tb_world *w, double h);
 void tb__contacts_free(tb_world *w);
 void tb__shapes_of_body_removed(tb_world *w, uint32_t body_index1);
+/* bodies.c: the slot of a live body id, or TB_ERR_STALE_ID with a message */
+tb_status tb__body_find(const tb_world *w, tb_body_id id, uint32_t *slot);
 /* sleep.c: wake body slot s and the island it sleeps in (if it sleeps). */
 void tb__wake_body(tb_world *w, uint32_t s);
 void tb__wake_all(tb_world *w);
