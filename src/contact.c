@@ -5,6 +5,7 @@
 #include "body_math.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -342,6 +343,8 @@ static double motion_margin(const tb_world *w, const tb__contacts *c, uint32_t p
     }
 }
 
+static tb_status colour_entries(tb_world *w, tb__contacts *c);
+
 tb_status tb__contacts_prepare(tb_world *w, double h)
 {
     tb__contacts *c = w->contacts;
@@ -484,10 +487,8 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
         c->order[i].index = (uint32_t)i;
     }
     qsort(c->order, c->entry_count, sizeof *c->order, key_order);
-    /* the solver's room: a row for every point, motion for every body */
-    if ((st = tb__contacts_reserve(w, (void **)&c->rows, &c->row_cap, TB__MANIFOLD_POINTS * c->entry_count + 1,
-                                   sizeof *c->rows)) != TB_OK ||
-        (st = reserve_motion(w, c)) != TB_OK)
+    /* the solver's room: batches for the entries, motion for every body */
+    if ((st = colour_entries(w, c)) != TB_OK || (st = reserve_motion(w, c)) != TB_OK)
         return st;
     c->prepared = 1;
     return TB_OK;
@@ -557,253 +558,282 @@ static void load_bodies(tb_world *w, tb__contacts *c)
     }
 }
 
-/* Relative velocity of the anchors along row d of r, with velocities (or
-   position changes) from the array m. */
-static inline double row_rate(const tb__row *r, const double *m, int d)
-{
-    const double *A = m + TB__MOTION * r->a, *B = m + TB__MOTION * r->b;
-    const double *n = r->dir[d], *ja = r->arm_a[d], *jb = r->arm_b[d];
-    return n[0] * (B[0] - A[0]) + n[1] * (B[1] - A[1]) + n[2] * (B[2] - A[2]) + jb[0] * B[3] + jb[1] * B[4] +
-           jb[2] * B[5] - ja[0] * A[3] - ja[1] * A[4] - ja[2] * A[5];
-}
+/* ---- batches ----------------------------------------------------------------- */
 
-/* An impulse lambda along row d of r into the array m: -lambda on a,
-   +lambda on b. */
-static inline void row_push(const tb__row *r, double *m, int d, double lambda)
+/* Colour the entries to solve (in key order) so that no two of a colour
+   share a moving body: each takes the lowest colour free at both its
+   bodies, or TB__COLOURS (a batch of its own) when none is. Then room for
+   the batches, however many of the points turn out to touch. */
+static tb_status colour_entries(tb_world *w, tb__contacts *c)
 {
-    double *A = m + TB__MOTION * r->a, *B = m + TB__MOTION * r->b;
-    const double *n = r->dir[d], *ta = r->turn_a[d], *tb = r->turn_b[d];
-    const double la = lambda * A[6], lb = lambda * B[6];
+    size_t count[TB__COLOURS + 1] = { 0 }, batches = 0, i;
+    tb_status st;
     int k;
-    for (k = 0; k < 3; ++k) {
-        A[k] -= la * n[k];
-        A[k + 3] -= lambda * ta[k];
-        B[k] += lb * n[k];
-        B[k + 3] += lambda * tb[k];
+    if ((st = tb__contacts_reserve(w, (void **)&c->colours, &c->colours_cap, c->body_count + 1,
+                                   sizeof *c->colours)) != TB_OK ||
+        (st = tb__contacts_reserve(w, (void **)&c->bucket, &c->bucket_cap, c->entry_count + 1,
+                                   sizeof *c->bucket)) != TB_OK)
+        return st;
+    memset(c->colours, 0, c->body_count * sizeof *c->colours);
+    for (i = 0; i < c->entry_count; ++i) {
+        tb__entry *e = &c->entries[c->order[i].index];
+        uint64_t used = 0;
+        int colour = 0;
+        if (e->asleep || e->count == 0) {
+            e->colour = -1;
+            continue;
+        }
+        used |= e->body_a >= 0 ? c->colours[e->body_a] : 0;
+        used |= e->body_b >= 0 ? c->colours[e->body_b] : 0;
+        while (colour < TB__COLOURS && (used >> colour & 1))
+            ++colour;
+        if (colour < TB__COLOURS) {
+            if (e->body_a >= 0)
+                c->colours[e->body_a] |= (uint64_t)1 << colour;
+            if (e->body_b >= 0)
+                c->colours[e->body_b] |= (uint64_t)1 << colour;
+        }
+        e->colour = colour;
+        count[colour]++;
     }
+    for (k = 0; k < TB__COLOURS; ++k)
+        batches += (count[k] + TB__BATCH_LANES - 1) / TB__BATCH_LANES;
+    batches += count[TB__COLOURS];
+    return tb__contacts_reserve(w, (void **)&c->batches, &c->batch_cap, batches + 1, sizeof *c->batches);
 }
 
-/* One side's part of a row along dir: r x dir and I^-1 (r x dir), zero on
-   the static side; returns their dot, the side's turning share of the
-   row's 1 / mass. */
-static double side_row(const tb__contacts *c, int32_t body, const double r[3], const double dir[3], double arm[3],
-                       double turn[3])
+/* One side's part of a row along dir: r x dir and I^-1 (r x dir) into
+   lane k of arm and turn, zero on the static side; returns their dot, the
+   side's turning share of the row's 1 / mass. */
+static double side_row(const tb__contacts *c, int32_t body, const double r[3], const double dir[3],
+                       double arm[3][TB__BATCH_LANES], double turn[3][TB__BATCH_LANES], int k)
 {
+    double a[3], t[3];
+    int i;
     if (body < 0) {
-        memset(arm, 0, 3 * sizeof *arm);
-        memset(turn, 0, 3 * sizeof *turn);
-        return 0;
+        a[0] = a[1] = a[2] = t[0] = t[1] = t[2] = 0;
+    } else {
+        cross(r, dir, a);
+        mul(c->bodies[body].inv_world, a, t);
     }
-    cross(r, dir, arm);
-    mul(c->bodies[body].inv_world, arm, turn);
-    return dot3(arm, turn);
+    for (i = 0; i < 3; ++i)
+        arm[i][k] = a[i], turn[i][k] = t[i];
+    return dot3(a, t);
 }
 
-/* Each touching point's rows; where the free motion took it, its impact
-   timing and targets. */
-static void set_up_rows(tb__contacts *c, double h)
+/* Lane k's relative velocity along row d of point p, from the array m. */
+static double lane_rate(const tb__batch *bt, const tb__lane_point *p, int k, const double *m, int d)
 {
+    const double *A = m + TB__MOTION * bt->a[k], *B = m + TB__MOTION * bt->b[k];
+    double rate = 0;
+    int i;
+    for (i = 0; i < 3; ++i)
+        rate += bt->dir[d][i][k] * (B[i] - A[i]) + p->arm_b[d][i][k] * B[3 + i] - p->arm_a[d][i][k] * A[3 + i];
+    return rate;
+}
+
+/* An impulse lambda along row d of lane k's point p into the array m:
+   -lambda on a, +lambda on b. */
+static void lane_push(const tb__batch *bt, const tb__lane_point *p, int k, double *m, int d, double lambda)
+{
+    double *A = m + TB__MOTION * bt->a[k], *B = m + TB__MOTION * bt->b[k];
+    const double la = lambda * A[6], lb = lambda * B[6];
+    int i;
+    for (i = 0; i < 3; ++i) {
+        A[i] -= la * bt->dir[d][i][k];
+        A[i + 3] -= lambda * p->turn_a[d][i][k];
+        B[i] += lb * bt->dir[d][i][k];
+        B[i + 3] += lambda * p->turn_b[d][i][k];
+    }
+}
+
+/* Where the free motion took each point of entry e, and which touch;
+   returns how many do. */
+static int predict_points(tb__contacts *c, tb__entry *e)
+{
+    int k, j, touching = 0;
+    for (k = 0; k < e->count; ++k) {
+        tb__point *p = &e->point[k];
+        double pa[3], pb[3], gap[3];
+        /* the arms keep their start-of-step direction: a rolling ball's
+           contact stays under its centre, not on the material point
+           carried round (whose arm would make the normal force spin it
+           up); the free motion's turn moves the anchors to first order */
+        anchor(c, e->body_a, p->point, p->ra, pa);
+        anchor(c, e->body_b, p->point, p->rb, pb);
+        /* where the contact point was at the start is where both anchors
+           were; the separation grew by their relative motion */
+        for (j = 0; j < 3; ++j)
+            gap[j] = pb[j] - pa[j];
+        p->predicted = p->separation + dot3(gap, e->normal);
+        p->speed = 0;
+        /* closed, or within a fifth of the slop of it: a resting point must
+           not drop out of the solve for a rounding-sized gap */
+        p->active = p->predicted <= 0.2 * c->settings.slop;
+        if (!p->active)
+            p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
+        touching += p->active;
+    }
+    return touching;
+}
+
+/* Point p of entry e as point j of lane k: its rows, impact timing and
+   targets. fraction: the share of an old overlap the position pass takes
+   back this step. */
+static void set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__batch *bt, int k, int j, double h,
+                         double fraction)
+{
+    const tb_contact_settings *s = &c->settings;
+    tb__lane_point *lp = &bt->point[j];
+    const double sum = c->velocity[TB__MOTION * bt->a[k] + 6] + c->velocity[TB__MOTION * bt->b[k] + 6];
+    int d;
+    lp->source[k] = p;
+    for (d = 0; d < 3; ++d) {
+        const double dir[3] = { bt->dir[d][0][k], bt->dir[d][1][k], bt->dir[d][2][k] };
+        const double mass = sum + side_row(c, e->body_a, p->ra, dir, lp->arm_a[d], lp->turn_a[d], k) +
+                            side_row(c, e->body_b, p->rb, dir, lp->arm_b[d], lp->turn_b[d], k);
+        lp->mass[d][k] = mass > 0 ? 1 / mass : 0;
+    }
+    lp->predicted[k] = p->predicted;
+    lp->position_impulse[k] = 0;
+    /* overlap that was already there is taken back at the rate of a
+       spring-damper of the contact hertz and damping ratio, at most
+       max_push, so that what an unconverged velocity pass lets sink each
+       step settles at a small fixed overlap instead of adding up */
+    lp->push_target[k] = p->separation >= 0 ? 0 : p->separation + fmin(fraction * -p->separation, h * s->max_push);
+    if ((p->separation > 0 && !p->matched) || p->separation > 0.2 * s->slop) {
+        /* a new contact: when in the step did the gap close? Its normal
+           motion, s + u t + a t^2 / 2 with the free motion's acceleration
+           a, reaches 0 at tau */
+        const double u = p->approach, a = (lane_rate(bt, lp, k, c->velocity, 0) - u) / h;
+        double tau, disc, vi;
+        disc = u * u - 2 * a * p->separation;
+        if (a != 0 && disc >= 0)
+            tau = (-u - sqrt(disc)) / a;
+        else
+            tau = u < 0 ? -p->separation / u : h;
+        if (!(tau >= 0 && tau <= h))
+            tau = u < 0 ? fmin(h, -p->separation / u) : h;
+        vi = -(u + a * tau); /* approach speed at impact */
+        p->speed = vi > 0 ? vi : 0;
+        lp->lever[k] = h - tau;
+        lp->target[k] = vi > s->restitution_threshold && e->restitution > 0 ? e->restitution * vi + a * (h - tau) : 0;
+        p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
+    } else {
+        lp->lever[k] = h / 2; /* a contact force acting through the step */
+        lp->target[k] = 0;
+    }
+    lp->impulse[0][k] = p->normal_impulse;
+    lp->impulse[1][k] = p->tangent_impulse[0];
+    lp->impulse[2][k] = p->tangent_impulse[1];
+}
+
+/* The touching entries into batches: by colour, and within a colour by
+   how many points touch, most first, so that a batch's lanes mostly have
+   as many points as its first; each lane's touching points packed. */
+static void set_up_batches(tb__contacts *c, double h)
+{
+    enum { CLASSES = TB__MANIFOLD_POINTS, BUCKETS = (TB__COLOURS + 1) * CLASSES };
     const tb_contact_settings *s = &c->settings;
     const double omega = 2 * 3.14159265358979323846 * s->hertz;
     const double fraction = fmin(1, h * omega / (2 * s->damping_ratio + h * omega));
-    size_t i;
-    c->row_count = 0;
+    size_t start[BUCKETS + 1] = { 0 }, i, n = 0;
+    int last_colour = -1, lane = TB__BATCH_LANES;
+    tb__batch *bt = NULL;
     for (i = 0; i < c->entry_count; ++i) {
         tb__entry *e = &c->entries[c->order[i].index];
-        int k, j, d;
-        if (e->asleep)
+        if (e->colour < 0)
             continue;
-        for (k = 0; k < e->count; ++k) {
-            tb__point *p = &e->point[k];
-            tb__row *r = &c->rows[c->row_count];
-            double pa[3], pb[3], gap[3], sum;
-            /* the arms keep their start-of-step direction: a rolling ball's
-               contact stays under its centre, not on the material point
-               carried round (whose arm would make the normal force spin it
-               up); the free motion's turn moves the anchors to first order */
-            anchor(c, e->body_a, p->point, p->ra, pa);
-            anchor(c, e->body_b, p->point, p->rb, pb);
-            /* where the contact point was at the start is where both
-               anchors were; the separation grew by their relative motion */
-            for (j = 0; j < 3; ++j)
-                gap[j] = pb[j] - pa[j];
-            r->predicted = p->separation + dot3(gap, e->normal);
-            p->speed = 0;
-            /* closed, or within a fifth of the slop of it: a resting point
-               must not drop out of the solve for a rounding-sized gap */
-            p->active = r->predicted <= 0.2 * s->slop;
-            if (!p->active) {
-                p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
-                continue;
-            }
-            c->row_count++;
-            r->a = e->body_a + 1, r->b = e->body_b + 1;
-            r->point = p;
-            r->friction = e->friction;
-            memcpy(r->dir[0], e->normal, sizeof r->dir[0]);
-            memcpy(r->dir[1], e->tangent[0], sizeof r->dir[1]);
-            memcpy(r->dir[2], e->tangent[1], sizeof r->dir[2]);
-            sum = c->velocity[TB__MOTION * r->a + 6] + c->velocity[TB__MOTION * r->b + 6]; /* inverse masses */
-            for (d = 0; d < 3; ++d) {
-                const double k = sum + side_row(c, e->body_a, p->ra, r->dir[d], r->arm_a[d], r->turn_a[d]) +
-                                 side_row(c, e->body_b, p->rb, r->dir[d], r->arm_b[d], r->turn_b[d]);
-                r->mass[d] = k > 0 ? 1 / k : 0;
-            }
-            r->position_impulse = 0;
-            /* overlap that was already there is taken back at the rate of a
-               spring-damper of the contact hertz and damping ratio, at most
-               max_push, so that what an unconverged velocity pass lets sink
-               each step settles at a small fixed overlap instead of adding up */
-            r->push_target =
-                p->separation >= 0 ? 0 : p->separation + fmin(fraction * -p->separation, h * s->max_push);
-            if ((p->separation > 0 && !p->matched) || p->separation > 0.2 * s->slop) {
-                /* a new contact: when in the step did the gap close? Its
-                   normal motion, s + u t + a t^2 / 2 with the free motion's
-                   acceleration a, reaches 0 at tau */
-                const double u = p->approach, a = (row_rate(r, c->velocity, 0) - u) / h;
-                double tau, disc, vi;
-                disc = u * u - 2 * a * p->separation;
-                if (a != 0 && disc >= 0)
-                    tau = (-u - sqrt(disc)) / a;
-                else
-                    tau = u < 0 ? -p->separation / u : h;
-                if (!(tau >= 0 && tau <= h))
-                    tau = u < 0 ? fmin(h, -p->separation / u) : h;
-                vi = -(u + a * tau); /* approach speed at impact */
-                p->speed = vi > 0 ? vi : 0;
-                r->lever = h - tau;
-                r->target = vi > s->restitution_threshold && e->restitution > 0
-                                ? e->restitution * vi + a * (h - tau)
-                                : 0;
-                p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
-            } else {
-                r->lever = h / 2; /* a contact force acting through the step */
-                r->target = 0;
-            }
-            r->impulse[0] = p->normal_impulse;
-            r->impulse[1] = p->tangent_impulse[0];
-            r->impulse[2] = p->tangent_impulse[1];
+        /* (make_events sets touching again after the solve) */
+        if ((e->touching = predict_points(c, e)) > 0)
+            start[e->colour * CLASSES + CLASSES - e->touching + 1]++;
+    }
+    for (i = 0; i < BUCKETS; ++i)
+        start[i + 1] += start[i];
+    for (i = 0; i < c->entry_count; ++i) {
+        const uint32_t index = c->order[i].index;
+        const tb__entry *e = &c->entries[index];
+        if (e->colour >= 0 && e->touching) {
+            c->bucket[start[e->colour * CLASSES + CLASSES - e->touching]++] = index;
+            ++n;
         }
     }
+    c->batch_count = 0;
+    for (i = 0; i < n; ++i) {
+        tb__entry *e = &c->entries[c->bucket[i]];
+        int k, j = 0;
+        if (lane == TB__BATCH_LANES || e->colour != last_colour || e->colour == TB__COLOURS) {
+            /* a new batch: its first lane has the most points */
+            bt = &c->batches[c->batch_count++];
+            memset(bt, 0, offsetof(tb__batch, point) + (size_t)e->touching * sizeof(tb__lane_point));
+            bt->points = e->touching;
+            last_colour = e->colour;
+            lane = 0;
+        }
+        bt->a[lane] = e->body_a + 1, bt->b[lane] = e->body_b + 1;
+        bt->friction[lane] = e->friction;
+        for (k = 0; k < 3; ++k) {
+            const double *dir = k == 0 ? e->normal : e->tangent[k - 1];
+            bt->dir[k][0][lane] = dir[0], bt->dir[k][1][lane] = dir[1], bt->dir[k][2][lane] = dir[2];
+        }
+        for (k = 0; k < e->count; ++k)
+            if (e->point[k].active)
+                set_up_point(c, e, &e->point[k], bt, lane, j++, h, fraction);
+        ++lane;
+    }
 }
+
+/* Runs body for every point p of every lane k of every batch bt, in batch
+   order. */
+#define EACH_LANE_POINT(c, bt, p, k, body)                            \
+    do {                                                              \
+        size_t i_;                                                    \
+        int j_;                                                       \
+        for (i_ = 0; i_ < (c)->batch_count; ++i_) {                   \
+            tb__batch *bt = &(c)->batches[i_];                        \
+            for (j_ = 0; j_ < bt->points; ++j_) {                     \
+                tb__lane_point *p = &bt->point[j_];                   \
+                for (k = 0; k < TB__BATCH_LANES; ++k)                 \
+                    if (p->source[k]) {                               \
+                        body;                                         \
+                    }                                                 \
+            }                                                         \
+        }                                                             \
+    } while (0)
 
 static void warm_start(tb__contacts *c)
 {
-    size_t i;
-    int d;
-    for (i = 0; i < c->row_count; ++i)
-        for (d = 0; d < 3; ++d)
-            row_push(&c->rows[i], c->velocity, d, c->rows[i].impulse[d]);
+    int k, d;
+    EACH_LANE_POINT(c, bt, p, k, for (d = 0; d < 3; ++d) lane_push(bt, p, k, c->velocity, d, p->impulse[d][k]));
 }
 
-/* The velocities of a row's two sides, held in locals through a point's
-   three rows. */
-typedef struct pair_motion {
-    double va[3], wa[3], vb[3], wb[3], ma, mb;
-} pair_motion;
-
-static inline double pair_rate(const tb__row *r, const pair_motion *s, int d)
+/* A point's whole effect, from its impulse totals: the momenta change by
+   them, and positions move as they would have over its lever time. */
+static void apply_impulse(tb__contacts *c, const tb__batch *bt, const tb__lane_point *p, int k)
 {
-    const double *n = r->dir[d], *ja = r->arm_a[d], *jb = r->arm_b[d];
-    return n[0] * (s->vb[0] - s->va[0]) + n[1] * (s->vb[1] - s->va[1]) + n[2] * (s->vb[2] - s->va[2]) +
-           jb[0] * s->wb[0] + jb[1] * s->wb[1] + jb[2] * s->wb[2] - ja[0] * s->wa[0] - ja[1] * s->wa[1] -
-           ja[2] * s->wa[2];
-}
-
-static inline void pair_push(const tb__row *r, pair_motion *s, int d, double lambda)
-{
-    const double *n = r->dir[d], *ta = r->turn_a[d], *tb = r->turn_b[d];
-    const double la = lambda * s->ma, lb = lambda * s->mb;
-    int k;
-    for (k = 0; k < 3; ++k) {
-        s->va[k] -= la * n[k];
-        s->wa[k] -= lambda * ta[k];
-        s->vb[k] += lb * n[k];
-        s->wb[k] += lambda * tb[k];
-    }
-}
-
-/* One Gauss-Seidel sweep over the touching points: friction first, within
-   the circle mu * normal impulse, then the normal, v_n >= target. */
-static void solve_velocities(tb__contacts *c, int backwards)
-{
-    double *m = c->velocity;
-    size_t i;
-    for (i = 0; i < c->row_count; ++i) {
-        tb__row *r = &c->rows[backwards ? c->row_count - 1 - i : i];
-        double *A = m + TB__MOTION * r->a, *B = m + TB__MOTION * r->b;
-        const double limit = r->friction * r->impulse[0];
-        pair_motion s;
-        double t0, t1, len2, total;
-        memcpy(s.va, A, 3 * sizeof *A), memcpy(s.wa, A + 3, 3 * sizeof *A), s.ma = A[6];
-        memcpy(s.vb, B, 3 * sizeof *B), memcpy(s.wb, B + 3, 3 * sizeof *B), s.mb = B[6];
-        t0 = r->impulse[1] - r->mass[1] * pair_rate(r, &s, 1);
-        t1 = r->impulse[2] - r->mass[2] * pair_rate(r, &s, 2);
-        len2 = t0 * t0 + t1 * t1;
-        if (len2 > limit * limit) {
-            const double scale = limit / sqrt(len2);
-            t0 *= scale, t1 *= scale;
-        }
-        pair_push(r, &s, 1, t0 - r->impulse[1]);
-        pair_push(r, &s, 2, t1 - r->impulse[2]);
-        r->impulse[1] = t0, r->impulse[2] = t1;
-        total = r->impulse[0] - r->mass[0] * (pair_rate(r, &s, 0) - r->target);
-        total = total > 0 ? total : 0;
-        pair_push(r, &s, 0, total - r->impulse[0]);
-        r->impulse[0] = total;
-        /* (the static world at 0 gets its zeros back: its rows have no
-           mass and no turn) */
-        memcpy(A, s.va, 3 * sizeof *A), memcpy(A + 3, s.wa, 3 * sizeof *A);
-        memcpy(B, s.vb, 3 * sizeof *B), memcpy(B + 3, s.wb, 3 * sizeof *B);
-    }
-}
-
-/* The impulses' whole effect, from their totals: the momenta change by
-   them, and positions move as they would have over their lever time. */
-static void apply_impulses(tb__contacts *c)
-{
-    size_t i;
-    for (i = 0; i < c->row_count; ++i) {
-        tb__row *r = &c->rows[i];
-        int d, k;
-        for (d = 0; d < 3; ++d)
-            row_push(r, c->motion, d, r->lever * r->impulse[d]);
-        for (k = 0; k < 2; ++k) {
-            const int32_t body = (k ? r->b : r->a) - 1;
-            const double sign = k ? 1 : -1;
-            tb__solver_body *b;
-            if (body < 0)
-                continue;
-            b = &c->bodies[body];
-            for (d = 0; d < 3; ++d) {
-                const double l = sign * r->impulse[d], *arm = k ? r->arm_b[d] : r->arm_a[d];
-                b->P[0] += l * r->dir[d][0], b->P[1] += l * r->dir[d][1], b->P[2] += l * r->dir[d][2];
-                b->L[0] += l * arm[0], b->L[1] += l * arm[1], b->L[2] += l * arm[2];
+    int d, side;
+    for (d = 0; d < 3; ++d)
+        lane_push(bt, p, k, c->motion, d, p->lever[k] * p->impulse[d][k]);
+    for (side = 0; side < 2; ++side) {
+        const int32_t body = (side ? bt->b[k] : bt->a[k]) - 1;
+        const double sign = side ? 1 : -1;
+        tb__solver_body *b;
+        if (body < 0)
+            continue;
+        b = &c->bodies[body];
+        for (d = 0; d < 3; ++d) {
+            const double l = sign * p->impulse[d][k];
+            const double(*arm)[TB__BATCH_LANES] = side ? p->arm_b[d] : p->arm_a[d];
+            int i;
+            for (i = 0; i < 3; ++i) {
+                b->P[i] += l * bt->dir[d][i][k];
+                b->L[i] += l * arm[i][k];
             }
         }
-        r->point->normal_impulse = r->impulse[0];
-        r->point->tangent_impulse[0] = r->impulse[1];
-        r->point->tangent_impulse[1] = r->impulse[2];
     }
-}
-
-/* Push overlaps apart (positions only, along the normal rows): gaps that
-   closed this step are closed rigidly, old overlap softly (push_target). */
-static void solve_positions(tb__contacts *c)
-{
-    double *m = c->motion;
-    size_t i;
-    for (i = 0; i < c->row_count; ++i) {
-        tb__row *r = &c->rows[i];
-        const double now = r->predicted + row_rate(r, m, 0);
-        double total;
-        if (now >= r->push_target && r->position_impulse == 0)
-            continue;
-        total = r->position_impulse - r->mass[0] * (now - r->push_target);
-        total = total > 0 ? total : 0;
-        row_push(r, m, 0, total - r->position_impulse);
-        r->position_impulse = total;
-    }
+    p->source[k]->normal_impulse = p->impulse[0][k];
+    p->source[k]->tangent_impulse[0] = p->impulse[1][k];
+    p->source[k]->tangent_impulse[1] = p->impulse[2][k];
 }
 
 static void store_bodies(tb_world *w, tb__contacts *c)
@@ -928,25 +958,24 @@ static tb_status make_events(tb_world *w, tb__contacts *c)
 void tb__contacts_solve(tb_world *w, double h)
 {
     tb__contacts *c = w->contacts;
-    size_t i, cold = 0;
-    int it, iterations;
+    size_t points = 0, cold = 0;
+    int it, iterations, k;
     if (!c->prepared)
         return;
     tb__sleep_restore(w, c);
     load_bodies(w, c);
-    set_up_rows(c, h);
+    set_up_batches(c, h);
     warm_start(c);
     /* a contact without last step's impulses to start from needs more
        sweeps to reach them: a stack built at rest would otherwise sink and
        lean in its first steps */
-    for (i = 0; i < c->row_count; ++i)
-        cold += !c->rows[i].point->matched;
-    iterations = c->settings.velocity_iterations * (8 * cold > c->row_count ? 4 : 1);
+    EACH_LANE_POINT(c, bt, p, k, (points++, cold += !p->source[k]->matched));
+    iterations = c->settings.velocity_iterations * (8 * cold > points ? 4 : 1);
     for (it = 0; it < iterations; ++it)
-        solve_velocities(c, it & 1);
-    apply_impulses(c);
+        tb__sweep_velocities(c->batches, c->batch_count, c->velocity, it & 1, c->isa);
+    EACH_LANE_POINT(c, bt, p, k, apply_impulse(c, bt, p, k));
     for (it = 0; it < c->settings.position_iterations; ++it)
-        solve_positions(c);
+        tb__sweep_positions(c->batches, c->batch_count, c->motion, c->isa);
     store_bodies(w, c);
     if (make_events(w, c) != TB_OK)
         c->event_count = 0; /* out of memory for events: the step itself stands */

@@ -35,29 +35,49 @@ typedef struct tb__point {
     double separation;         /* m, at the start of the step (< 0: overlap) */
     double approach;           /* m/s: normal relative velocity at the start */
     double speed;              /* m/s: the approach speed of an impact, 0 otherwise */
+    double predicted;          /* m: separation after the free motion */
     int active;                /* touching after the free motion: solved */
     int matched;               /* it touched last step too (warm started) */
 } tb__point;
 
-/* A touching point packed for the solver's sweeps: three rows (normal,
-   tangent 1, tangent 2), each with its direction, r x d at each anchor and
-   I^-1 (r x d). The bodies are indices into the velocity arrays, where 0 is
-   the static world (no motion, no inverse mass), so the sweeps never
-   branch on which side moves. */
-typedef struct tb__row {
-    int32_t a, b;
-    tb__point *point;          /* where the impulses go back to */
-    double dir[3][3];
-    double arm_a[3][3], arm_b[3][3], turn_a[3][3], turn_b[3][3];
-    double mass[3];            /* 1 / (J M^-1 J^T) of each row */
-    double impulse[3];         /* N s, accumulated */
-    double friction;
-    double target;             /* m/s: the normal velocity to reach */
-    double lever;              /* s: how long its impulse acts on positions */
-    double predicted;          /* m: separation after the free motion */
-    double push_target;        /* m: the separation the position pass aims for */
-    double position_impulse;
-} tb__row;
+/* The solver works on batches of up to TB__BATCH_LANES manifolds that
+   share no moving body (a greedy colouring of the step's manifolds), laid
+   out lane by lane so that one instruction serves every lane
+   (contact_lanes.c). A manifold's touching points are its lane's points,
+   solved in turn. Each point has three rows (normal, tangent 1, tangent 2)
+   with r x d at each anchor and I^-1 (r x d). Bodies are indices into the
+   velocity arrays, where 0 is the static world (no motion, no inverse
+   mass), so the sweeps never branch on which side moves; an empty lane, or
+   a lane without a given point, is all zeros on the static world. */
+#define TB__BATCH_LANES 8
+#define TB__COLOURS 64 /* one bit each in a uint64_t */
+
+typedef struct tb__lane_point {
+    double arm_a[3][3][TB__BATCH_LANES], arm_b[3][3][TB__BATCH_LANES]; /* [row][axis][lane] */
+    double turn_a[3][3][TB__BATCH_LANES], turn_b[3][3][TB__BATCH_LANES];
+    double mass[3][TB__BATCH_LANES];    /* 1 / (J M^-1 J^T) of each row */
+    double impulse[3][TB__BATCH_LANES]; /* N s, accumulated */
+    double target[TB__BATCH_LANES];     /* m/s: the normal velocity to reach */
+    double predicted[TB__BATCH_LANES];  /* m: separation after the free motion */
+    double push_target[TB__BATCH_LANES];/* m: the separation the position pass aims for */
+    double position_impulse[TB__BATCH_LANES];
+    double lever[TB__BATCH_LANES];      /* s: how long its impulse acts on positions */
+    struct tb__point *source[TB__BATCH_LANES]; /* where the impulses go back to; NULL: none */
+} tb__lane_point;
+
+typedef struct tb__batch {
+    int32_t a[TB__BATCH_LANES], b[TB__BATCH_LANES];
+    int points;                         /* the most points of any lane */
+    double dir[3][3][TB__BATCH_LANES];  /* [row][axis][lane]: the manifold's normal, tangents */
+    double friction[TB__BATCH_LANES];
+    tb__lane_point point[TB__MANIFOLD_POINTS];
+} tb__batch;
+
+/* contact_lanes.c: a sweep over the batches (backwards: last batch and
+   last point first) on the velocity array m; a position sweep on the
+   position-change array. isa: tb__isa() or below, the same bits each. */
+void tb__sweep_velocities(tb__batch *batches, size_t n, double *m, int backwards, int isa);
+void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int isa);
 
 /* The points between two shapes (or a shape and a particle). */
 typedef struct tb__entry {
@@ -68,6 +88,7 @@ typedef struct tb__entry {
     int count;
     int touching;
     int asleep;                /* carried over unsolved: both sides sleep or are static */
+    int colour;                /* its batches' colour, TB__COLOURS: a batch of its own */
     tb__point point[TB__MANIFOLD_POINTS];
 } tb__entry;
 
@@ -130,8 +151,13 @@ struct tb__contacts {
     tb__key *order, *previous_order;
     size_t order_cap, previous_order_cap;
 
-    tb__row *rows;             /* the touching points of this step */
-    size_t row_count, row_cap;
+    tb__batch *batches;        /* the touching manifolds of this step */
+    size_t batch_count, batch_cap;
+    uint64_t *colours;         /* [body_cap]: the colours a solver body's manifolds took */
+    size_t colours_cap;
+    uint32_t *bucket;          /* [entry_cap]: entries by colour, then points */
+    size_t bucket_cap;
+    int isa;                   /* the sweeps' instruction set (tb__isa) */
     double *velocity, *motion; /* [TB__MOTION * motion_cap] each, one block: see TB__MOTION */
     size_t motion_cap;
 

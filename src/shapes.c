@@ -1,6 +1,7 @@
 /* shapes.c: shapes attached to bodies or static, the contact settings and
    the events of the last step: the public side of the collision tier. */
 #include "contact.h"
+#include "rotation.h"
 #include "body_math.h"
 
 #include <math.h>
@@ -63,6 +64,7 @@ static tb_status contacts_of(tb_world *w, tb__contacts **out)
             return tb__fail(w, TB_ERR_MEMORY, "out of memory for shapes");
         memset(c, 0, sizeof *c);
         c->settings = tb_default_contact_settings();
+        c->isa = tb__isa();
         w->contacts = c;
     }
     *out = w->contacts;
@@ -90,7 +92,9 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->previous, c->previous_cap * sizeof *c->previous, 0);
     tb__alloc(w, c->order, c->order_cap * sizeof *c->order, 0);
     tb__alloc(w, c->previous_order, c->previous_order_cap * sizeof *c->previous_order, 0);
-    tb__alloc(w, c->rows, c->row_cap * sizeof *c->rows, 0);
+    tb__alloc(w, c->batches, c->batch_cap * sizeof *c->batches, 0);
+    tb__alloc(w, c->colours, c->colours_cap * sizeof *c->colours, 0);
+    tb__alloc(w, c->bucket, c->bucket_cap * sizeof *c->bucket, 0);
     tb__alloc(w, c->owner, c->proxy_cap * sizeof(uint32_t), 0);
     tb__alloc(w, c->poses, c->pose_cap * sizeof *c->poses, 0);
     tb__alloc(w, c->island_scratch, c->island_scratch_cap * sizeof(double), 0);
