@@ -343,6 +343,130 @@ static double motion_margin(const tb_world *w, const tb__contacts *c, uint32_t p
     }
 }
 
+/* ---- reusing a manifold ------------------------------------------------------ */
+
+/* A pair whose relative pose moved less than this since its shapes last
+   collided keeps that manifold (its points ride on both shapes, their
+   separations updated to first order): a resting stack costs no
+   narrowphase. A tenth of the slop, so what goes stale (a clipped corner
+   that slid, the second order of a turn) stays well below what the
+   solver already leaves alone. */
+#define TB__REUSE_SLOP_FRACTION 0.1
+
+/* b's frame in a's: rot = Ra^T Rb, pos = Ra^T (xb - xa). */
+static void relative_pose(const tb__geom *a, const tb__geom *b, double rot[9], double pos[3])
+{
+    int i, j;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j)
+            rot[3 * i + j] = a->rot[i] * b->rot[j] + a->rot[3 + i] * b->rot[3 + j] + a->rot[6 + i] * b->rot[6 + j];
+        pos[i] = a->rot[i] * (b->pos[0] - a->pos[0]) + a->rot[3 + i] * (b->pos[1] - a->pos[1]) +
+                 a->rot[6 + i] * (b->pos[2] - a->pos[2]);
+    }
+}
+
+/* Shape frame g's coordinates of the world point p, and back. */
+static void to_shape(const tb__geom *g, const double p[3], double out[3])
+{
+    int i;
+    for (i = 0; i < 3; ++i)
+        out[i] = g->rot[i] * (p[0] - g->pos[0]) + g->rot[3 + i] * (p[1] - g->pos[1]) + g->rot[6 + i] * (p[2] - g->pos[2]);
+}
+
+static void from_shape(const tb__geom *g, const double l[3], double out[3])
+{
+    int i;
+    for (i = 0; i < 3; ++i)
+        out[i] = g->pos[i] + g->rot[3 * i] * l[0] + g->rot[3 * i + 1] * l[1] + g->rot[3 * i + 2] * l[2];
+}
+
+/* Last step's manifold between the shapes of proxies pa and pb, moved to
+   their poses now, if they moved little enough since it was found; NULL
+   otherwise (particles are always collided: a point costs little). */
+static const tb__entry *reuse(const tb__contacts *c, const tb__geom *a, const tb__geom *b, uint32_t pa, uint32_t pb,
+                              tb__manifold *m)
+{
+    const double near = TB__REUSE_SLOP_FRACTION * c->settings.slop;
+    const tb__entry *old;
+    uint32_t key_a, key_b, gen;
+    double rot[9], pos[3], moved = 0, trace = 0, turn;
+    int i, k;
+    if ((pa | pb) & TB__PARTICLE_KEY)
+        return NULL;
+    tb__ids_at(&c->ids, pa, &key_a, &gen);
+    tb__ids_at(&c->ids, pb, &key_b, &gen);
+    if (!(old = previous_entry(c, key_a, key_b)) || !old->cached)
+        return NULL;
+    relative_pose(a, b, rot, pos);
+    for (i = 0; i < 3; ++i)
+        moved += (pos[i] - old->cache_pos[i]) * (pos[i] - old->cache_pos[i]);
+    for (i = 0; i < 9; ++i)
+        trace += rot[i] * old->cache_rot[i];
+    /* 3 - trace = 2 (1 - cos angle), about angle^2; b's points turn by
+       at most its reach times the angle */
+    turn = c->shapes[pb].reach * c->shapes[pb].reach * (3 - trace);
+    if (!(moved < near * near && turn < near * near))
+        return NULL;
+    for (i = 0; i < 3; ++i)
+        m->normal[i] = a->rot[3 * i] * old->cache_normal[0] + a->rot[3 * i + 1] * old->cache_normal[1] +
+                       a->rot[3 * i + 2] * old->cache_normal[2];
+    m->count = old->count;
+    for (k = 0; k < old->count; ++k) {
+        const tb__point *o = &old->point[k];
+        double on_a[3], on_b[3], gap = 0;
+        from_shape(a, o->local_a, on_a);
+        from_shape(b, o->local_b, on_b);
+        for (i = 0; i < 3; ++i) {
+            gap += (on_b[i] - on_a[i]) * m->normal[i];
+            m->point[k].pos[i] = 0.5 * (on_a[i] + on_b[i]);
+        }
+        m->point[k].depth = -(o->separation0 + gap);
+        m->point[k].feature = o->feature;
+    }
+    return old;
+}
+
+/* The manifold of shapes a and b (proxies pa and pb) as an entry: last
+   step's moved along if it can be, else collided afresh. */
+static tb_status collide_pair(tb_world *w, tb__contacts *c, const tb__geom *a, const tb__geom *b, uint32_t pa,
+                              uint32_t pb, double margin)
+{
+    const size_t before = c->entry_count;
+    tb__manifold m;
+    const tb__entry *old = reuse(c, a, b, pa, pb, &m);
+    tb__entry *e;
+    tb_status st;
+    int k;
+    if (!old && !tb__collide(a, b, margin, &m))
+        return TB_OK;
+    if ((st = add_entry(w, c, pa, pb, &m)) != TB_OK || c->entry_count == before)
+        return st;
+    e = &c->entries[before];
+    e->cached = !((pa | pb) & TB__PARTICLE_KEY);
+    if (!e->cached)
+        return TB_OK;
+    if (old) { /* the reference stays the last collision */
+        memcpy(e->cache_rot, old->cache_rot, sizeof e->cache_rot);
+        memcpy(e->cache_pos, old->cache_pos, sizeof e->cache_pos);
+        memcpy(e->cache_normal, old->cache_normal, sizeof e->cache_normal);
+        for (k = 0; k < e->count; ++k) {
+            memcpy(e->point[k].local_a, old->point[k].local_a, sizeof e->point[k].local_a);
+            memcpy(e->point[k].local_b, old->point[k].local_b, sizeof e->point[k].local_b);
+            e->point[k].separation0 = old->point[k].separation0;
+        }
+        return TB_OK;
+    }
+    relative_pose(a, b, e->cache_rot, e->cache_pos);
+    for (k = 0; k < 3; ++k)
+        e->cache_normal[k] = a->rot[k] * m.normal[0] + a->rot[3 + k] * m.normal[1] + a->rot[6 + k] * m.normal[2];
+    for (k = 0; k < m.count; ++k) {
+        to_shape(a, m.point[k].pos, e->point[k].local_a);
+        to_shape(b, m.point[k].pos, e->point[k].local_b);
+        e->point[k].separation0 = -m.point[k].depth;
+    }
+    return TB_OK;
+}
+
 static tb_status colour_entries(tb_world *w, tb__contacts *c);
 
 tb_status tb__contacts_prepare(tb_world *w, double h)
@@ -437,7 +561,6 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
         return st;
     for (i = 0; i < c->pair_count; ++i) {
         const uint32_t a = c->pairs[i].a, b = c->pairs[i].b;
-        tb__manifold m;
         if ((c->proxy[a] & TB__PARTICLE_KEY) && (c->proxy[b] & TB__PARTICLE_KEY))
             continue;
         if (inert(w, c, a) && inert(w, c, b)) {
@@ -445,8 +568,8 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
                 return st;
             continue;
         }
-        if (tb__collide(&c->geoms[a], &c->geoms[b], c->margin[a] + c->margin[b], &m) &&
-            (st = add_entry(w, c, c->proxy[a], c->proxy[b], &m)) != TB_OK)
+        if ((st = collide_pair(w, c, &c->geoms[a], &c->geoms[b], c->proxy[a], c->proxy[b],
+                               c->margin[a] + c->margin[b])) != TB_OK)
             return st;
     }
     /* planes against every proxy whose box reaches them */
@@ -459,7 +582,6 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
         for (k = 0; k < c->proxy_count; ++k) {
             const double *lo = c->lo + 3 * k, *hi = c->hi + 3 * k;
             double nearest = 0;
-            tb__manifold m;
             int j;
             if (!(s->category & c->mask[k]) || !(c->category[k] & s->mask) || c->group[k] == 0xFFFFFFFFu)
                 continue;
@@ -472,8 +594,7 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
                     return st;
                 continue;
             }
-            if (tb__collide(&plane, &c->geoms[k], c->margin[k], &m) &&
-                (st = add_entry(w, c, (uint32_t)i, c->proxy[k], &m)) != TB_OK)
+            if ((st = collide_pair(w, c, &plane, &c->geoms[k], (uint32_t)i, c->proxy[k], c->margin[k])) != TB_OK)
                 return st;
         }
     }
@@ -561,9 +682,9 @@ static void load_bodies(tb_world *w, tb__contacts *c)
 /* ---- batches ----------------------------------------------------------------- */
 
 /* Colour the entries to solve (in key order) so that no two of a colour
-   share a moving body: each takes the lowest colour free at both its
-   bodies, or TB__COLOURS (a batch of its own) when none is. Then room for
-   the batches, however many of the points turn out to touch. */
+   share a moving body, or give one TB__COLOURS (a batch of its own) when
+   no colour is free at both its bodies. Then room for the batches,
+   however many of the points turn out to touch. */
 static tb_status colour_entries(tb_world *w, tb__contacts *c)
 {
     size_t count[TB__COLOURS + 1] = { 0 }, batches = 0, i;
@@ -585,6 +706,16 @@ static tb_status colour_entries(tb_world *w, tb__contacts *c)
         }
         used |= e->body_a >= 0 ? c->colours[e->body_a] : 0;
         used |= e->body_b >= 0 ? c->colours[e->body_b] : 0;
+        /* after every colour its bodies already have: the sweep then meets
+           any two manifolds that share a body in key order, as a plain
+           loop over the entries would, so weight still reaches down a
+           stack within a pair of sweeps; past the last colour, the lowest
+           free one */
+        colour = TB__COLOURS;
+        while (colour > 0 && !(used >> (colour - 1) & 1))
+            --colour;
+        if (colour == TB__COLOURS)
+            colour = 0;
         while (colour < TB__COLOURS && (used >> colour & 1))
             ++colour;
         if (colour < TB__COLOURS) {

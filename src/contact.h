@@ -36,6 +36,8 @@ typedef struct tb__point {
     double approach;           /* m/s: normal relative velocity at the start */
     double speed;              /* m/s: the approach speed of an impact, 0 otherwise */
     double predicted;          /* m: separation after the free motion */
+    double local_a[3], local_b[3]; /* m: the point in each shape's frame, and */
+    double separation0;        /* its separation, when the shapes last collided */
     int active;                /* touching after the free motion: solved */
     int matched;               /* it touched last step too (warm started) */
 } tb__point;
@@ -89,6 +91,10 @@ typedef struct tb__entry {
     int touching;
     int asleep;                /* carried over unsolved: both sides sleep or are static */
     int colour;                /* its batches' colour, TB__COLOURS: a batch of its own */
+    int cached;                /* the fields below hold the last collision */
+    double cache_rot[9];       /* b's shape frame in a's when the shapes last collided */
+    double cache_pos[3];       /* m: b's shape centre then, in a's frame */
+    double cache_normal[3];    /* the normal then, in a's frame */
     tb__point point[TB__MANIFOLD_POINTS];
 } tb__entry;
 
