@@ -443,6 +443,7 @@ static tb_status collide_pair(tb_world *w, tb__contacts *c, const tb__geom *a, c
         return st;
     e = &c->entries[before];
     e->cached = !((pa | pb) & TB__PARTICLE_KEY);
+    e->reused = old != NULL;
     if (!e->cached)
         return TB_OK;
     if (old) { /* the reference stays the last collision */

@@ -92,6 +92,7 @@ typedef struct tb__entry {
     int asleep;                /* carried over unsolved: both sides sleep or are static */
     int colour;                /* its batches' colour, TB__COLOURS: a batch of its own */
     int cached;                /* the fields below hold the last collision */
+    int reused;                /* this step's manifold is the last collision's, moved */
     double cache_rot[9];       /* b's shape frame in a's when the shapes last collided */
     double cache_pos[3];       /* m: b's shape centre then, in a's frame */
     double cache_normal[3];    /* the normal then, in a's frame */
