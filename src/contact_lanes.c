@@ -45,12 +45,14 @@ TB__LANE void scatter(const tb__batch *bt, double *m, const sides *s)
     }
 }
 
-/* Lane k's relative velocity along row d of point p. */
-#define RATE(bt, p, s, d, k)                                                                                \
-    ((bt)->dir[d][0][k] * ((s)->vb[0][k] - (s)->va[0][k]) + (bt)->dir[d][1][k] * ((s)->vb[1][k] - (s)->va[1][k]) + \
-     (bt)->dir[d][2][k] * ((s)->vb[2][k] - (s)->va[2][k]) + (p)->arm_b[d][0][k] * (s)->wb[0][k] +               \
-     (p)->arm_b[d][1][k] * (s)->wb[1][k] + (p)->arm_b[d][2][k] * (s)->wb[2][k] -                                 \
-     (p)->arm_a[d][0][k] * (s)->wa[0][k] - (p)->arm_a[d][1][k] * (s)->wa[1][k] - (p)->arm_a[d][2][k] * (s)->wa[2][k])
+/* Lane k's relative velocity along row d of point p: three dot products
+   summed as a tree, so that the sweep's chain of dependent operations
+   (each point's rows wait for the last one's push) stays short. */
+#define DOT3(x, y, k) ((x)[0][k] * (y)[0][k] + (x)[1][k] * (y)[1][k] + (x)[2][k] * (y)[2][k])
+#define RATE(bt, p, s, d, k)                                                                                    \
+    (((bt)->dir[d][0][k] * ((s)->vb[0][k] - (s)->va[0][k]) + (bt)->dir[d][1][k] * ((s)->vb[1][k] - (s)->va[1][k]) + \
+      (bt)->dir[d][2][k] * ((s)->vb[2][k] - (s)->va[2][k])) +                                                   \
+     (DOT3((p)->arm_b[d], (s)->wb, k) - DOT3((p)->arm_a[d], (s)->wa, k)))
 
 /* An impulse l along row d of point p on lane k: -l on a, +l on b.
    (Written out: a loop over the axes inside the loop over lanes keeps GCC
@@ -77,24 +79,35 @@ TB__LANE void scatter(const tb__batch *bt, double *m, const sides *s)
    point has zero masses and friction, so its impulses stay 0. */
 TB__LANE void velocity_point(const tb__batch *restrict bt, tb__lane_point *restrict p, sides *restrict s)
 {
-    int k;
+    double t0[W], t1[W], len2[W], limit[W], limit2[W];
+    int k, outside = 0;
     for (k = 0; k < W; ++k) {
-        const double limit = bt->friction[k] * p->impulse[0][k];
-        double t0 = p->impulse[1][k] - p->mass[1][k] * RATE(bt, p, s, 1, k);
-        double t1 = p->impulse[2][k] - p->mass[2][k] * RATE(bt, p, s, 2, k);
-        const double len2 = t0 * t0 + t1 * t1;
-        /* outside the circle (ratio < 1) scaled back onto it, inside
-           times exactly 1; no branch, so the lanes share instructions
-           (len2 = 0 gives an infinite or NaN ratio, hence 1) */
-        const double ratio = limit / sqrt(len2), scale = ratio < 1 ? ratio : 1;
-        double total, d0, d1, dn;
-        t0 *= scale;
-        t1 *= scale;
-        d0 = t0 - p->impulse[1][k];
-        d1 = t1 - p->impulse[2][k];
+        limit[k] = bt->friction[k] * p->impulse[0][k];
+        t0[k] = p->impulse[1][k] - p->mass[1][k] * RATE(bt, p, s, 1, k);
+        t1[k] = p->impulse[2][k] - p->mass[2][k] * RATE(bt, p, s, 2, k);
+        len2[k] = t0[k] * t0[k] + t1[k] * t1[k];
+        limit2[k] = limit[k] * limit[k];
+    }
+    for (k = 0; k < W; ++k)
+        outside |= len2[k] > limit2[k];
+    /* Outside the circle, scaled back onto it. The square root and the
+       division are the slowest operations of the sweep, and resting
+       contacts mostly stay inside: they are done only when some lane is
+       out, and then in every lane (len2 = 0 gives an unused infinity or
+       NaN), as a branch per lane would keep the lanes from one
+       instruction. */
+    if (outside)
+        for (k = 0; k < W; ++k) {
+            const double scale = limit[k] / sqrt(len2[k]);
+            t0[k] = len2[k] > limit2[k] ? t0[k] * scale : t0[k];
+            t1[k] = len2[k] > limit2[k] ? t1[k] * scale : t1[k];
+        }
+    for (k = 0; k < W; ++k) {
+        const double d0 = t0[k] - p->impulse[1][k], d1 = t1[k] - p->impulse[2][k];
+        double total, dn;
         PUSH(bt, p, s, 1, k, d0);
         PUSH(bt, p, s, 2, k, d1);
-        p->impulse[1][k] = t0, p->impulse[2][k] = t1;
+        p->impulse[1][k] = t0[k], p->impulse[2][k] = t1[k];
         total = p->impulse[0][k] - p->mass[0][k] * (RATE(bt, p, s, 0, k) - p->target[k]);
         total = total > 0 ? total : 0;
         dn = total - p->impulse[0][k];
