@@ -379,6 +379,7 @@ ode_pyramid_def ode_default_pyramid_def(void)
     d.max_contacts = 4;
     d.gravity = 9.81;
     d.duration = 10;
+    d.auto_disable = 0;
     return d;
 }
 
@@ -443,6 +444,8 @@ int ode_pyramid(const ode_pyramid_def *def, ode_pyramid_result *out)
     h = 1 / def->hz;
     world = make_world(def->gravity);
     dWorldSetQuickStepNumIterations(world, def->iterations);
+    if (def->auto_disable)
+        dWorldSetAutoDisableFlag(world, 1); /* (new bodies take the flag) */
     space = dHashSpaceCreate(0);
     dCreatePlane(space, 0, 0, 1, 0);
     dMassSetBoxTotal(&mass, def->mass, def->edge, def->edge, def->edge);

@@ -172,6 +172,9 @@ typedef struct ode_pyramid_def {
     int max_contacts; /* per pair: 4 */
     double gravity;   /* m/s^2: 9.81 */
     double duration;  /* s: 10 */
+    int auto_disable; /* 0; 1: ODE's auto-disable at its defaults (bodies slower
+                         than 0.01 m/s and 0.01 rad/s for 10 steps rest, by
+                         island), for comparing with tumble's sleep */
 } ode_pyramid_def;
 
 typedef struct ode_pyramid_result {
