@@ -421,7 +421,15 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    gaps that closed, softly (contact_hertz, damping ratio) for overlaps
    that were already there. Momentum is exchanged by equal and opposite
    impulses, so it is conserved to rounding. Sleeping bodies (see "Sleep"
-   below) are left out of (1) to (4) and keep their pose. */
+   below) are left out of (1) to (4) and keep their pose.
+   Cost: a pair of shapes whose relative pose moved less than a tenth of
+   the slop since they last collided keeps that manifold, its points
+   carried on both shapes and their separations updated (a resting stack
+   costs almost no narrowphase). The sweeps run on batches of up to 8
+   manifolds that share no moving body, one instruction for all 8 where
+   the processor has AVX2 or AVX-512; manifolds that share a body are met
+   in the same order as in a plain loop, and every instruction set gives
+   the same bits. */
 typedef enum tb_shape_type { TB_SHAPE_SPHERE, TB_SHAPE_CAPSULE, TB_SHAPE_BOX, TB_SHAPE_PLANE } tb_shape_type;
 
 typedef struct tb_shape_def {
