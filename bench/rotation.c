@@ -158,38 +158,23 @@ static void many_states(double *q, double *L, double *invI)
 
 typedef void kernel_fn(double q[4], const double L[3], const double invI[3], double h);
 
-/* The bodies b < BODIES through a kernel in lanes, as the world does: the
-   frozen kernel straight on the arrays, the splitting kernels (accurate 0
-   or 1) loaded into lanes in their frames and stored back. */
-static void step_lanes(int kernel, double *q, const double *L, const double *invI, const tb__split_frame *frames,
-                       double h, int isa)
+/* The bodies b < BODIES through a kernel in lanes, as the world does:
+   frozen (kernel 0), split2 (1) or accurate (2), straight on the arrays. */
+static void step_lanes(int kernel, double *q, const double *L, const double *invI, double h, int isa)
 {
-    int b, i;
-    for (b = 0; b < BODIES; b += TB__LANES) {
-        tb__spin_lanes p;
-        if (kernel == 0) {
+    int b;
+    for (b = 0; b < BODIES; b += TB__LANES)
+        if (kernel == 0)
             tb__frozen_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, TB__LANES, isa);
-            continue;
-        }
-        p.h = h;
-        for (i = 0; i < TB__LANES; ++i)
-            if (!tb__spin_load(&p, i, q + 4 * (b + i), L + 3 * (b + i), &frames[b + i], h * h, kernel == 2)) {
-                fprintf(stderr, "bench_rotation: a flip body is beyond the lanes' polynomials\n");
-                exit(EXIT_FAILURE);
-            }
-        if (kernel == 2)
-            tb__accurate_lanes(&p, TB__LANES, isa);
+        else if (kernel == 1)
+            tb__split2_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, TB__LANES, isa);
         else
-            tb__split2_lanes(&p, TB__LANES, isa);
-        for (i = 0; i < TB__LANES; ++i)
-            tb__spin_store(&p, i, &frames[b + i], q + 4 * (b + i));
-    }
+            tb__accurate_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, TB__LANES, isa);
 }
 
 static void run_kernel(result *r, kernel_fn *step, int lanes, const double ref[4])
 {
     static double qs[4 * BODIES], Ls[3 * BODIES], Is[3 * BODIES];
-    static tb__split_frame frames[BODIES];
     double invI[3], L[3], q[4], lb[3], e0, e = 0, ns[REPEATS], many[REPEATS];
     long s;
     int k, b, isa;
@@ -230,12 +215,10 @@ static void run_kernel(result *r, kernel_fn *step, int lanes, const double ref[4
         return;
     for (isa = TB__ISA_PORTABLE; isa <= tb__isa(); isa = isa == TB__ISA_PORTABLE ? tb__isa() : isa + 1) {
         many_states(qs, Ls, Is);
-        for (b = 0; b < BODIES; ++b)
-            tb__split_frame_of(Is + 3 * b, &frames[b]);
         for (k = 0; k < REPEATS; ++k) {
             const double t0 = seconds();
             for (s = 0; s < 4; ++s)
-                step_lanes(lanes, qs, Ls, Is, frames, H, isa);
+                step_lanes(lanes, qs, Ls, Is, H, isa);
             many[k] = 1e9 * (seconds() - t0) / (4.0 * BODIES);
         }
         keep(qs[0]);

@@ -308,122 +308,95 @@ void tb__body_rk4(tb_world *w, double h)
         rk4_portable(w, h, local);
 }
 
-/* The sweep goes over blocks of TB__LANES consecutive bodies, applying the
-   ops in order to each block while it sits in L1. Translation and kicks run
-   in loops of fixed length over the block, which GCC vectorises; drifts
-   turn the block with the kernels in lanes (rotation.h). Bodies for the
-   splitting kernels are relabelled into lanes one by one (a gather: every
-   body has its own axes) and turned TB__LANES at a time, across blocks:
-   this is right as long as a body drifts once per sweep, as in every
-   method (a sweep with more drifts turns its lanes after each). */
-typedef struct pending {
-    tb__spin_lanes lanes;
-    uint32_t slot[TB__LANES];
-    int count;
-    int accurate;
-    int isa; /* tb__isa(), asked once a sweep */
-} pending;
-
-static void turn_pending(tb_world *w, pending *p)
+/* Turn bodies [b, b + m) of a block through their free motion over h. */
+static void turn(tb_world *w, size_t b, size_t m, const tb__split_op *op, int isa)
 {
-    double *q = w->y + w->off[TB__BODY_ROT];
-    int i;
-    if (!p->count)
-        return;
-    if (p->accurate)
-        tb__accurate_lanes(&p->lanes, p->count, p->isa);
-    else
-        tb__split2_lanes(&p->lanes, p->count, p->isa);
-    for (i = 0; i < p->count; ++i)
-        tb__spin_store(&p->lanes, i, &w->body_frame[p->slot[i]], q + 4 * p->slot[i]);
-    p->count = 0;
-}
-
-/* Turn bodies [b, b + m) through their free motion over h. */
-static void turn(tb_world *w, size_t b, size_t m, const tb__split_op *op, pending *p)
-{
-    double *q = w->y + w->off[TB__BODY_ROT];
-    const double *L = w->y + w->off[TB__BODY_ANG], *invI = w->body_inv_inertia;
-    const tb__split_frame *frame = w->body_frame;
+    double *q = w->y + w->off[TB__BODY_ROT] + 4 * b;
+    const double *L = w->y + w->off[TB__BODY_ANG] + 3 * b, *invI = w->body_inv_inertia + 3 * b;
+    const tb__split_frame *frame = w->body_frame + b;
     const double h = op->h;
     size_t s, iso = w->body_isotropic == w->body_count ? m : 0;
-    int accurate;
     if (w->body_isotropic && iso == 0)
-        for (s = b; s < b + m; ++s)
+        for (s = 0; s < m; ++s)
             iso += frame[s].isotropic;
     /* an isotropic body turns about a fixed axis, exactly and cheaply, with
-       no gyroscopic work */
-    if (iso == m) {
-        tb__isotropic_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, (int)m, p->isa);
-        return;
-    }
-    if (op->rotation == TB__ROTATE_FROZEN && iso == 0) {
-        tb__frozen_lanes(q + 4 * b, L + 3 * b, invI + 3 * b, h, (int)m, p->isa);
-        return;
-    }
-    accurate = op->rotation == TB__ROTATE_ACCURATE;
-    if (op->rotation != TB__ROTATE_FROZEN) {
-        /* the lanes turn with one kernel and one step: settled once a
-           block, not once a body (this loop is most of a sweep's cost) */
-        if (p->accurate != accurate || p->lanes.h != h)
-            turn_pending(w, p);
-        p->accurate = accurate;
-        p->lanes.h = h;
-    }
-    for (s = b; s < b + m; ++s) {
-        if (frame[s].isotropic) {
-            tb__rotation_isotropic(q + 4 * s, L + 3 * s, invI[3 * s], h);
-        } else if (op->rotation == TB__ROTATE_FROZEN) {
-            tb__rotation_frozen(q + 4 * s, L + 3 * s, invI + 3 * s, h);
-        } else if (tb__spin_load(&p->lanes, p->count, q + 4 * s, L + 3 * s, &frame[s], h * h, accurate)) {
-            p->slot[p->count++] = (uint32_t)s;
-            if (p->count == TB__LANES)
-                turn_pending(w, p);
-        } else if (accurate) {
-            tb__accurate_framed(q + 4 * s, L + 3 * s, &frame[s], h);
-        } else {
-            tb__split2_framed(q + 4 * s, L + 3 * s, &frame[s], h);
-        }
-    }
+       no gyroscopic work (the splitting lanes send it there too) */
+    if (iso == m)
+        tb__isotropic_lanes(q, L, invI, h, (int)m, isa);
+    else if (op->rotation == TB__ROTATE_SPLIT2)
+        tb__split2_lanes(q, L, invI, h, (int)m, isa);
+    else if (op->rotation == TB__ROTATE_ACCURATE)
+        tb__accurate_lanes(q, L, invI, h, (int)m, isa);
+    else if (iso == 0)
+        tb__frozen_lanes(q, L, invI, h, (int)m, isa);
+    else
+        for (s = 0; s < m; ++s)
+            if (frame[s].isotropic)
+                tb__rotation_isotropic(q + 4 * s, L + 3 * s, invI[3 * s], h);
+            else
+                tb__rotation_frozen(q + 4 * s, L + 3 * s, invI + 3 * s, h);
 }
 
-TB__LANE void drift_lane(double *x, const double *P, double inv_mass, double h)
+/* A block's per-body numbers spread to the layout of its 3-vectors:
+   out[3 i + k] = in[i]. The loops over the block's vectors can then run
+   straight over 3 TB__LANES numbers, instead of gathering each component
+   at a stride of 3 (which took a shuffle per number). */
+TB__LANE void spread3(const double *restrict in, double *restrict out)
 {
-    x[0] += h * P[0] * inv_mass;
-    x[1] += h * P[1] * inv_mass;
-    x[2] += h * P[2] * inv_mass;
+    int i;
+    for (i = 0; i < TB__LANES; ++i)
+        out[3 * i] = out[3 * i + 1] = out[3 * i + 2] = in[i];
 }
 
-/* x += h v for bodies [0, m) of a block (pointers at the block). */
-static void drift(double *restrict x, const double *restrict P, const double *restrict inv_mass, double h, size_t m)
+/* x += h v = h P / m for bodies [0, m) of a block (pointers at the
+   block). */
+TB__LANE void drift(double *restrict x, const double *restrict P, const double *restrict inv_mass, double h,
+                    size_t m)
 {
     size_t i;
-    if (m == TB__LANES)
-        for (i = 0; i < TB__LANES; ++i)
-            drift_lane(x + 3 * i, P + 3 * i, inv_mass[i], h);
-    else
-        for (i = 0; i < m; ++i)
-            drift_lane(x + 3 * i, P + 3 * i, inv_mass[i], h);
+    if (m == TB__LANES) {
+        double inv3[3 * TB__LANES];
+        spread3(inv_mass, inv3);
+        for (i = 0; i < 3 * TB__LANES; ++i)
+            x[i] += h * P[i] * inv3[i];
+    } else {
+        for (i = 0; i < 3 * m; ++i)
+            x[i] += h * P[i] * inv_mass[i / 3];
+    }
+}
+
+/* A kick of gravity alone (as kick_gravity) and then a drift, in one pass
+   over the block: what a split method's sweep mostly does. */
+TB__LANE void kick_drift(double *restrict x, double *restrict P, const double *restrict mass,
+                         const double *restrict inv_mass, double hk, double hd, const double *restrict g3)
+{
+    double m3[3 * TB__LANES], inv3[3 * TB__LANES];
+    int i;
+    spread3(mass, m3);
+    spread3(inv_mass, inv3);
+    for (i = 0; i < 3 * TB__LANES; ++i) {
+        const double p = P[i] + hk * (m3[i] * g3[i]);
+        P[i] = p;
+        x[i] += hd * p * inv3[i];
+    }
 }
 
 /* The kick of a world where gravity is the only force on bodies: P gains
-   h m g, L nothing. The same bits as rates() gives with its other terms
-   zero (m g - 0 P + 0), and, as P holds no -0, as P + h m 0 where a
-   component of g is zero, which is skipped. */
-static void kick_gravity(double *restrict P, const double *restrict mass, double h, const double g[3], size_t m)
+   h m g, L nothing. g3 is (g + 0) repeated TB__LANES times: m (g + 0) is
+   what rates() gives with its other terms zero (m g - 0 P + 0), to the
+   bit, even for a component of g that is -0. */
+TB__LANE void kick_gravity(double *restrict P, const double *restrict mass, double h, const double *restrict g3,
+                           size_t m)
 {
     size_t i;
-    int k;
-    for (k = 0; k < 3; ++k) {
-        const double gk = g[k];
-        if (gk == 0)
-            continue;
-        if (m == TB__LANES)
-            for (i = 0; i < TB__LANES; ++i)
-                P[3 * i + k] += h * (mass[i] * gk);
-        else
-            for (i = 0; i < m; ++i)
-                P[3 * i + k] += h * (mass[i] * gk);
+    if (m == TB__LANES) {
+        double m3[3 * TB__LANES];
+        spread3(mass, m3);
+        for (i = 0; i < 3 * TB__LANES; ++i)
+            P[i] += h * (m3[i] * g3[i]);
+    } else {
+        for (i = 0; i < 3 * m; ++i)
+            P[i] += h * (mass[i / 3] * g3[i]);
     }
 }
 
@@ -458,36 +431,66 @@ static int gravity_only(tb_world *w)
     return w->body_damped == 0 && !w->body_held && !(w->force_ready && w->forces.count > 0);
 }
 
-void tb__body_sweep(tb_world *w, const tb__split_op *ops, int n)
+/* The sweep goes over blocks of TB__LANES consecutive bodies, applying the
+   ops in order to each block while it sits in L1: kicks and drifts in
+   loops of fixed length over the block, which GCC vectorises, and turns by
+   the kernels in lanes (rotation.h), which take the block as it is stored. */
+TB__LANE void sweep_blocks(tb_world *w, const tb__split_op *ops, int n, int only_gravity, int isa)
 {
-    double *x = w->y + w->off[TB__BODY_POS], *P = w->y + w->off[TB__BODY_MOM];
-    const int only_gravity = gravity_only(w);
-    pending p;
+    double *x = w->y + w->off[TB__BODY_POS], *P = w->y + w->off[TB__BODY_MOM], g3[3 * TB__LANES];
     size_t b;
-    int i, drifts = 0;
-    for (i = 0; i < n; ++i)
-        drifts += ops[i].drift;
-    p.count = 0;
-    p.accurate = 0;
-    p.isa = tb__isa();
-    p.lanes.h = 0;
+    int i;
+    for (i = 0; i < TB__LANES; ++i) {
+        g3[3 * i] = w->gravity[0] + 0.0;
+        g3[3 * i + 1] = w->gravity[1] + 0.0;
+        g3[3 * i + 2] = w->gravity[2] + 0.0;
+    }
     for (b = 0; b < w->body_count; b += TB__LANES) {
         const size_t m = w->body_count - b < TB__LANES ? w->body_count - b : TB__LANES;
         for (i = 0; i < n; ++i) {
+            if (only_gravity && m == TB__LANES && !ops[i].drift && i + 1 < n && ops[i + 1].drift) {
+                kick_drift(x + 3 * b, P + 3 * b, w->body_mass + b, w->body_inv_mass + b, ops[i].h, ops[i + 1].h, g3);
+                turn(w, b, m, &ops[++i], isa);
+                continue;
+            }
             if (!ops[i].drift) {
                 if (only_gravity)
-                    kick_gravity(P + 3 * b, w->body_mass + b, ops[i].h, w->gravity, m);
+                    kick_gravity(P + 3 * b, w->body_mass + b, ops[i].h, g3, m);
                 else
                     kick(w, b, m, ops[i].h);
                 continue;
             }
             drift(x + 3 * b, P + 3 * b, w->body_inv_mass + b, ops[i].h, m);
-            turn(w, b, m, &ops[i], &p);
-            if (drifts > 1)
-                turn_pending(w, &p);
+            turn(w, b, m, &ops[i], isa);
         }
     }
-    turn_pending(w, &p);
+}
+
+/* ... compiled for each instruction set, as the lanes are: the kicks and
+   drifts vectorise with the same bits on each. */
+#define SWEEP_BLOCKS(isa, attr, isa_id)                                                        \
+    attr static void sweep_##isa(tb_world *w, const tb__split_op *ops, int n, int only_gravity) \
+    {                                                                                          \
+        sweep_blocks(w, ops, n, only_gravity, isa_id);                                         \
+    }
+SWEEP_BLOCKS(portable, , TB__ISA_PORTABLE)
+#if TB__X86_DISPATCH
+SWEEP_BLOCKS(avx2, TB__TARGET_AVX2, TB__ISA_AVX2)
+SWEEP_BLOCKS(avx512, TB__TARGET_AVX512, TB__ISA_AVX512)
+#endif
+
+void tb__body_sweep(tb_world *w, const tb__split_op *ops, int n)
+{
+    const int only_gravity = gravity_only(w);
+#if TB__X86_DISPATCH
+    const int isa = tb__isa();
+    if (isa == TB__ISA_AVX512)
+        sweep_avx512(w, ops, n, only_gravity);
+    else if (isa == TB__ISA_AVX2)
+        sweep_avx2(w, ops, n, only_gravity);
+    else
+#endif
+        sweep_portable(w, ops, n, only_gravity);
 }
 
 int tb__body_velocity_dependent(const tb_world *w)

@@ -57,37 +57,43 @@
    relabelled body obeys the same equations, with q's vector part, L and L_b
    multiplied by det P when P is odd), so one straight-line body of code
    serves every order of moments. Turns are computed in the body frame from
-   L_b and composed on the right of q (q <- q r); the turn about the world L
-   is composed on the left. */
+   L_b. The lanes (the world's path) relabel L_b alone and compose the
+   step's turns into one quaternion T, the turn about the world L included
+   (r q = q r_b, with r_b the same turn about L_b), then set q <- q T in
+   the body's own axes: every body has its own P, and this way only two
+   3-vectors a step go through it, with selects the loops vectorise. The
+   general path (tb__split_any) relabels q and L and turns q itself: the
+   same rotations, rounded differently. */
 #include "rotation.h"
 
 #include <math.h>
 
 /* ------------------------------------------------ small-angle trigonometry -- */
 
-/* sin x and cos x for |x| <= 1/8 from their Taylor series in u = x^2, through
-   x^9 and x^10. The first terms left out, x^11/11! and x^12/12!, are at most
-   2.3e-17 of sin x and 1.2e-19 of cos x there: the results are as good as a
-   correctly rounded libm's, and no sqrt or range reduction is needed. */
-#define TB__SMALL_HALF 0.125
+/* sin x and cos x for |x| <= 1/4 from their Taylor series in u = x^2, through
+   x^11 and x^12. The first terms left out, x^13/13! and x^14/14!, are at most
+   9.6e-18 of sin x and 4.3e-20 of cos x there: the results are as good as a
+   correctly rounded libm's, and no sqrt or range reduction is needed. (At
+   1/8 two terms fewer would do, but then the lanes sent a body spinning at
+   45 rad/s about a thin axis down the slow general path at every step.) */
+#define TB__SMALL 0.25
 
-static inline void tb__sincos8(double x, double *s, double *c)
+static inline void tb__sincos4(double x, double *s, double *c)
 {
     const double u = x * x, u2 = u * u, u4 = u2 * u2;
     /* Estrin's scheme: the same polynomials in fewer dependent steps */
-    *s = x + x * u * ((-1.0 / 6 + u * (1.0 / 120)) + u2 * (-1.0 / 5040 + u * (1.0 / 362880)));
+    *s = x + x * u * (((-1.0 / 6 + u * (1.0 / 120)) + u2 * (-1.0 / 5040 + u * (1.0 / 362880)))
+                      + u4 * (-1.0 / 39916800));
     *c = (1 + u * (-1.0 / 2)) + u2 * (1.0 / 24 + u * (-1.0 / 720))
-         + u4 * (1.0 / 40320 + u * (-1.0 / 3628800));
+         + u4 * ((1.0 / 40320 + u * (-1.0 / 3628800)) + u2 * (1.0 / 479001600.0));
 }
 
 /* sin(x) / x and cos x from u = x^2 <= 1/16 (|x| <= 1/4), through x^12: the
    first terms left out, x^14/15! and x^14/14!, are below 1e-19. */
-#define TB__SMALL_WHOLE 0.25
-
 static inline void tb__sinc_cos4(double u, double *sinc, double *c)
 {
     const double u2 = u * u, u4 = u2 * u2;
-    /* Estrin's scheme, as in tb__sincos8: Horner's chain of 12 dependent
+    /* Estrin's scheme, as in tb__sincos4: Horner's chain of 12 dependent
        operations was the critical path of the lanes */
     *sinc = (1 + u * (-1.0 / 6)) + u2 * (1.0 / 120 + u * (-1.0 / 5040))
             + u4 * ((1.0 / 362880 + u * (-1.0 / 39916800)) + u2 * (1.0 / 6227020800.0));
@@ -122,7 +128,7 @@ static inline void tb__turn_poly(double u, double k, const double v[3], double r
 
 static inline void tb__half_turn(double u, double k, const double v[3], double r[4])
 {
-    if (u > TB__SMALL_WHOLE * TB__SMALL_WHOLE)
+    if (u > TB__SMALL * TB__SMALL)
         tb__half_turn_big(u, k, v, r);
     else
         tb__turn_poly(u, k, v, r);
@@ -252,7 +258,7 @@ static inline int tb__turns_small(const tb__turn_lanes *t)
 {
     int i;
     for (i = 0; i < TB__LANES; ++i)
-        if (!(t->u[i] <= TB__SMALL_WHOLE * TB__SMALL_WHOLE))
+        if (!(t->u[i] <= TB__SMALL * TB__SMALL))
             return 0;
     return 1;
 }
@@ -342,63 +348,96 @@ TB__LANE void tb__frozen_lanes_t(double *restrict q, const double *restrict L, c
 #define TB__BM_B1 0.209515106613362
 #define TB__BM_B2 (-0.143851773179818)
 #define TB__BM_B3 (0.5 - TB__BM_B1 - TB__BM_B2)
-#define TB__BM_REACH 0.44
 
-/* (h |L|)^2 <= 1 / rate^2 keeps every half angle, rate h |L| at most, in
-   range. */
-static double tb__reach2(double rate)
+/* The relabelling of a body with inverse moments i (see the top): which
+   axis has the middle moment (mid0: axis 0, mid1: axis 1, neither: axis
+   2; with ties the first of 1, 0, 2), whether A is the axis after it
+   cyclically (up_a: then det P = -1) or the one before, and the rates.
+   Minima, maxima and selects, no branches or indices, so that the loops
+   over lanes vectorise it: the lanes relabel every body at every step from
+   invI, which costs less than loading a frame stored per body. */
+typedef struct tb__relabel {
+    int mid0, mid1, up_a, isotropic;
+    double a, ca, cb;
+} tb__relabel;
+
+/* x86's minpd and maxpd, exactly */
+TB__LANE double tb__min(double x, double y)
 {
-    return rate > 0 ? 1 / (rate * rate) : HUGE_VAL;
+    return y < x ? y : x;
 }
 
-/* The middle moment, the relabelling and the rates: fixed by the moments. */
+TB__LANE double tb__max(double x, double y)
+{
+    return y > x ? y : x;
+}
+
+TB__LANE void tb__relabel_of(const double i[3], tb__relabel *r)
+{
+    const double lo01 = tb__min(i[0], i[1]), hi01 = tb__max(i[0], i[1]);
+    const double lo = tb__min(lo01, i[2]), hi = tb__max(hi01, i[2]);
+    const double a = tb__max(lo01, tb__min(hi01, i[2])); /* the median */
+    const int m1 = i[1] == a, m0 = (!m1) & (i[0] == a);
+    const double up = m1 ? i[2] : m0 ? i[1] : i[0];
+    const int hi_a = hi - a > a - lo; /* A: the outer axis with the larger |c| */
+    r->mid0 = m0;
+    r->mid1 = m1;
+    r->up_a = hi_a == (up == hi); /* A comes after the middle axis */
+    r->a = a;
+    r->ca = (hi_a ? hi : lo) - a;
+    r->cb = (hi_a ? lo : hi) - a;
+    r->isotropic = r->ca == 0; /* |ca| >= |cb|: both moments equal the middle one */
+}
+
+/* A body-frame vector v in the relabelled axes: det P (v_A, v_mid, v_B). */
+TB__LANE void tb__relabel_in(int mid0, int mid1, int up_a, const double v[3], double out[3])
+{
+    const double m = mid1 ? v[1] : mid0 ? v[0] : v[2];
+    const double up = mid1 ? v[2] : mid0 ? v[1] : v[0];
+    const double down = mid1 ? v[0] : mid0 ? v[2] : v[1];
+    out[0] = up_a ? -up : down;
+    out[1] = up_a ? -m : m;
+    out[2] = up_a ? -down : up;
+}
+
+/* ... and back. */
+TB__LANE void tb__relabel_out(int mid0, int mid1, int up_a, const double in[3], double out[3])
+{
+    const double m = up_a ? -in[1] : in[1];
+    const double up = up_a ? -in[0] : in[2];
+    const double down = up_a ? -in[2] : in[0];
+    out[0] = mid1 ? down : mid0 ? m : up;
+    out[1] = mid1 ? m : mid0 ? up : down;
+    out[2] = mid1 ? up : mid0 ? down : m;
+}
+
+/* The frame the general path (tb__split_any) works in: the same choice. */
 void tb__split_frame_of(const double invI[3], tb__split_frame *f)
 {
-    double a;
-    int m, up, down, A, B;
-    /* the middle moment (ties: any of the equal ones) */
-    if ((invI[0] <= invI[1] && invI[1] <= invI[2]) || (invI[2] <= invI[1] && invI[1] <= invI[0]))
-        m = 1;
-    else if ((invI[1] <= invI[0] && invI[0] <= invI[2]) || (invI[2] <= invI[0] && invI[0] <= invI[1]))
-        m = 0;
-    else
-        m = 2;
-    a = invI[m];
-    up = m == 2 ? 0 : m + 1;
-    down = m == 0 ? 2 : m - 1;
-    /* A = the outer axis with the larger |c|. (up, m, down) is an odd
-       permutation of (0, 1, 2) for every m, (down, m, up) an even one. */
-    if (fabs(invI[up] - a) > fabs(invI[down] - a)) {
-        A = up, B = down;
-        f->sign = -1;
-    } else {
-        A = down, B = up;
-        f->sign = 1;
-    }
-    f->ax[0] = (unsigned char)A;
+    tb__relabel r;
+    int m;
+    tb__relabel_of(invI, &r);
+    m = r.mid1 ? 1 : r.mid0 ? 0 : 2;
     f->ax[1] = (unsigned char)m;
-    f->ax[2] = (unsigned char)B;
-    f->a = a;
-    f->ca = invI[A] - a;
-    f->cb = invI[B] - a;
-    f->isotropic = invI[0] == invI[1] && invI[1] == invI[2];
-    /* the half angle of the turn about L, a h |L| / 2, within tb__turn_poly;
-       those of the axis turns, at most reach |ca| h |L| / 2, within
-       tb__sincos8 (|ca| >= |cb|, |L_b,i| <= |L|) */
-    f->reach2[0] = tb__reach2(fmax(0.5 * a / TB__SMALL_WHOLE, 0.5 * fabs(f->ca) / TB__SMALL_HALF));
-    f->reach2[1] = tb__reach2(fmax(0.5 * a / TB__SMALL_WHOLE, 0.5 * TB__BM_REACH * fabs(f->ca) / TB__SMALL_HALF));
+    f->ax[r.up_a ? 0 : 2] = (unsigned char)(m == 2 ? 0 : m + 1);
+    f->ax[r.up_a ? 2 : 0] = (unsigned char)(m == 0 ? 2 : m - 1);
+    f->sign = r.up_a ? -1 : 1;
+    f->a = r.a;
+    f->ca = r.ca;
+    f->cb = r.cb;
+    f->isotropic = (unsigned char)r.isotropic;
 }
 
-
-/* The state a composition works on: q and L_b in the relabelled axes. */
+/* The state a composition works on, in the relabelled axes: the quaternion
+   the turns act on (q in the general path, T in the lanes) and L_b. */
 typedef struct tb__spin {
-    double w, x, y, z;  /* q */
+    double w, x, y, z;  /* q or T */
     double l0, l1, l2;  /* L_b, kg m^2/s */
 } tb__spin;
 
 /* Turn the body by the angle 2 x about (relabelled) axis 0, given s = sin x
-   and c = cos x: q <- q (c, s e0), and L_b <- R_0(2x)^T L_b. `last` skips
-   L_b, which the final turn of a step leaves unused. */
+   and c = cos x: q <- q (c, s e0) (or T), and L_b <- R_0(2x)^T L_b. `last`
+   skips L_b, which the final turn of a step leaves unused. */
 TB__LANE void tb__turn_a(tb__spin *p, double s, double c, int last)
 {
     const double w = p->w, x0 = p->x, y = p->y, z = p->z;
@@ -413,8 +452,9 @@ TB__LANE void tb__turn_a(tb__spin *p, double s, double c, int last)
     }
 }
 
-/* The same about (relabelled) axis 2: q <- q (c, s e2). */
-TB__LANE void tb__turn_b(tb__spin *p, double s, double c)
+/* The same about (relabelled) axis 2: q <- q (c, s e2). `l0_only` skips
+   L_b's component 1, which a turn before the last A reads no more. */
+TB__LANE void tb__turn_b(tb__spin *p, double s, double c, int l0_only)
 {
     const double w = p->w, x0 = p->x, y = p->y, z = p->z;
     const double C = 1 - 2 * s * s, S = 2 * s * c, l0 = p->l0, l1 = p->l1;
@@ -423,32 +463,31 @@ TB__LANE void tb__turn_b(tb__spin *p, double s, double c)
     p->y = y * c - x0 * s;
     p->z = z * c + w * s;
     p->l0 = C * l0 + S * l1;
-    p->l1 = C * l1 - S * l0;
+    if (!l0_only)
+        p->l1 = C * l1 - S * l0;
 }
 
-/* The exact flow of c_A L_A^2 / 2 over the time g h is a turn about axis A
-   by g h c_A L_A: with ka = h c_A / 2 the half angle is g ka L_A. In lanes
-   every half angle is within TB__SMALL_HALF (tb__spin_load saw to it). */
-TB__LANE void tb__a(tb__spin *p, double g, double ka, int last)
-{
-    double s, c;
-    tb__sincos8((g * ka) * p->l0, &s, &c);
-    tb__turn_a(p, s, c, last);
-}
-
-TB__LANE void tb__b(tb__spin *p, double g, double kb)
-{
-    double s, c;
-    tb__sincos8((g * kb) * p->l2, &s, &c);
-    tb__turn_b(p, s, c);
-}
+/* Bodies in lanes for the splitting kernels, one array per quantity. The
+   lanes leave q alone until the last piece: they compose the step's turns
+   into one quaternion T in the relabelled body frame (each turn on the
+   right, as it would turn q) and then set q <- q T. The turn about the
+   world L, on the left of q, is the turn about L_b on the right. */
+typedef struct tb__spin_lanes {
+    double w[TB__LANES], x[TB__LANES], y[TB__LANES], z[TB__LANES]; /* T */
+    double l0[TB__LANES], l1[TB__LANES], l2[TB__LANES];             /* L_b, relabelled */
+    double ka[TB__LANES], kb[TB__LANES]; /* half angle per unit L_A, L_B */
+    double k[TB__LANES], u[TB__LANES];   /* the turn about L: k = a h / 2, u = (k |L|)^2 */
+    double big[TB__LANES];               /* largest half angle so far */
+    double q[4][TB__LANES];              /* q at the start */
+    double mid0[TB__LANES], mid1[TB__LANES], up_a[TB__LANES]; /* the relabelling, 0 or 1 */
+} tb__spin_lanes;
 
 /* A composition in lanes runs piece by piece: each piece is one loop over
    all lanes (GCC vectorises the fixed-length one; the other serves a
-   partial block with the same arithmetic), so the lanes' chains of
-   dependent turns overlap instead of one waiting for the last: a whole
-   composition per loop iteration would be too long for the processor to
-   look past. Between pieces the lanes stay in L1. */
+   partial block, or one body, with the same arithmetic), so the lanes'
+   chains of dependent turns overlap instead of one waiting for the last:
+   a whole composition per loop iteration would be too long for the
+   processor to look past. Between pieces the lanes stay in L1. */
 #define TB__EACH_LANE(i, n, lane)                          \
     do {                                                   \
         if ((n) == TB__LANES)                              \
@@ -473,89 +512,108 @@ TB__LANE void tb__spin_put(tb__spin_lanes *lanes, int i, const tb__spin *p)
     lanes->l0[i] = p->l0, lanes->l1[i] = p->l1, lanes->l2[i] = p->l2;
 }
 
-/* Lane i's L_b from its q and L (which it replaces), and its q turned about
-   the world L by the angle a h |L| (that turn leaves L_b unchanged). */
+/* The first piece, straight from the world's arrays: body i relabelled,
+   its q kept, its L_b from q and L. hh = h / 2. An isotropic body starts
+   with big = HUGE_VAL: the lanes do not finish it (tb__rotation_isotropic
+   is its kernel). */
+TB__LANE void tb__lane_load(tb__spin_lanes *lanes, int i, const double *q, const double *L, const double *invI,
+                            double hh)
+{
+    double qi[4], li[3], lb[3], lr[3], k;
+    tb__relabel f;
+    tb__relabel_of(invI + 3 * i, &f);
+    qi[0] = q[4 * i], qi[1] = q[4 * i + 1], qi[2] = q[4 * i + 2], qi[3] = q[4 * i + 3];
+    li[0] = L[3 * i], li[1] = L[3 * i + 1], li[2] = L[3 * i + 2];
+    lanes->q[0][i] = qi[0], lanes->q[1][i] = qi[1], lanes->q[2][i] = qi[2], lanes->q[3][i] = qi[3];
+    tb__to_body(qi, li, lb);
+    tb__relabel_in(f.mid0, f.mid1, f.up_a, lb, lr);
+    k = hh * f.a;
+    lanes->ka[i] = hh * f.ca;
+    lanes->kb[i] = hh * f.cb;
+    lanes->k[i] = k;
+    lanes->u[i] = k * k * (li[0] * li[0] + li[1] * li[1] + li[2] * li[2]);
+    lanes->l0[i] = lr[0], lanes->l1[i] = lr[1], lanes->l2[i] = lr[2];
+    lanes->big[i] = f.isotropic ? HUGE_VAL : 0;
+    lanes->mid0[i] = f.mid0 ? 1.0 : 0.0; /* selects: an int here would halve the lanes' width */
+    lanes->mid1[i] = f.mid1 ? 1.0 : 0.0;
+    lanes->up_a[i] = f.up_a ? 1.0 : 0.0;
+}
+
+/* Then T = the turn about L_b by the angle a h |L|: a loop of its own, as
+   one with the piece above held too many numbers for the registers. A turn
+   beyond the polynomial (or not finite) marks the lane to be redone. */
 TB__LANE void tb__lane_begin(tb__spin_lanes *lanes, int i)
 {
-    double q[4], L[3], lb[3], r[4];
-    const double h = lanes->h, k = 0.5 * h * lanes->a[i];
-    lanes->ka[i] = 0.5 * h * lanes->ca[i];
-    lanes->kb[i] = 0.5 * h * lanes->cb[i];
-    q[0] = lanes->w[i], q[1] = lanes->x[i], q[2] = lanes->y[i], q[3] = lanes->z[i];
-    L[0] = lanes->l0[i], L[1] = lanes->l1[i], L[2] = lanes->l2[i];
-    tb__to_body(q, L, lb);
-    tb__turn_poly(k * k * (L[0] * L[0] + L[1] * L[1] + L[2] * L[2]), k, L, r);
-    tb__qmul(r, q, r); /* world frame: on the left */
-    lanes->w[i] = r[0], lanes->x[i] = r[1], lanes->y[i] = r[2], lanes->z[i] = r[3];
-    lanes->l0[i] = lb[0], lanes->l1[i] = lb[1], lanes->l2[i] = lb[2];
+    const double k = lanes->k[i], u = lanes->u[i];
+    double sinc, c;
+    tb__sinc_cos4(u, &sinc, &c);
+    sinc *= k;
+    lanes->w[i] = c, lanes->x[i] = sinc * lanes->l0[i], lanes->y[i] = sinc * lanes->l1[i];
+    lanes->z[i] = sinc * lanes->l2[i];
+    lanes->big[i] = !(u <= TB__SMALL * TB__SMALL) ? HUGE_VAL : lanes->big[i];
 }
 
-TB__LANE void tb__lane_a(tb__spin_lanes *lanes, int i, double g, int last)
+/* The exact flow of c_A L_A^2 / 2 over the time g h is a turn about axis A
+   by g h c_A L_A: with ka = h c_A / 2 the half angle is g ka L_A (B: the
+   same with kb and L_B). The lanes take every angle to the polynomial and
+   note the largest: a lane that went beyond it is redone afterwards. */
+TB__LANE double tb__lane_angle(tb__spin_lanes *lanes, int i, double x)
+{
+    const double ax = fabs(x), big = lanes->big[i];
+    lanes->big[i] = ax > big ? ax : big;
+    return x;
+}
+
+TB__LANE void tb__lane_a(tb__spin_lanes *lanes, int i, double g)
 {
     tb__spin p;
+    double s, c;
     tb__spin_get(lanes, i, &p);
-    tb__a(&p, g, lanes->ka[i], last);
+    tb__sincos4(tb__lane_angle(lanes, i, (g * lanes->ka[i]) * p.l0), &s, &c);
+    tb__turn_a(&p, s, c, 0);
     tb__spin_put(lanes, i, &p);
 }
 
-TB__LANE void tb__lane_b(tb__spin_lanes *lanes, int i, double g)
+TB__LANE void tb__lane_b(tb__spin_lanes *lanes, int i, double g, int l0_only)
 {
     tb__spin p;
+    double s, c;
     tb__spin_get(lanes, i, &p);
-    tb__b(&p, g, lanes->kb[i]);
+    tb__sincos4(tb__lane_angle(lanes, i, (g * lanes->kb[i]) * p.l2), &s, &c);
+    tb__turn_b(&p, s, c, l0_only);
     tb__spin_put(lanes, i, &p);
 }
 
-TB__LANE void tb__lane_end(tb__spin_lanes *lanes, int i)
+/* The last piece, into the world's array: the last turn about A, T back
+   in the body's own axes, q <- q T and the Newton step. */
+TB__LANE double tb__lane_end(tb__spin_lanes *lanes, int i, double g, double *q)
 {
-    double q[4];
-    q[0] = lanes->w[i], q[1] = lanes->x[i], q[2] = lanes->y[i], q[3] = lanes->z[i];
-    tb__newton(q, q);
-    lanes->w[i] = q[0], lanes->x[i] = q[1], lanes->y[i] = q[2], lanes->z[i] = q[3];
-}
-
-TB__LANE void tb__lanes_begin(tb__spin_lanes *restrict p, int n)
-{
-    int i;
-    TB__EACH_LANE(i, n, tb__lane_begin(p, i));
-}
-
-TB__LANE void tb__lanes_a_last(tb__spin_lanes *restrict p, int n, double g)
-{
-    int i;
-    TB__EACH_LANE(i, n, tb__lane_a(p, i, g, 1));
-}
-
-/* One loop a turn. (Two turns a loop halve the loads and stores between
-   turns, but double the chain of an iteration: 15% slower, measured.) */
-TB__LANE void tb__lanes_a(tb__spin_lanes *restrict p, int n, double g)
-{
-    int i;
-    TB__EACH_LANE(i, n, tb__lane_a(p, i, g, 0));
-}
-
-TB__LANE void tb__lanes_b(tb__spin_lanes *restrict p, int n, double g)
-{
-    int i;
-    TB__EACH_LANE(i, n, tb__lane_b(p, i, g));
-}
-
-TB__LANE void tb__lanes_end(tb__spin_lanes *restrict p, int n)
-{
-    int i;
-    TB__EACH_LANE(i, n, tb__lane_end(p, i));
+    tb__spin p;
+    double s, c, t[4], qi[4];
+    tb__spin_get(lanes, i, &p);
+    tb__sincos4(tb__lane_angle(lanes, i, (g * lanes->ka[i]) * p.l0), &s, &c);
+    tb__turn_a(&p, s, c, 1);
+    t[0] = p.w;
+    {
+        const double tr[3] = { p.x, p.y, p.z };
+        tb__relabel_out(lanes->mid0[i] != 0, lanes->mid1[i] != 0, lanes->up_a[i] != 0, tr, t + 1);
+    }
+    qi[0] = lanes->q[0][i], qi[1] = lanes->q[1][i], qi[2] = lanes->q[2][i], qi[3] = lanes->q[3][i];
+    tb__qmul(qi, t, t);
+    tb__newton(t, t);
+    q[4 * i] = t[0], q[4 * i + 1] = t[1], q[4 * i + 2] = t[2], q[4 * i + 3] = t[3];
+    return lanes->big[i];
 }
 
 /* Any composition A(ga[0]) B(gb[0]) A(ga[1]) ... B(gb[n-2]) A(ga[n-1]) of
-   one body that the lanes cannot take: turns beyond the polynomials (taken
-   when max |c| |L| h exceeds 0.25 rad for split2, 0.57 rad for accurate,
-   that is beyond about 15 or 34 rad/s of relative spin at h = 1/60), or a
-   q off unit length. Slower (libm for the large turns), otherwise the
-   same. */
+   one body that the lanes cannot take: turns beyond the polynomials (libm
+   for those), or a q off unit length (the full normalisation). The same
+   rotations as the lanes, the plain way: q and L relabelled, q turned
+   itself. */
 static void tb__sincos_any(double x, double *s, double *c)
 {
-    if (fabs(x) <= TB__SMALL_HALF) {
-        tb__sincos8(x, s, c);
+    if (fabs(x) <= TB__SMALL) {
+        tb__sincos4(x, s, c);
     } else {
         *s = sin(x);
         *c = cos(x);
@@ -586,7 +644,7 @@ static void tb__split_any(double q[4], const double L[3], const tb__split_frame 
         if (i == n - 1)
             break;
         tb__sincos_any(gb[i] * kb * p.l2, &s, &c);
-        tb__turn_b(&p, s, c);
+        tb__turn_b(&p, s, c, 0);
     }
     r[0] = p.w;
     r[1 + f->ax[0]] = sign * p.x;
@@ -595,75 +653,81 @@ static void tb__split_any(double q[4], const double L[3], const tb__split_frame 
     tb__normalize(r, q);
 }
 
-/* ----------------------------------------------------------------- split2 -- */
-
-/* The compositions, as sequences of pieces: over lanes, or for one body in
-   lane 0 with no loop around each piece (the same arithmetic). */
-#define TB__SPLIT2(begin, a, b, a_last, end) \
-    do {                                    \
-        begin;                              \
-        a(0.5);                             \
-        b(1.0);                             \
-        a_last(0.5);                        \
-        end;                                \
-    } while (0)
-
-#define TB__ACCURATE(begin, a, b, a_last, end)                          \
-    do {                                                                \
-        begin;                                                          \
-        a(TB__BM_A1), b(TB__BM_B1), a(TB__BM_A2), b(TB__BM_B2);         \
-        a(TB__BM_A3), b(TB__BM_B3), a(TB__BM_A4), b(TB__BM_B3);         \
-        a(TB__BM_A3), b(TB__BM_B2), a(TB__BM_A2), b(TB__BM_B1);         \
-        a_last(TB__BM_A1);                                              \
-        end;                                                            \
-    } while (0)
-
-#define TB__LANES_A(g) tb__lanes_a(p, n, g)
-#define TB__LANES_B(g) tb__lanes_b(p, n, g)
-#define TB__LANES_A_LAST(g) tb__lanes_a_last(p, n, g)
-#define TB__ONE_A(g) tb__lane_a(p, 0, g, 0)
-#define TB__ONE_B(g) tb__lane_b(p, 0, g)
-#define TB__ONE_A_LAST(g) tb__lane_a(p, 0, g, 1)
-
-TB__LANE void tb__split2_lanes_t(tb__spin_lanes *p, int n)
-{
-    TB__SPLIT2(tb__lanes_begin(p, n), TB__LANES_A, TB__LANES_B, TB__LANES_A_LAST, tb__lanes_end(p, n));
-}
-
-static void tb__split2_one(tb__spin_lanes *p)
-{
-    TB__SPLIT2(tb__lane_begin(p, 0), TB__ONE_A, TB__ONE_B, TB__ONE_A_LAST, tb__lane_end(p, 0));
-}
-
 static const double tb__strang_a[2] = { 0.5, 0.5 };
 static const double tb__strang_b[1] = { 1.0 };
-
-/* A q off unit length (a careless caller; never the world's) goes the
-   general way too, for its full normalisation. */
-#define TB__NEAR_UNIT(q) (fabs(tb__norm2(q) - 1) <= 5e-9)
-
-void tb__rotation_split2(double q[4], const double L[3], const double invI[3], double h)
-{
-    tb__split_frame f;
-    tb__split_frame_of(invI, &f);
-    tb__split2_framed(q, L, &f, h);
-}
-
-/* --------------------------------------------------------------- accurate -- */
-
 static const double tb__bm_a[7] = { TB__BM_A1, TB__BM_A2, TB__BM_A3, TB__BM_A4,
                                     TB__BM_A3, TB__BM_A2, TB__BM_A1 };
 static const double tb__bm_b[6] = { TB__BM_B1, TB__BM_B2, TB__BM_B3,
                                     TB__BM_B3, TB__BM_B2, TB__BM_B1 };
 
-TB__LANE void tb__accurate_lanes_t(tb__spin_lanes *p, int n)
+/* One body the general way: an isotropic one by its own kernel (exact,
+   and what the lanes send it to, whatever the method), any other by
+   tb__split_any. */
+static void tb__split_general(double q[4], const double L[3], const double invI[3], double h, int accurate)
 {
-    TB__ACCURATE(tb__lanes_begin(p, n), TB__LANES_A, TB__LANES_B, TB__LANES_A_LAST, tb__lanes_end(p, n));
+    tb__split_frame f;
+    tb__split_frame_of(invI, &f);
+    if (f.isotropic)
+        tb__rotation_isotropic(q, L, invI[0], h);
+    else if (accurate)
+        tb__split_any(q, L, &f, h, tb__bm_a, tb__bm_b, 7);
+    else
+        tb__split_any(q, L, &f, h, tb__strang_a, tb__strang_b, 2);
 }
 
-static void tb__accurate_one(tb__spin_lanes *p)
+/* The lanes that the polynomials did not serve, or that are isotropic,
+   again from their q at the start, the general way. Rare: at h = 1/60 s it
+   takes a body spinning at 30 rad/s relative to its turn about L (60
+   about A), or an isotropic body among others. */
+static void tb__lanes_redo(double *q, const double *L, const double *invI, double h, int n, int accurate,
+                           const tb__spin_lanes *lanes)
 {
-    TB__ACCURATE(tb__lane_begin(p, 0), TB__ONE_A, TB__ONE_B, TB__ONE_A_LAST, tb__lane_end(p, 0));
+    int i, k;
+    for (i = 0; i < n; ++i)
+        if (!(lanes->big[i] <= TB__SMALL)) {
+            for (k = 0; k < 4; ++k)
+                q[4 * i + k] = lanes->q[k][i];
+            tb__split_general(q + 4 * i, L + 3 * i, invI + 3 * i, h, accurate);
+        }
+}
+
+/* ----------------------------------------------------------- compositions -- */
+
+TB__LANE void tb__split2_lanes_t(double *restrict q, const double *restrict L, const double *restrict invI,
+                                 double h, int n)
+{
+    tb__spin_lanes p;
+    const double hh = 0.5 * h;
+    double redo = 0; /* 1: some lane is to be redone (a double: every instruction set vectorises this) */
+    int i;
+    /* A(h/2) B(h) A(h/2), the turn about L (which commutes) in the first
+       piece; B's turn of L_b,1 is left out: the last A reads L_b,0 alone */
+    TB__EACH_LANE(i, n, tb__lane_load(&p, i, q, L, invI, hh));
+    TB__EACH_LANE(i, n, tb__lane_begin(&p, i));
+    TB__EACH_LANE(i, n, tb__lane_a(&p, i, 0.5));
+    TB__EACH_LANE(i, n, tb__lane_b(&p, i, 1.0, 1));
+    TB__EACH_LANE(i, n, redo = tb__lane_end(&p, i, 0.5, q) <= TB__SMALL ? redo : 1);
+    if (redo != 0)
+        tb__lanes_redo(q, L, invI, h, n, 0, &p);
+}
+
+TB__LANE void tb__accurate_lanes_t(double *restrict q, const double *restrict L, const double *restrict invI,
+                                   double h, int n)
+{
+    tb__spin_lanes p;
+    const double hh = 0.5 * h;
+    double redo = 0; /* 1: some lane is to be redone (a double: every instruction set vectorises this) */
+    int i, j;
+    TB__EACH_LANE(i, n, tb__lane_load(&p, i, q, L, invI, hh));
+    TB__EACH_LANE(i, n, tb__lane_begin(&p, i));
+    for (j = 0; j < 6; ++j) { /* the loops of fixed length inside are what count */
+        const double ga = tb__bm_a[j], gb = tb__bm_b[j];
+        TB__EACH_LANE(i, n, tb__lane_a(&p, i, ga));
+        TB__EACH_LANE(i, n, tb__lane_b(&p, i, gb, 0));
+    }
+    TB__EACH_LANE(i, n, redo = tb__lane_end(&p, i, TB__BM_A1, q) <= TB__SMALL ? redo : 1);
+    if (redo != 0)
+        tb__lanes_redo(q, L, invI, h, n, 1, &p);
 }
 
 /* ------------------------------------------------ instruction sets -- */
@@ -682,13 +746,13 @@ static void tb__accurate_one(tb__spin_lanes *p)
     {                                                                                                   \
         tb__frozen_lanes_t(q, L, invI, h, n);                                                           \
     }                                                                                                   \
-    attr static void tb__split2_##isa(tb__spin_lanes *p, int n)                                         \
+    attr static void tb__split2_##isa(double *q, const double *L, const double *invI, double h, int n)  \
     {                                                                                                   \
-        tb__split2_lanes_t(p, n);                                                                       \
+        tb__split2_lanes_t(q, L, invI, h, n);                                                           \
     }                                                                                                   \
-    attr static void tb__accurate_##isa(tb__spin_lanes *p, int n)                                       \
+    attr static void tb__accurate_##isa(double *q, const double *L, const double *invI, double h, int n) \
     {                                                                                                   \
-        tb__accurate_lanes_t(p, n);                                                                     \
+        tb__accurate_lanes_t(q, L, invI, h, n);                                                         \
     }
 
 TB__KERNELS(portable, )
@@ -733,51 +797,37 @@ void tb__frozen_lanes(double *q, const double *L, const double *invI, double h, 
     TB__DISPATCH(frozen, (q, L, invI, h, n));
 }
 
-void tb__split2_lanes(tb__spin_lanes *p, int n, int isa)
+void tb__split2_lanes(double *q, const double *L, const double *invI, double h, int n, int isa)
 {
-    TB__DISPATCH(split2, (p, n));
+    TB__DISPATCH(split2, (q, L, invI, h, n));
 }
 
-void tb__accurate_lanes(tb__spin_lanes *p, int n, int isa)
+void tb__accurate_lanes(double *q, const double *L, const double *invI, double h, int n, int isa)
 {
-    TB__DISPATCH(accurate, (p, n));
+    TB__DISPATCH(accurate, (q, L, invI, h, n));
 }
 
 /* --------------------------------------------------------- one body -- */
 
-/* One body by the lanes code (so it gets the bits it would get in a block),
-   or the general way for a q off unit length or turns too large for the
-   polynomials. */
-static void tb__framed(double q[4], const double L[3], const tb__split_frame *f, double h, int accurate)
-{
-    tb__spin_lanes p;
-    p.h = h;
-    if (TB__NEAR_UNIT(q) && tb__spin_load(&p, 0, q, L, f, h * h, accurate)) {
-        if (accurate)
-            tb__accurate_one(&p);
-        else
-            tb__split2_one(&p);
-        tb__spin_store(&p, 0, f, q);
-    } else if (accurate) {
-        tb__split_any(q, L, f, h, tb__bm_a, tb__bm_b, 7);
-    } else {
-        tb__split_any(q, L, f, h, tb__strang_a, tb__strang_b, 2);
-    }
-}
+/* One body by the lanes code (so it gets the bits it would get in a
+   block), or the general way for a q off unit length. */
 
-void tb__split2_framed(double q[4], const double L[3], const tb__split_frame *f, double h)
-{
-    tb__framed(q, L, f, h, 0);
-}
+/* A q off unit length (a careless caller; never the world's) goes the
+   general way, for its full normalisation. */
+#define TB__NEAR_UNIT(q) (fabs(tb__norm2(q) - 1) <= 5e-9)
 
-void tb__accurate_framed(double q[4], const double L[3], const tb__split_frame *f, double h)
+void tb__rotation_split2(double q[4], const double L[3], const double invI[3], double h)
 {
-    tb__framed(q, L, f, h, 1);
+    if (TB__NEAR_UNIT(q))
+        tb__split2_portable(q, L, invI, h, 1);
+    else
+        tb__split_general(q, L, invI, h, 0);
 }
 
 void tb__rotation_accurate(double q[4], const double L[3], const double invI[3], double h)
 {
-    tb__split_frame f;
-    tb__split_frame_of(invI, &f);
-    tb__accurate_framed(q, L, &f, h);
+    if (TB__NEAR_UNIT(q))
+        tb__accurate_portable(q, L, invI, h, 1);
+    else
+        tb__split_general(q, L, invI, h, 1);
 }

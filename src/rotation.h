@@ -29,8 +29,8 @@
 
    Costs: per body-step on this project's 2-core x86-64 (gcc -O2, no
    -march), in lanes over 1024 bodies (what a world pays) with AVX-512 and
-   with portable C, then for one body stepped alone (each step waiting for
-   the last), +-20% run to run.
+   with portable C (SSE2), then for one body stepped alone (each step
+   waiting for the last), +-20% run to run.
    Accuracy: on the intermediate-axis flip of NOTES.md at h = 1/60 s over
    20 s (bench/rotation.c). */
 #ifndef TB_ROTATION_H
@@ -50,23 +50,26 @@ void tb__rotation_isotropic(double q[4], const double L[3], double inv_inertia, 
 /* Order 2: Strang splitting of T into a turn about the world L and turns
    about two principal axes (rotation.c), A(h/2) B(h) A(h/2). A Poisson map:
    energy error bounded with no drift (6.0e-5 on the flip), exact for
-   isotropic bodies and symmetric tops, time-reversible; 1.7e-4 rad on the
-   flip. libm beyond max |invI_i - invI_mid| |L| h = 0.25 rad. 11 / 21 ns
-   in lanes (70 ns alone). */
+   symmetric tops and for isotropic bodies (which it hands to
+   tb__rotation_isotropic), time-reversible; 1.7e-4 rad on the flip. libm
+   only for a turn of more than 1/2 rad in one piece (at h = 1/60 s, a
+   spin of about 30 rad/s relative to the turn about L). 9 / 32 ns in
+   lanes (80 ns alone). */
 void tb__rotation_split2(double q[4], const double L[3], const double invI[3], double h);
 
 /* Order 4: the same splitting composed by Blanes and Moan's S6, 13 axis
    turns a step. Also a Poisson map, exact for isotropic bodies and
    symmetric tops, time-reversible. On the flip: energy within 1.1e-10 at
-   every step, 7.5e-10 rad after 20 s. libm beyond max |invI_i - invI_mid|
-   |L| h = 0.57 rad. 22 / 55 ns in lanes (220 ns alone: 13 dependent turns). */
+   every step, 7.5e-10 rad after 20 s. libm as for split2. 23 / 73 ns in
+   lanes (270 ns alone: 13 dependent turns). */
 void tb__rotation_accurate(double q[4], const double L[3], const double invI[3], double h);
 
 /* ---- bodies in lanes ----------------------------------------------------- */
 
 /* 32: with eight lanes an AVX-512 instruction, four independent chains of
    turns per piece keep the units busy (at 8 lanes the turns were
-   latency-bound: 57 ns for accurate against 22 at 32). */
+   latency-bound: 57 ns for accurate against 22 at 32; 64 and 128 were
+   no faster). */
 #define TB__LANES 32
 
 /* For the definition of a piece of the work of one lane: it must be
@@ -111,73 +114,28 @@ int tb__isa(void);
 void tb__isotropic_lanes(double *q, const double *L, const double *invI, double h, int n, int isa);
 void tb__frozen_lanes(double *q, const double *L, const double *invI, double h, int n, int isa);
 
-/* What the splitting kernels need to know of a body that only its moments
-   decide: which axes play A, middle and B (rotation.c), and the rates.
-   Worked out once per body (tb__split_frame_of), not at every step. */
+/* The splitting kernels for bodies k < n <= TB__LANES, stored as the
+   world stores them: q[4 k], L[3 k], invI[3 k]. Each body gets the bits of
+   tb__rotation_split2 (tb__rotation_accurate) alone: the lanes relabel
+   every body's axes themselves, with selects (rotation.c); an isotropic
+   body, or one whose turns went beyond the polynomials, is redone by the
+   one-body kernel's general path. */
+void tb__split2_lanes(double *q, const double *L, const double *invI, double h, int n, int isa);
+void tb__accurate_lanes(double *q, const double *L, const double *invI, double h, int n, int isa);
+
+/* How the splitting kernels relabel a body's axes (rotation.c): which
+   play A, middle and B, and the rates. The lanes work it out at every
+   step from invI (cheaper than loading it); the general path and the
+   world's isotropic test read it from here (tb__split_frame_of, once per
+   body). */
 typedef struct tb__split_frame {
     double a;            /* 1/(kg m^2): inverse middle moment, the rate of the turn about L per |L| */
     double ca, cb;       /* invI_A - a, invI_B - a, with |ca| >= |cb| */
     double sign;         /* det P: -1 when the relabelling is an odd permutation */
-    double reach2[2];    /* s^2: the largest (h |L|)^2 whose turns lanes take, for
-                            split2 [0] and accurate [1] */
     unsigned char ax[3]; /* relabelled axis n is the body's axis ax[n] */
     unsigned char isotropic; /* I1 = I2 = I3: tb__rotation_isotropic does it cheaper */
 } tb__split_frame;
 
 void tb__split_frame_of(const double invI[3], tb__split_frame *f);
-
-/* tb__rotation_split2 and tb__rotation_accurate for a body whose frame is
-   known. */
-void tb__split2_framed(double q[4], const double L[3], const tb__split_frame *f, double h);
-void tb__accurate_framed(double q[4], const double L[3], const tb__split_frame *f, double h);
-
-/* Bodies for the splitting kernels, relabelled into their frames: q, the
-   world L (then L_b), the rates, and the half angles per unit momentum of
-   the step about A and B. One step h for all lanes. */
-typedef struct tb__spin_lanes {
-    double w[TB__LANES], x[TB__LANES], y[TB__LANES], z[TB__LANES];
-    double l0[TB__LANES], l1[TB__LANES], l2[TB__LANES];
-    double a[TB__LANES], ca[TB__LANES], cb[TB__LANES];
-    double ka[TB__LANES], kb[TB__LANES];
-    double h;
-} tb__spin_lanes;
-
-/* Put a body in lane i for a step whose square is h2, by split2
-   (accurate = 0) or accurate (1): relabel (A, middle, B) -> (0, 1, 2), q's
-   vector part and L by the permutation and its sign. Returns 0, loading
-   nothing, when its turns are beyond the polynomials: step it with the
-   framed one-body kernel instead. Inline: the world calls it per body. */
-static inline int tb__spin_load(tb__spin_lanes *p, int i, const double q[4], const double L[3],
-                                const tb__split_frame *f, double h2, int accurate)
-{
-    const double sign = f->sign;
-    if (!(h2 * (L[0] * L[0] + L[1] * L[1] + L[2] * L[2]) <= f->reach2[accurate]))
-        return 0;
-    p->w[i] = q[0];
-    p->x[i] = sign * q[1 + f->ax[0]];
-    p->y[i] = sign * q[1 + f->ax[1]];
-    p->z[i] = sign * q[1 + f->ax[2]];
-    p->l0[i] = sign * L[f->ax[0]];
-    p->l1[i] = sign * L[f->ax[1]];
-    p->l2[i] = sign * L[f->ax[2]];
-    p->a[i] = f->a;
-    p->ca[i] = f->ca;
-    p->cb[i] = f->cb;
-    return 1;
-}
-
-/* Turn lanes 0 to n - 1 (n <= TB__LANES) by split2 or accurate over p->h. */
-void tb__split2_lanes(tb__spin_lanes *p, int n, int isa);
-void tb__accurate_lanes(tb__spin_lanes *p, int n, int isa);
-
-/* Lane i's new orientation, back in the body's own axes. */
-static inline void tb__spin_store(const tb__spin_lanes *p, int i, const tb__split_frame *f, double q[4])
-{
-    const double sign = f->sign;
-    q[0] = p->w[i];
-    q[1 + f->ax[0]] = sign * p->x[i];
-    q[1 + f->ax[1]] = sign * p->y[i];
-    q[1 + f->ax[2]] = sign * p->z[i];
-}
 
 #endif
