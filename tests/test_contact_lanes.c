@@ -95,11 +95,14 @@ static void run_scene(int isa, double out[SCENE_BODIES][13])
 static void every_instruction_set_gives_the_same_bits(void **state)
 {
     double portable[SCENE_BODIES][13], wider[SCENE_BODIES][13];
-    int isa;
+    int isa, box;
     (void)state;
     run_scene(TB__ISA_PORTABLE, portable);
-    /* the balls did hit: some body ended away from where it started */
-    assert_true(fabs(portable[15][1] + 2) > 0.1);
+    /* the throws did hit the pyramid: a box was pushed out of its plane
+       y = 0 (measured: up to 1.4 mm) */
+    for (box = 0; box < 15 && fabs(portable[box][1]) < 1e-4; ++box)
+        ;
+    assert_true(box < 15);
     for (isa = TB__ISA_PORTABLE + 1; isa <= tb__isa(); ++isa) {
         run_scene(isa, wider);
         if (memcmp(portable, wider, sizeof portable) != 0)
@@ -190,8 +193,8 @@ static size_t compare_reused(const tb_world *w, double *separation, double *poin
 }
 
 /* A pyramid of 210 resting (sleep off, so it creeps and rocks a little)
-   for 5 s: most pairs keep last step's manifold, and every kept one
-   agrees with a fresh collision. A pair is kept while its relative pose
+   for 5 s: nine in ten pairs or more keep last step's manifold, and
+   every kept one agrees with a fresh collision. A pair is kept while its relative pose
    has moved less than a tenth of the slop (0.5 mm) since it was last
    collided, turns included (turn times reach): the separations then
    differ by the second order of the turn (under 1e-6 m for these), the
@@ -213,7 +216,7 @@ static void reused_manifolds_match_fresh_ones(void **state)
     }
     print_message("pyramid, 5 s: %zu of %zu manifolds reused; worst differences from a fresh collision: separation "
                   "%.2e m, point %.2e m, normal %.2e\n", reused, entries, separation, point, normal);
-    assert_true(reused > entries / 2);
+    assert_true(reused > 0.9 * entries); /* measured 98% */
     assert_below(separation, 1e-6);
     assert_below(point, 5e-4);
     assert_below(normal, 6e-4);
