@@ -288,11 +288,16 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
             }
             if (best >= 0) {
                 p->normal_impulse = old->point[best].normal_impulse;
-                p->tangent_impulse[0] = old->point[best].tangent_impulse[0];
-                p->tangent_impulse[1] = old->point[best].tangent_impulse[1];
                 p->matched = 1;
             }
         }
+    }
+    /* the patch's friction, into this step's contact plane */
+    if (old) {
+        const double along = dot3(old->friction_impulse, e->normal);
+        for (k = 0; k < 3; ++k)
+            e->friction_impulse[k] = old->friction_impulse[k] - along * e->normal[k];
+        e->twist_impulse = old->twist_impulse;
     }
     return TB_OK;
 }
@@ -734,10 +739,11 @@ static tb_status colour_entries(tb_world *w, tb__contacts *c)
     return tb__contacts_reserve(w, (void **)&c->batches, &c->batch_cap, batches + 1, sizeof *c->batches);
 }
 
-/* One side's part of a row along dir: r x dir and I^-1 (r x dir) into
-   lane k of arm and turn, zero on the static side; returns their dot, the
-   side's turning share of the row's 1 / mass. */
-static double side_row(const tb__contacts *c, int32_t body, const double r[3], const double dir[3],
+/* One side's part of a row along dir at r: r x dir (or, with no r, dir
+   itself: a twist) and I^-1 of that, into lane k of arm and turn, zero on
+   the static side; returns their dot, the side's turning share of the
+   row's 1 / mass. */
+static double side_row(const tb__contacts *c, int32_t body, const double *r, const double dir[3],
                        double arm[3][TB__BATCH_LANES], double turn[3][TB__BATCH_LANES], int k)
 {
     double a[3], t[3];
@@ -745,7 +751,10 @@ static double side_row(const tb__contacts *c, int32_t body, const double r[3], c
     if (body < 0) {
         a[0] = a[1] = a[2] = t[0] = t[1] = t[2] = 0;
     } else {
-        cross(r, dir, a);
+        if (r)
+            cross(r, dir, a);
+        else
+            memcpy(a, dir, sizeof a);
         mul(c->bodies[body].inv_world, a, t);
     }
     for (i = 0; i < 3; ++i)
@@ -753,29 +762,58 @@ static double side_row(const tb__contacts *c, int32_t body, const double r[3], c
     return dot3(a, t);
 }
 
-/* Lane k's relative velocity along row d of point p, from the array m. */
-static double lane_rate(const tb__batch *bt, const tb__lane_point *p, int k, const double *m, int d)
+/* Lane k's relative velocity along a row (dir NULL: a twist about
+   bt's normal), from the array m. */
+static double lane_rate(const tb__batch *bt, int k, const double *m, double (*dir)[TB__BATCH_LANES],
+                        double (*arm_a)[TB__BATCH_LANES], double (*arm_b)[TB__BATCH_LANES])
 {
     const double *A = m + TB__MOTION * bt->a[k], *B = m + TB__MOTION * bt->b[k];
     double rate = 0;
     int i;
+    (void)bt;
     for (i = 0; i < 3; ++i)
-        rate += bt->dir[d][i][k] * (B[i] - A[i]) + p->arm_b[d][i][k] * B[3 + i] - p->arm_a[d][i][k] * A[3 + i];
+        rate += (dir ? dir[i][k] * (B[i] - A[i]) : 0) + arm_b[i][k] * B[3 + i] - arm_a[i][k] * A[3 + i];
     return rate;
 }
 
-/* An impulse lambda along row d of lane k's point p into the array m:
+/* An impulse lambda along a row (dir NULL: a twist) into the array m:
    -lambda on a, +lambda on b. */
-static void lane_push(const tb__batch *bt, const tb__lane_point *p, int k, double *m, int d, double lambda)
+static void lane_push(const tb__batch *bt, int k, double *m, double (*dir)[TB__BATCH_LANES],
+                      double (*turn_a)[TB__BATCH_LANES], double (*turn_b)[TB__BATCH_LANES],
+                      double lambda)
 {
     double *A = m + TB__MOTION * bt->a[k], *B = m + TB__MOTION * bt->b[k];
     const double la = lambda * A[6], lb = lambda * B[6];
     int i;
     for (i = 0; i < 3; ++i) {
-        A[i] -= la * bt->dir[d][i][k];
-        A[i + 3] -= lambda * p->turn_a[d][i][k];
-        B[i] += lb * bt->dir[d][i][k];
-        B[i + 3] += lambda * p->turn_b[d][i][k];
+        if (dir) {
+            A[i] -= la * dir[i][k];
+            B[i] += lb * dir[i][k];
+        }
+        A[i + 3] -= lambda * turn_a[i][k];
+        B[i + 3] += lambda * turn_b[i][k];
+    }
+}
+
+/* The momenta of lane k's bodies change by lambda along a row (dir NULL:
+   a twist): P by lambda dir, L by lambda times the arm. */
+static void lane_momenta(tb__contacts *c, const tb__batch *bt, int k, double (*dir)[TB__BATCH_LANES],
+                         double (*arm_a)[TB__BATCH_LANES], double (*arm_b)[TB__BATCH_LANES],
+                         double lambda)
+{
+    int side, i;
+    for (side = 0; side < 2; ++side) {
+        const int32_t body = (side ? bt->b[k] : bt->a[k]) - 1;
+        const double l = side ? lambda : -lambda;
+        double(*arm)[TB__BATCH_LANES] = side ? arm_b : arm_a;
+        tb__solver_body *b;
+        if (body < 0)
+            continue;
+        b = &c->bodies[body];
+        for (i = 0; i < 3; ++i) {
+            b->P[i] += dir ? l * dir[i][k] : 0;
+            b->L[i] += l * arm[i][k];
+        }
     }
 }
 
@@ -803,29 +841,26 @@ static int predict_points(tb__contacts *c, tb__entry *e)
            not drop out of the solve for a rounding-sized gap */
         p->active = p->predicted <= 0.2 * c->settings.slop;
         if (!p->active)
-            p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
+            p->normal_impulse = 0;
         touching += p->active;
     }
     return touching;
 }
 
-/* Point p of entry e as point j of lane k: its rows, impact timing and
-   targets. fraction: the share of an old overlap the position pass takes
-   back this step. */
-static void set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__batch *bt, int k, int j, double h,
-                         double fraction)
+/* Point p of entry e as point j of lane k: its normal row, impact timing
+   and targets. fraction: the share of an old overlap the position pass
+   takes back this step. Returns whether it is a new contact (an impact). */
+static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__batch *bt, int k, int j, double h,
+                        double fraction)
 {
     const tb_contact_settings *s = &c->settings;
     tb__lane_point *lp = &bt->point[j];
     const double sum = c->velocity[TB__MOTION * bt->a[k] + 6] + c->velocity[TB__MOTION * bt->b[k] + 6];
-    int d;
+    const double mass = sum + side_row(c, e->body_a, p->ra, e->normal, lp->arm_a, lp->turn_a, k) +
+                        side_row(c, e->body_b, p->rb, e->normal, lp->arm_b, lp->turn_b, k);
+    int impact = 0;
     lp->source[k] = p;
-    for (d = 0; d < 3; ++d) {
-        const double dir[3] = { bt->dir[d][0][k], bt->dir[d][1][k], bt->dir[d][2][k] };
-        const double mass = sum + side_row(c, e->body_a, p->ra, dir, lp->arm_a[d], lp->turn_a[d], k) +
-                            side_row(c, e->body_b, p->rb, dir, lp->arm_b[d], lp->turn_b[d], k);
-        lp->mass[d][k] = mass > 0 ? 1 / mass : 0;
-    }
+    lp->mass[k] = mass > 0 ? 1 / mass : 0;
     lp->predicted[k] = p->predicted;
     lp->position_impulse[k] = 0;
     /* overlap that was already there is taken back at the rate of a
@@ -837,7 +872,8 @@ static void set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__
         /* a new contact: when in the step did the gap close? Its normal
            motion, s + u t + a t^2 / 2 with the free motion's acceleration
            a, reaches 0 at tau */
-        const double u = p->approach, a = (lane_rate(bt, lp, k, c->velocity, 0) - u) / h;
+        const double u = p->approach;
+        const double a = (lane_rate(bt, k, c->velocity, bt->dir[0], lp->arm_a, lp->arm_b) - u) / h;
         double tau, disc, vi;
         disc = u * u - 2 * a * p->separation;
         if (a != 0 && disc >= 0)
@@ -850,14 +886,56 @@ static void set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__
         p->speed = vi > 0 ? vi : 0;
         lp->lever[k] = h - tau;
         lp->target[k] = vi > s->restitution_threshold && e->restitution > 0 ? e->restitution * vi + a * (h - tau) : 0;
-        p->normal_impulse = p->tangent_impulse[0] = p->tangent_impulse[1] = 0;
+        p->normal_impulse = 0;
+        impact = 1;
     } else {
         lp->lever[k] = h / 2; /* a contact force acting through the step */
         lp->target[k] = 0;
     }
-    lp->impulse[0][k] = p->normal_impulse;
-    lp->impulse[1][k] = p->tangent_impulse[0];
-    lp->impulse[2][k] = p->tangent_impulse[1];
+    lp->impulse[k] = p->normal_impulse;
+    return impact;
+}
+
+/* Entry e's friction patch in lane k, at the centre of its touching
+   points: tangent rows there, the twist row, the reach, and last step's
+   impulses unless the patch is new or struck this step. */
+static void set_up_patch(tb__contacts *c, tb__entry *e, tb__batch *bt, int k, int impacts, double lever)
+{
+    const double sum = c->velocity[TB__MOTION * bt->a[k] + 6] + c->velocity[TB__MOTION * bt->b[k] + 6];
+    double ca[3] = { 0, 0, 0 }, cb[3] = { 0, 0, 0 }, reach = 0, mass;
+    int n = 0, i, d;
+    for (i = 0; i < e->count; ++i)
+        if (e->point[i].active) {
+            for (d = 0; d < 3; ++d)
+                ca[d] += e->point[i].ra[d], cb[d] += e->point[i].rb[d];
+            ++n;
+        }
+    for (d = 0; d < 3; ++d)
+        ca[d] /= n, cb[d] /= n;
+    for (i = 0; i < e->count; ++i)
+        if (e->point[i].active) {
+            double off[3], along;
+            for (d = 0; d < 3; ++d)
+                off[d] = e->point[i].ra[d] - ca[d] + e->point[i].rb[d] - cb[d];
+            along = dot3(off, e->normal);
+            for (d = 0; d < 3; ++d)
+                off[d] -= along * e->normal[d];
+            reach += 0.5 * norm3(off);
+        }
+    bt->source[k] = e;
+    bt->friction[k] = e->friction;
+    bt->twist_reach[k] = reach / n;
+    bt->lever[k] = lever;
+    for (d = 0; d < 2; ++d) {
+        mass = sum + side_row(c, e->body_a, ca, e->tangent[d], bt->arm_a[d], bt->turn_a[d], k) +
+               side_row(c, e->body_b, cb, e->tangent[d], bt->arm_b[d], bt->turn_b[d], k);
+        bt->mass[d][k] = mass > 0 ? 1 / mass : 0;
+        bt->impulse[d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]);
+    }
+    mass = side_row(c, e->body_a, NULL, e->normal, bt->arm_a[2], bt->turn_a[2], k) +
+           side_row(c, e->body_b, NULL, e->normal, bt->arm_b[2], bt->turn_b[2], k);
+    bt->mass[2][k] = mass > 0 ? 1 / mass : 0;
+    bt->impulse[2][k] = impacts ? 0 : e->twist_impulse;
 }
 
 /* The touching entries into batches: by colour, and within a colour by
@@ -893,7 +971,8 @@ static void set_up_batches(tb__contacts *c, double h)
     c->batch_count = 0;
     for (i = 0; i < n; ++i) {
         tb__entry *e = &c->entries[c->bucket[i]];
-        int k, j = 0;
+        double lever = 0;
+        int k, j = 0, impacts = 0;
         if (lane == TB__BATCH_LANES || e->colour != last_colour || e->colour == TB__COLOURS) {
             /* a new batch: its first lane has the most points */
             bt = &c->batches[c->batch_count++];
@@ -903,14 +982,17 @@ static void set_up_batches(tb__contacts *c, double h)
             lane = 0;
         }
         bt->a[lane] = e->body_a + 1, bt->b[lane] = e->body_b + 1;
-        bt->friction[lane] = e->friction;
         for (k = 0; k < 3; ++k) {
             const double *dir = k == 0 ? e->normal : e->tangent[k - 1];
             bt->dir[k][0][lane] = dir[0], bt->dir[k][1][lane] = dir[1], bt->dir[k][2][lane] = dir[2];
         }
         for (k = 0; k < e->count; ++k)
-            if (e->point[k].active)
-                set_up_point(c, e, &e->point[k], bt, lane, j++, h, fraction);
+            if (e->point[k].active) {
+                impacts += set_up_point(c, e, &e->point[k], bt, lane, j, h, fraction);
+                lever += bt->point[j++].lever[lane];
+            }
+        /* friction acts on positions for as long as its points touched */
+        set_up_patch(c, e, bt, lane, impacts, lever / j);
         ++lane;
     }
 }
@@ -933,39 +1015,56 @@ static void set_up_batches(tb__contacts *c, double h)
         }                                                             \
     } while (0)
 
+/* Runs body for every lane k (a manifold) of every batch bt. */
+#define EACH_LANE(c, bt, k, body)                                     \
+    do {                                                              \
+        size_t i_;                                                    \
+        for (i_ = 0; i_ < (c)->batch_count; ++i_) {                   \
+            tb__batch *bt = &(c)->batches[i_];                        \
+            for (k = 0; k < TB__BATCH_LANES; ++k)                     \
+                if (bt->source[k]) {                                  \
+                    body;                                             \
+                }                                                     \
+        }                                                             \
+    } while (0)
+
+/* The patch's rows of lane k: tangents 0 and 1, twist 2. */
+#define PATCH_DIR(bt, d) ((d) < 2 ? (bt)->dir[(d) + 1] : NULL)
+
 static void warm_start(tb__contacts *c)
 {
     int k, d;
-    EACH_LANE_POINT(c, bt, p, k, for (d = 0; d < 3; ++d) lane_push(bt, p, k, c->velocity, d, p->impulse[d][k]));
+    EACH_LANE(c, bt, k, for (d = 0; d < 3; ++d) lane_push(bt, k, c->velocity, PATCH_DIR(bt, d), bt->turn_a[d],
+                                                          bt->turn_b[d], bt->impulse[d][k]));
+    EACH_LANE_POINT(c, bt, p, k, lane_push(bt, k, c->velocity, bt->dir[0], p->turn_a, p->turn_b, p->impulse[k]));
 }
 
-/* A point's whole effect, from its impulse totals: the momenta change by
-   them, and positions move as they would have over its lever time. */
-static void apply_impulse(tb__contacts *c, const tb__batch *bt, const tb__lane_point *p, int k)
+/* A row's whole effect, from its impulse total: the momenta change by it,
+   and positions move as they would have over its lever time. */
+static void apply_points(tb__contacts *c)
 {
-    int d, side;
-    for (d = 0; d < 3; ++d)
-        lane_push(bt, p, k, c->motion, d, p->lever[k] * p->impulse[d][k]);
-    for (side = 0; side < 2; ++side) {
-        const int32_t body = (side ? bt->b[k] : bt->a[k]) - 1;
-        const double sign = side ? 1 : -1;
-        tb__solver_body *b;
-        if (body < 0)
-            continue;
-        b = &c->bodies[body];
+    int k;
+    EACH_LANE_POINT(c, bt, p, k, {
+        lane_push(bt, k, c->motion, bt->dir[0], p->turn_a, p->turn_b, p->lever[k] * p->impulse[k]);
+        lane_momenta(c, bt, k, bt->dir[0], p->arm_a, p->arm_b, p->impulse[k]);
+        p->source[k]->normal_impulse = p->impulse[k];
+    });
+}
+
+static void apply_patches(tb__contacts *c)
+{
+    int k, d, i;
+    EACH_LANE(c, bt, k, {
+        tb__entry *e = bt->source[k];
         for (d = 0; d < 3; ++d) {
-            const double l = sign * p->impulse[d][k];
-            const double(*arm)[TB__BATCH_LANES] = side ? p->arm_b[d] : p->arm_a[d];
-            int i;
-            for (i = 0; i < 3; ++i) {
-                b->P[i] += l * bt->dir[d][i][k];
-                b->L[i] += l * arm[i][k];
-            }
+            lane_push(bt, k, c->motion, PATCH_DIR(bt, d), bt->turn_a[d], bt->turn_b[d],
+                      bt->lever[k] * bt->impulse[d][k]);
+            lane_momenta(c, bt, k, PATCH_DIR(bt, d), bt->arm_a[d], bt->arm_b[d], bt->impulse[d][k]);
         }
-    }
-    p->source[k]->normal_impulse = p->impulse[0][k];
-    p->source[k]->tangent_impulse[0] = p->impulse[1][k];
-    p->source[k]->tangent_impulse[1] = p->impulse[2][k];
+        for (i = 0; i < 3; ++i)
+            e->friction_impulse[i] = bt->impulse[0][k] * e->tangent[0][i] + bt->impulse[1][k] * e->tangent[1][i];
+        e->twist_impulse = bt->impulse[2][k];
+    });
 }
 
 static void store_bodies(tb_world *w, tb__contacts *c)
@@ -1105,9 +1204,10 @@ void tb__contacts_solve(tb_world *w, double h)
     iterations = c->settings.velocity_iterations * (8 * cold > points ? 4 : 1);
     for (it = 0; it < iterations; ++it)
         tb__sweep_velocities(c->batches, c->batch_count, c->velocity, it & 1, c->isa);
-    EACH_LANE_POINT(c, bt, p, k, apply_impulse(c, bt, p, k));
+    apply_patches(c);
+    apply_points(c);
     for (it = 0; it < c->settings.position_iterations; ++it)
-        tb__sweep_positions(c->batches, c->batch_count, c->motion, c->isa);
+        tb__sweep_positions(c->batches, c->batch_count, c->motion, it & 1, c->isa);
     store_bodies(w, c);
     if (make_events(w, c) != TB_OK)
         c->event_count = 0; /* out of memory for events: the step itself stands */

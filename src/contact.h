@@ -28,7 +28,6 @@ typedef struct tb__shape {
 typedef struct tb__point {
     uint32_t feature;
     double normal_impulse;     /* N s, kept from step to step (warm start) */
-    double tangent_impulse[2]; /* N s */
     double point[3];           /* m, world: where the contact was found */
     double ra[3], rb[3];       /* m: the point from each centre at the start of the
                                   step, world (0 on a static side) */
@@ -43,28 +42,33 @@ typedef struct tb__point {
 } tb__point;
 
 /* The solver works on batches of up to TB__BATCH_LANES manifolds that
-   share no moving body (a greedy colouring of the step's manifolds), laid
-   out lane by lane so that one instruction serves every lane
-   (contact_lanes.c). A manifold's touching points are its lane's points,
-   solved in turn. Each point has three rows (normal, tangent 1, tangent 2)
-   with r x d at each anchor and I^-1 (r x d). Bodies are indices into the
-   velocity arrays, where 0 is the static world (no motion, no inverse
-   mass), so the sweeps never branch on which side moves; an empty lane, or
-   a lane without a given point, is all zeros on the static world. */
+   share no moving body (a colouring of the step's manifolds), laid out
+   lane by lane so that one instruction serves every lane
+   (contact_lanes.c). A manifold is a lane: a normal row for each touching
+   point, solved in turn, and its friction as one patch at the centre of
+   its points (as Bepu and PhysX's patch friction do): two tangent rows,
+   within the circle mu times the manifold's normal impulse, and a twist
+   about the normal within that times the points' mean distance from the
+   centre. Seven rows for a box on a box where friction at each point takes
+   twelve, and the same sliding force. A row holds r x d at each anchor and
+   I^-1 (r x d). Bodies are indices into the velocity arrays, where 0 is
+   the static world (no motion, no inverse mass), so the sweeps never
+   branch on which side moves; an empty lane, or a lane without a given
+   point, is all zeros on the static world. */
 #define TB__BATCH_LANES 8
 #define TB__COLOURS 64 /* one bit each in a uint64_t */
 
 typedef struct tb__lane_point {
-    double arm_a[3][3][TB__BATCH_LANES], arm_b[3][3][TB__BATCH_LANES]; /* [row][axis][lane] */
-    double turn_a[3][3][TB__BATCH_LANES], turn_b[3][3][TB__BATCH_LANES];
-    double mass[3][TB__BATCH_LANES];    /* 1 / (J M^-1 J^T) of each row */
-    double impulse[3][TB__BATCH_LANES]; /* N s, accumulated */
+    double arm_a[3][TB__BATCH_LANES], arm_b[3][TB__BATCH_LANES]; /* [axis][lane]: the normal row */
+    double turn_a[3][TB__BATCH_LANES], turn_b[3][TB__BATCH_LANES];
+    double mass[TB__BATCH_LANES];       /* 1 / (J M^-1 J^T) */
+    double impulse[TB__BATCH_LANES];    /* N s, accumulated */
     double target[TB__BATCH_LANES];     /* m/s: the normal velocity to reach */
     double predicted[TB__BATCH_LANES];  /* m: separation after the free motion */
     double push_target[TB__BATCH_LANES];/* m: the separation the position pass aims for */
     double position_impulse[TB__BATCH_LANES];
     double lever[TB__BATCH_LANES];      /* s: how long its impulse acts on positions */
-    struct tb__point *source[TB__BATCH_LANES]; /* where the impulses go back to; NULL: none */
+    struct tb__point *source[TB__BATCH_LANES]; /* where the impulse goes back to; NULL: none */
 } tb__lane_point;
 
 typedef struct tb__batch {
@@ -72,14 +76,24 @@ typedef struct tb__batch {
     int points;                         /* the most points of any lane */
     double dir[3][3][TB__BATCH_LANES];  /* [row][axis][lane]: the manifold's normal, tangents */
     double friction[TB__BATCH_LANES];
+    /* the friction patch: rows 0 and 1 along the tangents at the centre,
+       row 2 the twist (its arms are the normal itself) */
+    double arm_a[3][3][TB__BATCH_LANES], arm_b[3][3][TB__BATCH_LANES]; /* [row][axis][lane] */
+    double turn_a[3][3][TB__BATCH_LANES], turn_b[3][3][TB__BATCH_LANES];
+    double mass[3][TB__BATCH_LANES];
+    double impulse[3][TB__BATCH_LANES]; /* N s (twist: N m s), accumulated */
+    double twist_reach[TB__BATCH_LANES];/* m: mean distance of the points from the centre */
+    double lever[TB__BATCH_LANES];      /* s: how long friction acts on positions */
+    struct tb__entry *source[TB__BATCH_LANES]; /* NULL: an empty lane */
     tb__lane_point point[TB__MANIFOLD_POINTS];
 } tb__batch;
 
-/* contact_lanes.c: a sweep over the batches (backwards: last batch and
-   last point first) on the velocity array m; a position sweep on the
-   position-change array. isa: tb__isa() or below, the same bits each. */
+/* contact_lanes.c: a sweep over the batches on the velocity array m, and
+   a position sweep (normal rows only) on the position-change array;
+   backwards: the forward sweep's rows in reverse order. isa: tb__isa() or
+   below, the same bits each. */
 void tb__sweep_velocities(tb__batch *batches, size_t n, double *m, int backwards, int isa);
-void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int isa);
+void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards, int isa);
 
 /* The points between two shapes (or a shape and a particle). */
 typedef struct tb__entry {
@@ -87,6 +101,8 @@ typedef struct tb__entry {
     int32_t body_a, body_b;    /* solver bodies, -1: static */
     double normal[3], tangent[2][3];
     double friction, restitution;
+    double friction_impulse[3];/* N s, world: the patch's, kept from step to step */
+    double twist_impulse;      /* N m s, about the normal */
     int count;
     int touching;
     int asleep;                /* carried over unsolved: both sides sleep or are static */

@@ -45,46 +45,59 @@ TB__LANE void scatter(const tb__batch *bt, double *m, const sides *s)
     }
 }
 
-/* Lane k's relative velocity along row d of point p: three dot products
+/* Lane k's relative velocity along a row with direction dir (or none, for
+   the twist) and arms arm_a, arm_b ([axis][lane]): three dot products
    summed as a tree, so that the sweep's chain of dependent operations
-   (each point's rows wait for the last one's push) stays short. */
+   (each row waits for the last one's push) stays short. */
 #define DOT3(x, y, k) ((x)[0][k] * (y)[0][k] + (x)[1][k] * (y)[1][k] + (x)[2][k] * (y)[2][k])
-#define RATE(bt, p, s, d, k)                                                                                    \
-    (((bt)->dir[d][0][k] * ((s)->vb[0][k] - (s)->va[0][k]) + (bt)->dir[d][1][k] * ((s)->vb[1][k] - (s)->va[1][k]) + \
-      (bt)->dir[d][2][k] * ((s)->vb[2][k] - (s)->va[2][k])) +                                                   \
-     (DOT3((p)->arm_b[d], (s)->wb, k) - DOT3((p)->arm_a[d], (s)->wa, k)))
+#define LINEAR(dir, s, k)                                                                        \
+    ((dir)[0][k] * ((s)->vb[0][k] - (s)->va[0][k]) + (dir)[1][k] * ((s)->vb[1][k] - (s)->va[1][k]) + \
+     (dir)[2][k] * ((s)->vb[2][k] - (s)->va[2][k]))
+#define ANGULAR(arm_a, arm_b, s, k) (DOT3(arm_b, (s)->wb, k) - DOT3(arm_a, (s)->wa, k))
+#define RATE(dir, arm_a, arm_b, s, k) (LINEAR(dir, s, k) + ANGULAR(arm_a, arm_b, s, k))
 
-/* An impulse l along row d of point p on lane k: -l on a, +l on b.
-   (Written out: a loop over the axes inside the loop over lanes keeps GCC
-   from vectorising the lanes.) */
-#define PUSH(bt, p, s, d, k, l)                                        \
-    do {                                                               \
-        const double la_ = (l) * (s)->ma[k], lb_ = (l) * (s)->mb[k];   \
-        (s)->va[0][k] -= la_ * (bt)->dir[d][0][k];                     \
-        (s)->va[1][k] -= la_ * (bt)->dir[d][1][k];                     \
-        (s)->va[2][k] -= la_ * (bt)->dir[d][2][k];                     \
-        (s)->wa[0][k] -= (l) * (p)->turn_a[d][0][k];                   \
-        (s)->wa[1][k] -= (l) * (p)->turn_a[d][1][k];                   \
-        (s)->wa[2][k] -= (l) * (p)->turn_a[d][2][k];                   \
-        (s)->vb[0][k] += lb_ * (bt)->dir[d][0][k];                     \
-        (s)->vb[1][k] += lb_ * (bt)->dir[d][1][k];                     \
-        (s)->vb[2][k] += lb_ * (bt)->dir[d][2][k];                     \
-        (s)->wb[0][k] += (l) * (p)->turn_b[d][0][k];                   \
-        (s)->wb[1][k] += (l) * (p)->turn_b[d][1][k];                   \
-        (s)->wb[2][k] += (l) * (p)->turn_b[d][2][k];                   \
+/* An impulse l on lane k along a row: -l on a, +l on b; the linear part
+   along dir (skipped for the twist, LINEAR_PUSH 0), the turn along
+   turn_a, turn_b. (Written out: a loop over the axes inside the loop over
+   lanes keeps GCC from vectorising the lanes.) */
+#define ANGULAR_PUSH(turn_a, turn_b, s, k, l)  \
+    do {                                       \
+        (s)->wa[0][k] -= (l) * (turn_a)[0][k]; \
+        (s)->wa[1][k] -= (l) * (turn_a)[1][k]; \
+        (s)->wa[2][k] -= (l) * (turn_a)[2][k]; \
+        (s)->wb[0][k] += (l) * (turn_b)[0][k]; \
+        (s)->wb[1][k] += (l) * (turn_b)[1][k]; \
+        (s)->wb[2][k] += (l) * (turn_b)[2][k]; \
+    } while (0)
+#define PUSH(dir, turn_a, turn_b, s, k, l)                           \
+    do {                                                             \
+        const double la_ = (l) * (s)->ma[k], lb_ = (l) * (s)->mb[k]; \
+        (s)->va[0][k] -= la_ * (dir)[0][k];                          \
+        (s)->va[1][k] -= la_ * (dir)[1][k];                          \
+        (s)->va[2][k] -= la_ * (dir)[2][k];                          \
+        (s)->vb[0][k] += lb_ * (dir)[0][k];                          \
+        (s)->vb[1][k] += lb_ * (dir)[1][k];                          \
+        (s)->vb[2][k] += lb_ * (dir)[2][k];                          \
+        ANGULAR_PUSH(turn_a, turn_b, s, k, l);                       \
     } while (0)
 
-/* One point of every lane: friction first, within the circle mu times
-   the normal impulse, then the normal, v_n >= target. A lane without this
-   point has zero masses and friction, so its impulses stay 0. */
-TB__LANE void velocity_point(const tb__batch *restrict bt, tb__lane_point *restrict p, sides *restrict s)
+/* The friction patch of every lane: the two tangent rows at the centre,
+   within the circle mu times the manifold's normal impulse, then the
+   twist within that times the twist reach. An empty lane has zero
+   masses and friction, so its impulses stay 0. */
+TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s)
 {
     double t0[W], t1[W], len2[W], limit[W], limit2[W];
-    int k, outside = 0;
+    int k, j, outside = 0;
+    for (k = 0; k < W; ++k)
+        limit[k] = 0;
+    for (j = 0; j < bt->points; ++j)
+        for (k = 0; k < W; ++k)
+            limit[k] += bt->point[j].impulse[k];
     for (k = 0; k < W; ++k) {
-        limit[k] = bt->friction[k] * p->impulse[0][k];
-        t0[k] = p->impulse[1][k] - p->mass[1][k] * RATE(bt, p, s, 1, k);
-        t1[k] = p->impulse[2][k] - p->mass[2][k] * RATE(bt, p, s, 2, k);
+        limit[k] *= bt->friction[k];
+        t0[k] = bt->impulse[0][k] - bt->mass[0][k] * RATE(bt->dir[1], bt->arm_a[0], bt->arm_b[0], s, k);
+        t1[k] = bt->impulse[1][k] - bt->mass[1][k] * RATE(bt->dir[2], bt->arm_a[1], bt->arm_b[1], s, k);
         len2[k] = t0[k] * t0[k] + t1[k] * t1[k];
         limit2[k] = limit[k] * limit[k];
     }
@@ -103,16 +116,36 @@ TB__LANE void velocity_point(const tb__batch *restrict bt, tb__lane_point *restr
             t1[k] = len2[k] > limit2[k] ? t1[k] * scale : t1[k];
         }
     for (k = 0; k < W; ++k) {
-        const double d0 = t0[k] - p->impulse[1][k], d1 = t1[k] - p->impulse[2][k];
-        double total, dn;
-        PUSH(bt, p, s, 1, k, d0);
-        PUSH(bt, p, s, 2, k, d1);
-        p->impulse[1][k] = t0[k], p->impulse[2][k] = t1[k];
-        total = p->impulse[0][k] - p->mass[0][k] * (RATE(bt, p, s, 0, k) - p->target[k]);
+        const double d0 = t0[k] - bt->impulse[0][k], d1 = t1[k] - bt->impulse[1][k];
+        PUSH(bt->dir[1], bt->turn_a[0], bt->turn_b[0], s, k, d0);
+        PUSH(bt->dir[2], bt->turn_a[1], bt->turn_b[1], s, k, d1);
+        bt->impulse[0][k] = t0[k], bt->impulse[1][k] = t1[k];
+    }
+    /* a batch of one-point manifolds (its first lane has the most points)
+       has no reach to twist with */
+    if (bt->points > 1)
+        for (k = 0; k < W; ++k) {
+            const double reach = limit[k] * bt->twist_reach[k];
+            double twist = bt->impulse[2][k] - bt->mass[2][k] * ANGULAR(bt->dir[0], bt->dir[0], s, k), dt;
+            twist = twist > reach ? reach : twist < -reach ? -reach : twist;
+            dt = twist - bt->impulse[2][k];
+            ANGULAR_PUSH(bt->turn_a[2], bt->turn_b[2], s, k, dt);
+            bt->impulse[2][k] = twist;
+        }
+}
+
+/* One point of every lane: its normal row, v_n >= target. A lane without
+   this point has zero masses, so its impulse stays 0. */
+TB__LANE void normal_point(const tb__batch *restrict bt, tb__lane_point *restrict p, sides *restrict s)
+{
+    int k;
+    for (k = 0; k < W; ++k) {
+        double total = p->impulse[k] - p->mass[k] * (RATE(bt->dir[0], p->arm_a, p->arm_b, s, k) - p->target[k]);
+        double dn;
         total = total > 0 ? total : 0;
-        dn = total - p->impulse[0][k];
-        PUSH(bt, p, s, 0, k, dn);
-        p->impulse[0][k] = total;
+        dn = total - p->impulse[k];
+        PUSH(bt->dir[0], p->turn_a, p->turn_b, s, k, dn);
+        p->impulse[k] = total;
     }
 }
 
@@ -123,14 +156,14 @@ TB__LANE void position_point(const tb__batch *restrict bt, tb__lane_point *restr
 {
     int k;
     for (k = 0; k < W; ++k) {
-        const double now = p->predicted[k] + RATE(bt, p, s, 0, k);
+        const double now = p->predicted[k] + RATE(bt->dir[0], p->arm_a, p->arm_b, s, k);
         const double old = p->position_impulse[k];
-        double total = old - p->mass[0][k] * (now - p->push_target[k]);
+        double total = old - p->mass[k] * (now - p->push_target[k]);
         double dn;
         total = total > 0 ? total : 0;
         total = now >= p->push_target[k] && old == 0 ? 0 : total; /* idle */
         dn = total - p->position_impulse[k];
-        PUSH(bt, p, s, 0, k, dn);
+        PUSH(bt->dir[0], p->turn_a, p->turn_b, s, k, dn);
         p->position_impulse[k] = total;
     }
 }
@@ -143,22 +176,29 @@ TB__LANE void velocity_batches(tb__batch *batches, size_t n, double *m, int back
         sides s;
         int j;
         gather(bt, m, &s);
+        /* a backward sweep is the forward one reversed, row by row (its
+           friction last): a pair of sweeps is then symmetric Gauss-Seidel,
+           which leans a tall stack less than friction first both ways */
+        if (!backwards)
+            friction_patch(bt, &s);
         for (j = 0; j < bt->points; ++j)
-            velocity_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s);
+            normal_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s);
+        if (backwards)
+            friction_patch(bt, &s);
         scatter(bt, m, &s);
     }
 }
 
-TB__LANE void position_batches(tb__batch *batches, size_t n, double *m)
+TB__LANE void position_batches(tb__batch *batches, size_t n, double *m, int backwards)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
-        tb__batch *bt = &batches[i];
+        tb__batch *bt = &batches[backwards ? n - 1 - i : i];
         sides s;
         int j;
         gather(bt, m, &s);
         for (j = 0; j < bt->points; ++j)
-            position_point(bt, &bt->point[j], &s);
+            position_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s);
         scatter(bt, m, &s);
     }
 }
@@ -168,9 +208,9 @@ TB__LANE void position_batches(tb__batch *batches, size_t n, double *m)
     {                                                                                              \
         velocity_batches(batches, n, m, backwards);                                                \
     }                                                                                              \
-    attr static void position_##isa(tb__batch *batches, size_t n, double *m)                       \
+    attr static void position_##isa(tb__batch *batches, size_t n, double *m, int backwards)        \
     {                                                                                              \
-        position_batches(batches, n, m);                                                           \
+        position_batches(batches, n, m, backwards);                                                \
     }
 
 TB__SWEEPS(portable, )
@@ -192,15 +232,15 @@ void tb__sweep_velocities(tb__batch *batches, size_t n, double *m, int backwards
     (void)isa;
 }
 
-void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int isa)
+void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards, int isa)
 {
 #if TB__X86_DISPATCH
     if (isa == TB__ISA_AVX512)
-        position_avx512(batches, n, m);
+        position_avx512(batches, n, m, backwards);
     else if (isa == TB__ISA_AVX2)
-        position_avx2(batches, n, m);
+        position_avx2(batches, n, m, backwards);
     else
 #endif
-        position_portable(batches, n, m);
+        position_portable(batches, n, m, backwards);
     (void)isa;
 }

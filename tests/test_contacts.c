@@ -165,8 +165,12 @@ static void box_slides_to_v2_over_2_mu_g(void **state)
    jitter. A resting contact's impulse cancels gravity's kick and its h/2
    lever cancels gravity's drop exactly, so the drift is rounding: 1e-12 m
    asserted (the issue asks 1e-4). The height it rests at is what the slide
-   left: corners whose impulses converge sweep by sweep may leave a gap
-   below the slop, measured 7e-10 m; 1e-8 m asserted. */
+   left: the step that stops it turns it a little (friction acts at the
+   face's centre, 0.5 m below the box's; the sweeps leave a spin of about
+   5e-4 rad/s that step), and the active points then hold the tilt, one
+   edge touching and the other a few microns up, below the slop: w h r =
+   5e-4 rad/s x 1/60 s x 0.5 m, about 4e-6 m (measured 2.2e-6 m);
+   1e-5 m asserted. */
 static void box_rests_without_drift(void **state)
 {
     tb_world *w;
@@ -190,7 +194,7 @@ static void box_rests_without_drift(void **state)
     drift = sqrt((x[0] - x0[0]) * (x[0] - x0[0]) + (x[1] - x0[1]) * (x[1] - x0[1]) + (x[2] - x0[2]) * (x[2] - x0[2]));
     print_message("resting box: drift %.3g m in 10 s, height %.7f m\n", drift, x[2]);
     assert_below(drift, 1e-12);
-    assert_below(fabs(x[2] - 0.5), 1e-8);
+    assert_below(fabs(x[2] - 0.5), 1e-5);
     tb_world_destroy(w);
 }
 
