@@ -410,7 +410,11 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    through thin ones); (2) the integrator moves everything as if nothing
    touched (any method); (3) a velocity pass of sequential impulses, warm
    started from the last step, enforces for each touching point v_n >= 0
-   (or the restitution rebound), Coulomb friction |f_t| <= mu f_n, and
+   (or the restitution rebound), Coulomb friction for each pair of shapes
+   as one patch at the centre of its points (|f_t| <= mu times the pair's
+   normal force, and a twist about the normal up to that times the points'
+   mean distance from the centre: the sliding force of friction at every
+   point, in fewer rows), and
    moves positions as those impulses would have over the step: by h/2 for
    resting and sliding contact (a force acting through the step), by the
    time left after impact for a new contact (the impact is timed within the
