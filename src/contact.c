@@ -130,13 +130,14 @@ static tb_status reserve_motion(tb_world *w, tb__contacts *c)
         return TB_OK;
     while (cap < need)
         cap = cap ? 2 * cap : 64;
-    /* one block for both arrays; what they held is not needed again */
-    block = tb__alloc(w, NULL, 0, 2 * TB__MOTION * cap * sizeof *block);
+    /* one block for the three arrays; what they held is not needed again */
+    block = tb__alloc(w, NULL, 0, 3 * TB__MOTION * cap * sizeof *block);
     if (!block)
         return tb__fail(w, TB_ERR_MEMORY, "out of memory for the contact solver");
-    tb__alloc(w, c->velocity, 2 * TB__MOTION * c->motion_cap * sizeof *block, 0);
+    tb__alloc(w, c->velocity, 3 * TB__MOTION * c->motion_cap * sizeof *block, 0);
     c->velocity = block;
     c->motion = block + TB__MOTION * cap;
+    c->momenta = block + 2 * TB__MOTION * cap;
     c->motion_cap = cap;
     return TB_OK;
 }
@@ -646,6 +647,7 @@ static void load_bodies(tb_world *w, tb__contacts *c)
     size_t i;
     memset(c->velocity, 0, TB__MOTION * (c->body_count + 1) * sizeof *c->velocity);
     memset(c->motion, 0, TB__MOTION * (c->body_count + 1) * sizeof *c->motion);
+    memset(c->momenta, 0, TB__MOTION * (c->body_count + 1) * sizeof *c->momenta);
     for (i = 0; i < c->body_count; ++i) {
         tb__solver_body *b = &c->bodies[i];
         double *v = c->velocity + TB__MOTION * (i + 1);
@@ -658,6 +660,9 @@ static void load_bodies(tb_world *w, tb__contacts *c)
             memcpy(b->x, body_x(w, b->slot), sizeof b->x);
             memcpy(b->P, w->y + w->off[TB__BODY_MOM] + 3 * b->slot, sizeof b->P);
             memcpy(b->L, w->y + w->off[TB__BODY_ANG] + 3 * b->slot, sizeof b->L);
+            memcpy(c->momenta + TB__MOTION * (i + 1), b->P, sizeof b->P);
+            memcpy(c->momenta + TB__MOTION * (i + 1) + 3, b->L, sizeof b->L);
+            c->momenta[TB__MOTION * (i + 1) + 6] = 1;
             matrix_of(q, R);
             /* the free motion's turn, q q0^-1 = (cos, sin n) -> 2 sin n */
             quat_mul(q, q0c, dq);
@@ -774,47 +779,6 @@ static double lane_rate(const tb__batch *bt, int k, const double *m, double (*di
     for (i = 0; i < 3; ++i)
         rate += (dir ? dir[i][k] * (B[i] - A[i]) : 0) + arm_b[i][k] * B[3 + i] - arm_a[i][k] * A[3 + i];
     return rate;
-}
-
-/* An impulse lambda along a row (dir NULL: a twist) into the array m:
-   -lambda on a, +lambda on b. */
-static void lane_push(const tb__batch *bt, int k, double *m, double (*dir)[TB__BATCH_LANES],
-                      double (*turn_a)[TB__BATCH_LANES], double (*turn_b)[TB__BATCH_LANES],
-                      double lambda)
-{
-    double *A = m + TB__MOTION * bt->a[k], *B = m + TB__MOTION * bt->b[k];
-    const double la = lambda * A[6], lb = lambda * B[6];
-    int i;
-    for (i = 0; i < 3; ++i) {
-        if (dir) {
-            A[i] -= la * dir[i][k];
-            B[i] += lb * dir[i][k];
-        }
-        A[i + 3] -= lambda * turn_a[i][k];
-        B[i + 3] += lambda * turn_b[i][k];
-    }
-}
-
-/* The momenta of lane k's bodies change by lambda along a row (dir NULL:
-   a twist): P by lambda dir, L by lambda times the arm. */
-static void lane_momenta(tb__contacts *c, const tb__batch *bt, int k, double (*dir)[TB__BATCH_LANES],
-                         double (*arm_a)[TB__BATCH_LANES], double (*arm_b)[TB__BATCH_LANES],
-                         double lambda)
-{
-    int side, i;
-    for (side = 0; side < 2; ++side) {
-        const int32_t body = (side ? bt->b[k] : bt->a[k]) - 1;
-        const double l = side ? lambda : -lambda;
-        double(*arm)[TB__BATCH_LANES] = side ? arm_b : arm_a;
-        tb__solver_body *b;
-        if (body < 0)
-            continue;
-        b = &c->bodies[body];
-        for (i = 0; i < 3; ++i) {
-            b->P[i] += dir ? l * dir[i][k] : 0;
-            b->L[i] += l * arm[i][k];
-        }
-    }
 }
 
 /* Where the free motion took each point of entry e, and which touch;
@@ -1028,39 +992,14 @@ static void set_up_batches(tb__contacts *c, double h)
         }                                                             \
     } while (0)
 
-/* The patch's rows of lane k: tangents 0 and 1, twist 2. */
-#define PATCH_DIR(bt, d) ((d) < 2 ? (bt)->dir[(d) + 1] : NULL)
-
-static void warm_start(tb__contacts *c)
+/* The impulse totals back to the points and entries, for the next step's
+   warm start. */
+static void keep_impulses(tb__contacts *c)
 {
-    int k, d;
-    EACH_LANE(c, bt, k, for (d = 0; d < 3; ++d) lane_push(bt, k, c->velocity, PATCH_DIR(bt, d), bt->turn_a[d],
-                                                          bt->turn_b[d], bt->impulse[d][k]));
-    EACH_LANE_POINT(c, bt, p, k, lane_push(bt, k, c->velocity, bt->dir[0], p->turn_a, p->turn_b, p->impulse[k]));
-}
-
-/* A row's whole effect, from its impulse total: the momenta change by it,
-   and positions move as they would have over its lever time. */
-static void apply_points(tb__contacts *c)
-{
-    int k;
-    EACH_LANE_POINT(c, bt, p, k, {
-        lane_push(bt, k, c->motion, bt->dir[0], p->turn_a, p->turn_b, p->lever[k] * p->impulse[k]);
-        lane_momenta(c, bt, k, bt->dir[0], p->arm_a, p->arm_b, p->impulse[k]);
-        p->source[k]->normal_impulse = p->impulse[k];
-    });
-}
-
-static void apply_patches(tb__contacts *c)
-{
-    int k, d, i;
+    int k, i;
+    EACH_LANE_POINT(c, bt, p, k, p->source[k]->normal_impulse = p->impulse[k]);
     EACH_LANE(c, bt, k, {
         tb__entry *e = bt->source[k];
-        for (d = 0; d < 3; ++d) {
-            lane_push(bt, k, c->motion, PATCH_DIR(bt, d), bt->turn_a[d], bt->turn_b[d],
-                      bt->lever[k] * bt->impulse[d][k]);
-            lane_momenta(c, bt, k, PATCH_DIR(bt, d), bt->arm_a[d], bt->arm_b[d], bt->impulse[d][k]);
-        }
         for (i = 0; i < 3; ++i)
             e->friction_impulse[i] = bt->impulse[0][k] * e->tangent[0][i] + bt->impulse[1][k] * e->tangent[1][i];
         e->twist_impulse = bt->impulse[2][k];
@@ -1084,8 +1023,8 @@ static void store_bodies(tb_world *w, tb__contacts *c)
             for (k = 0; k < 4; ++k)
                 q[k] += dq[k];
             normalise(q);
-            memcpy(w->y + w->off[TB__BODY_MOM] + 3 * b->slot, b->P, sizeof b->P);
-            memcpy(w->y + w->off[TB__BODY_ANG] + 3 * b->slot, b->L, sizeof b->L);
+            memcpy(w->y + w->off[TB__BODY_MOM] + 3 * b->slot, c->momenta + TB__MOTION * (i + 1), sizeof b->P);
+            memcpy(w->y + w->off[TB__BODY_ANG] + 3 * b->slot, c->momenta + TB__MOTION * (i + 1) + 3, sizeof b->L);
         } else {
             double *x = w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot, *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * b->slot;
             for (k = 0; k < 3; ++k) {
@@ -1196,7 +1135,7 @@ void tb__contacts_solve(tb_world *w, double h)
     tb__sleep_restore(w, c);
     load_bodies(w, c);
     set_up_batches(c, h);
-    warm_start(c);
+    tb__push_impulses(c->batches, c->batch_count, c->velocity, TB__PUSH_VELOCITY, c->isa);
     /* a contact without last step's impulses to start from needs more
        sweeps to reach them: a stack built at rest would otherwise sink and
        lean in its first steps */
@@ -1204,8 +1143,11 @@ void tb__contacts_solve(tb_world *w, double h)
     iterations = c->settings.velocity_iterations * (8 * cold > points ? 4 : 1);
     for (it = 0; it < iterations; ++it)
         tb__sweep_velocities(c->batches, c->batch_count, c->velocity, it & 1, c->isa);
-    apply_patches(c);
-    apply_points(c);
+    /* the impulses' whole effect: momenta, and positions over their lever
+       times */
+    tb__push_impulses(c->batches, c->batch_count, c->momenta, TB__PUSH_MOMENTA, c->isa);
+    tb__push_impulses(c->batches, c->batch_count, c->motion, TB__PUSH_MOTION, c->isa);
+    keep_impulses(c);
     for (it = 0; it < c->settings.position_iterations; ++it)
         tb__sweep_positions(c->batches, c->batch_count, c->motion, it & 1, c->isa);
     store_bodies(w, c);

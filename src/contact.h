@@ -95,6 +95,14 @@ typedef struct tb__batch {
 void tb__sweep_velocities(tb__batch *batches, size_t n, double *m, int backwards, int isa);
 void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards, int isa);
 
+/* Every row's accumulated impulse pushed once into m, batch by batch:
+   TB__PUSH_VELOCITY, on the velocities (the warm start);
+   TB__PUSH_MOTION, on the position changes, times each row's lever time;
+   TB__PUSH_MOMENTA, on the momenta (P, L; slot 6 holds 1 for a moving
+   body), by the rows' arms. */
+enum { TB__PUSH_VELOCITY, TB__PUSH_MOTION, TB__PUSH_MOMENTA };
+void tb__push_impulses(tb__batch *batches, size_t n, double *m, int what, int isa);
+
 /* The points between two shapes (or a shape and a particle). */
 typedef struct tb__entry {
     uint32_t key_a, key_b;     /* shape id index1s; key_b | TB__PARTICLE_KEY for a particle */
@@ -181,7 +189,8 @@ struct tb__contacts {
     uint32_t *bucket;          /* [entry_cap]: entries by colour, then points */
     size_t bucket_cap;
     int isa;                   /* the sweeps' instruction set (tb__isa) */
-    double *velocity, *motion; /* [TB__MOTION * motion_cap] each, one block: see TB__MOTION */
+    double *velocity, *motion, *momenta; /* [TB__MOTION * motion_cap] each, one block: see
+                                  TB__MOTION (momenta: P, L, then 1 or 0 for the static world) */
     size_t motion_cap;
 
     tb__solver_body *bodies;

@@ -203,6 +203,38 @@ TB__LANE void position_batches(tb__batch *batches, size_t n, double *m, int back
     }
 }
 
+/* One batch's impulse totals into m (tb__push_impulses). */
+TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what)
+{
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        tb__batch *bt = &batches[i];
+        const int momenta = what == TB__PUSH_MOMENTA, motion = what == TB__PUSH_MOTION;
+        double(*ta)[3][W] = momenta ? bt->arm_a : bt->turn_a, (*tb)[3][W] = momenta ? bt->arm_b : bt->turn_b;
+        double l[3][W];
+        sides s;
+        int j, k, d;
+        gather(bt, m, &s);
+        for (d = 0; d < 3; ++d)
+            for (k = 0; k < W; ++k)
+                l[d][k] = motion ? bt->lever[k] * bt->impulse[d][k] : bt->impulse[d][k];
+        for (k = 0; k < W; ++k) {
+            PUSH(bt->dir[1], ta[0], tb[0], &s, k, l[0][k]);
+            PUSH(bt->dir[2], ta[1], tb[1], &s, k, l[1][k]);
+            ANGULAR_PUSH(ta[2], tb[2], &s, k, l[2][k]);
+        }
+        for (j = 0; j < bt->points; ++j) {
+            tb__lane_point *p = &bt->point[j];
+            double(*pa)[W] = momenta ? p->arm_a : p->turn_a, (*pb)[W] = momenta ? p->arm_b : p->turn_b;
+            for (k = 0; k < W; ++k) {
+                const double ln = motion ? p->lever[k] * p->impulse[k] : p->impulse[k];
+                PUSH(bt->dir[0], pa, pb, &s, k, ln);
+            }
+        }
+        scatter(bt, m, &s);
+    }
+}
+
 #define TB__SWEEPS(isa, attr)                                                                      \
     attr static void velocity_##isa(tb__batch *batches, size_t n, double *m, int backwards)        \
     {                                                                                              \
@@ -211,6 +243,10 @@ TB__LANE void position_batches(tb__batch *batches, size_t n, double *m, int back
     attr static void position_##isa(tb__batch *batches, size_t n, double *m, int backwards)        \
     {                                                                                              \
         position_batches(batches, n, m, backwards);                                                \
+    }                                                                                              \
+    attr static void push_##isa(tb__batch *batches, size_t n, double *m, int what)                 \
+    {                                                                                              \
+        push_batches(batches, n, m, what);                                                         \
     }
 
 TB__SWEEPS(portable, )
@@ -242,5 +278,18 @@ void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards,
     else
 #endif
         position_portable(batches, n, m, backwards);
+    (void)isa;
+}
+
+void tb__push_impulses(tb__batch *batches, size_t n, double *m, int what, int isa)
+{
+#if TB__X86_DISPATCH
+    if (isa == TB__ISA_AVX512)
+        push_avx512(batches, n, m, what);
+    else if (isa == TB__ISA_AVX2)
+        push_avx2(batches, n, m, what);
+    else
+#endif
+        push_portable(batches, n, m, what);
     (void)isa;
 }
