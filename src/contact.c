@@ -99,8 +99,9 @@ static tb_status solver_body(tb_world *w, tb__contacts *c, enum tb__tier tier, u
     }
     if ((st = tb__contacts_reserve(w, (void **)&c->bodies, &c->body_cap, c->body_count + 1, sizeof *b)) != TB_OK)
         return st;
+    /* the start of the step; load_bodies sets the rest (no memset: reads
+       of what was just zeroed wait for it) */
     b = &c->bodies[c->body_count];
-    memset(b, 0, sizeof *b);
     b->tier = tier;
     b->slot = slot;
     if (tier == TB__BODIES) {
@@ -111,9 +112,11 @@ static tb_status solver_body(tb_world *w, tb__contacts *c, enum tb__tier tier, u
         tb__body_velocity(w, slot, b->v0, b->w0);
     } else {
         b->inv_mass = w->inv_mass[slot];
+        b->inv_inertia[0] = b->inv_inertia[1] = b->inv_inertia[2] = 0;
         memcpy(b->x0, w->y + w->off[TB__PARTICLE_POS] + 3 * slot, sizeof b->x0);
         memcpy(b->v0, w->y + w->off[TB__PARTICLE_VEL] + 3 * slot, sizeof b->v0);
-        b->q0[0] = 1;
+        b->w0[0] = b->w0[1] = b->w0[2] = 0;
+        b->q0[0] = 1, b->q0[1] = b->q0[2] = b->q0[3] = 0;
     }
     map[slot] = (int32_t)c->body_count;
     *out = (int32_t)c->body_count++;
@@ -225,12 +228,25 @@ static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
     }
 }
 
-/* An entry for the manifold m between proxies pa and pb. */
-static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t pb, const tb__manifold *m)
+/* The point at from solver body i's centre at the start of the step (0
+   for the static world). */
+static void arm_of(const tb__contacts *c, int32_t i, const double at[3], double r[3])
+{
+    if (i < 0) {
+        r[0] = r[1] = r[2] = 0;
+    } else {
+        const double *x0 = c->bodies[i].x0;
+        r[0] = at[0] - x0[0], r[1] = at[1] - x0[1], r[2] = at[2] - x0[2];
+    }
+}
+
+/* An entry for the manifold m between proxies pa and pb; old: last step's
+   entry between them, if known (found), else looked up here. */
+static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t pb, const tb__manifold *m,
+                           const tb__entry *old, int found)
 {
     side a, b;
     tb__entry *e;
-    const tb__entry *old;
     tb_status st;
     int k;
     if ((st = side_of(w, c, pa, &a)) != TB_OK || (st = side_of(w, c, pb, &b)) != TB_OK)
@@ -239,33 +255,40 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
         return TB_OK;
     if ((st = tb__contacts_reserve(w, (void **)&c->entries, &c->entry_cap, c->entry_count + 1, sizeof *e)) != TB_OK)
         return st;
+    /* every field set here or by collide_pair (no memset: an entry is
+       about a kilobyte, and zeroing it stalled the reads that follow) */
     e = &c->entries[c->entry_count++];
-    memset(e, 0, sizeof *e);
     e->key_a = a.key, e->key_b = b.key;
     e->body_a = a.body, e->body_b = b.body;
     memcpy(e->normal, m->normal, sizeof e->normal);
-    tangents(e->normal, e->tangent[0], e->tangent[1]);
+    tangents(m->normal, e->tangent[0], e->tangent[1]);
     e->friction = sqrt(a.friction * b.friction);
     e->restitution = fmax(a.restitution, b.restitution);
     e->count = m->count;
-    old = previous_entry(c, a.key, b.key);
+    e->touching = e->asleep = e->colour = e->cached = e->reused = 0;
+    if (!found)
+        old = previous_entry(c, a.key, b.key);
     for (k = 0; k < m->count; ++k) {
         tb__point *p = &e->point[k];
         const double *at = m->point[k].pos;
-        double va[3], vb[3];
+        double ra[3], rb[3], va[3], vb[3];
         int j;
+        p->normal_impulse = p->speed = p->predicted = 0;
+        p->active = p->matched = 0;
         p->feature = m->point[k].feature;
         p->separation = -m->point[k].depth;
         memcpy(p->point, at, sizeof p->point);
-        for (j = 0; j < 3; ++j) {
-            p->ra[j] = e->body_a >= 0 ? at[j] - c->bodies[e->body_a].x0[j] : 0;
-            p->rb[j] = e->body_b >= 0 ? at[j] - c->bodies[e->body_b].x0[j] : 0;
-        }
-        start_velocity(c, e->body_a, p->ra, va);
-        start_velocity(c, e->body_b, p->rb, vb);
+        /* (worked in locals: reading back what was just stored field by
+           field stalls on the stores) */
+        arm_of(c, e->body_a, at, ra);
+        arm_of(c, e->body_b, at, rb);
+        memcpy(p->ra, ra, sizeof ra);
+        memcpy(p->rb, rb, sizeof rb);
+        start_velocity(c, e->body_a, ra, va);
+        start_velocity(c, e->body_b, rb, vb);
         for (j = 0; j < 3; ++j)
             vb[j] -= va[j];
-        p->approach = dot3(vb, e->normal);
+        p->approach = dot3(vb, m->normal);
         /* warm start from last step's point: the same pair of features, or
            failing that (a clipped polygon may renumber its corners) the
            nearest point within the slop */
@@ -299,6 +322,8 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
         for (k = 0; k < 3; ++k)
             e->friction_impulse[k] = old->friction_impulse[k] - along * e->normal[k];
         e->twist_impulse = old->twist_impulse;
+    } else {
+        e->friction_impulse[0] = e->friction_impulse[1] = e->friction_impulse[2] = e->twist_impulse = 0;
     }
     return TB_OK;
 }
@@ -386,23 +411,15 @@ static void from_shape(const tb__geom *g, const double l[3], double out[3])
         out[i] = g->pos[i] + g->rot[3 * i] * l[0] + g->rot[3 * i + 1] * l[1] + g->rot[3 * i + 2] * l[2];
 }
 
-/* Last step's manifold between the shapes of proxies pa and pb, moved to
-   their poses now, if they moved little enough since it was found; NULL
-   otherwise (particles are always collided: a point costs little). */
-static const tb__entry *reuse(const tb__contacts *c, const tb__geom *a, const tb__geom *b, uint32_t pa, uint32_t pb,
-                              tb__manifold *m)
+/* Last step's manifold old between shapes a and b (b: proxy pb), moved to
+   their poses now into m, if they moved little enough since it was found;
+   returns whether it was. */
+static int reuse(const tb__contacts *c, const tb__geom *a, const tb__geom *b, uint32_t pb, const tb__entry *old,
+                 tb__manifold *m)
 {
     const double near = TB__REUSE_SLOP_FRACTION * c->settings.slop;
-    const tb__entry *old;
-    uint32_t key_a, key_b, gen;
     double rot[9], pos[3], moved = 0, trace = 0, turn;
     int i, k;
-    if ((pa | pb) & TB__PARTICLE_KEY)
-        return NULL;
-    tb__ids_at(&c->ids, pa, &key_a, &gen);
-    tb__ids_at(&c->ids, pb, &key_b, &gen);
-    if (!(old = previous_entry(c, key_a, key_b)) || !old->cached)
-        return NULL;
     relative_pose(a, b, rot, pos);
     for (i = 0; i < 3; ++i)
         moved += (pos[i] - old->cache_pos[i]) * (pos[i] - old->cache_pos[i]);
@@ -412,7 +429,7 @@ static const tb__entry *reuse(const tb__contacts *c, const tb__geom *a, const tb
        at most its reach times the angle */
     turn = c->shapes[pb].reach * c->shapes[pb].reach * (3 - trace);
     if (!(moved < near * near && turn < near * near))
-        return NULL;
+        return 0;
     for (i = 0; i < 3; ++i)
         m->normal[i] = a->rot[3 * i] * old->cache_normal[0] + a->rot[3 * i + 1] * old->cache_normal[1] +
                        a->rot[3 * i + 2] * old->cache_normal[2];
@@ -429,30 +446,39 @@ static const tb__entry *reuse(const tb__contacts *c, const tb__geom *a, const tb
         m->point[k].depth = -(o->separation0 + gap);
         m->point[k].feature = o->feature;
     }
-    return old;
+    return 1;
 }
 
 /* The manifold of shapes a and b (proxies pa and pb) as an entry: last
-   step's moved along if it can be, else collided afresh. */
+   step's moved along if it can be (particles are always collided: a point
+   costs little), else collided afresh. */
 static tb_status collide_pair(tb_world *w, tb__contacts *c, const tb__geom *a, const tb__geom *b, uint32_t pa,
                               uint32_t pb, double margin)
 {
     const size_t before = c->entry_count;
+    const int shapes = !((pa | pb) & TB__PARTICLE_KEY);
+    const tb__entry *old = NULL;
     tb__manifold m;
-    const tb__entry *old = reuse(c, a, b, pa, pb, &m);
     tb__entry *e;
     tb_status st;
-    int k;
-    if (!old && !tb__collide(a, b, margin, &m))
+    int k, kept = 0;
+    if (shapes) {
+        uint32_t key_a, key_b, gen;
+        tb__ids_at(&c->ids, pa, &key_a, &gen);
+        tb__ids_at(&c->ids, pb, &key_b, &gen);
+        old = previous_entry(c, key_a, key_b);
+        kept = old && old->cached && reuse(c, a, b, pb, old, &m);
+    }
+    if (!kept && !tb__collide(a, b, margin, &m))
         return TB_OK;
-    if ((st = add_entry(w, c, pa, pb, &m)) != TB_OK || c->entry_count == before)
+    if ((st = add_entry(w, c, pa, pb, &m, old, shapes)) != TB_OK || c->entry_count == before)
         return st;
     e = &c->entries[before];
-    e->cached = !((pa | pb) & TB__PARTICLE_KEY);
-    e->reused = old != NULL;
+    e->cached = shapes;
+    e->reused = kept;
     if (!e->cached)
         return TB_OK;
-    if (old) { /* the reference stays the last collision */
+    if (kept) { /* the reference stays the last collision */
         memcpy(e->cache_rot, old->cache_rot, sizeof e->cache_rot);
         memcpy(e->cache_pos, old->cache_pos, sizeof e->cache_pos);
         memcpy(e->cache_normal, old->cache_normal, sizeof e->cache_normal);
