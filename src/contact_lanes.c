@@ -9,6 +9,7 @@
 #include "rotation.h"
 
 #include <math.h>
+#include <string.h>
 
 #define W TB__BATCH_LANES
 
@@ -18,6 +19,30 @@ typedef struct sides {
     double va[3][W], wa[3][W], vb[3][W], wb[3][W], ma[W], mb[W];
 } sides;
 
+#if defined(__GNUC__) && TB__BATCH_LANES == 8
+/* The lanes built in registers and stored whole: a vector load of what
+   was stored lane by lane would wait for the stores (store forwarding
+   fails), once for each of the fourteen. */
+typedef double tb__lanes __attribute__((vector_size(8 * sizeof(double))));
+
+TB__LANE void gather_one(const double *m, const int32_t *body, int i, double *out)
+{
+    const tb__lanes v = { m[TB__MOTION * body[0] + i], m[TB__MOTION * body[1] + i], m[TB__MOTION * body[2] + i],
+                          m[TB__MOTION * body[3] + i], m[TB__MOTION * body[4] + i], m[TB__MOTION * body[5] + i],
+                          m[TB__MOTION * body[6] + i], m[TB__MOTION * body[7] + i] };
+    memcpy(out, &v, sizeof v);
+}
+
+TB__LANE void gather(const tb__batch *bt, const double *m, sides *s)
+{
+    int i;
+    for (i = 0; i < 3; ++i) {
+        gather_one(m, bt->a, i, s->va[i]), gather_one(m, bt->a, 3 + i, s->wa[i]);
+        gather_one(m, bt->b, i, s->vb[i]), gather_one(m, bt->b, 3 + i, s->wb[i]);
+    }
+    gather_one(m, bt->a, 6, s->ma), gather_one(m, bt->b, 6, s->mb);
+}
+#else
 TB__LANE void gather(const tb__batch *bt, const double *m, sides *s)
 {
     int k, i;
@@ -30,6 +55,7 @@ TB__LANE void gather(const tb__batch *bt, const double *m, sides *s)
         s->ma[k] = A[6], s->mb[k] = B[6];
     }
 }
+#endif
 
 /* Back in lane order. Lanes on the static world (0) write its zeros back:
    it has no inverse mass and its rows no turn, so nothing moved it. */
