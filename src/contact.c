@@ -770,29 +770,6 @@ static tb_status colour_entries(tb_world *w, tb__contacts *c)
     return tb__contacts_reserve(w, (void **)&c->batches, &c->batch_cap, batches + 1, sizeof *c->batches);
 }
 
-/* One side's part of a row along dir at r: r x dir (or, with no r, dir
-   itself: a twist) and I^-1 of that, into lane k of arm and turn, zero on
-   the static side; returns their dot, the side's turning share of the
-   row's 1 / mass. */
-static double side_row(const tb__contacts *c, int32_t body, const double *r, const double dir[3],
-                       double arm[3][TB__BATCH_LANES], double turn[3][TB__BATCH_LANES], int k)
-{
-    double a[3], t[3];
-    int i;
-    if (body < 0) {
-        a[0] = a[1] = a[2] = t[0] = t[1] = t[2] = 0;
-    } else {
-        if (r)
-            cross(r, dir, a);
-        else
-            memcpy(a, dir, sizeof a);
-        mul(c->bodies[body].inv_world, a, t);
-    }
-    for (i = 0; i < 3; ++i)
-        arm[i][k] = a[i], turn[i][k] = t[i];
-    return dot3(a, t);
-}
-
 /* Lane k's relative velocity along a row (dir NULL: a twist about
    bt's normal), from the array m. */
 static double lane_rate(const tb__batch *bt, int k, const double *m, double (*dir)[TB__BATCH_LANES],
@@ -837,7 +814,10 @@ static int predict_points(tb__contacts *c, tb__entry *e)
     return touching;
 }
 
-/* Point p of entry e as point j of lane k: its normal row, impact timing
+/* No inverse inertia: the static world's, for the rows' set-up. */
+static const double no_inertia[9] = { 0 };
+
+/* Point p of entry e as point j of lane k, its row set up: impact timing
    and targets. fraction: the share of an old overlap the position pass
    takes back this step. Returns whether it is a new contact (an impact). */
 static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__batch *bt, int k, int j, double h,
@@ -845,12 +825,7 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
 {
     const tb_contact_settings *s = &c->settings;
     tb__lane_point *lp = &bt->point[j];
-    const double sum = c->velocity[TB__MOTION * bt->a[k] + 6] + c->velocity[TB__MOTION * bt->b[k] + 6];
-    const double mass = sum + side_row(c, e->body_a, p->ra, e->normal, lp->arm_a, lp->turn_a, k) +
-                        side_row(c, e->body_b, p->rb, e->normal, lp->arm_b, lp->turn_b, k);
     int impact = 0;
-    lp->source[k] = p;
-    lp->mass[k] = mass > 0 ? 1 / mass : 0;
     lp->predicted[k] = p->predicted;
     lp->position_impulse[k] = 0;
     /* overlap that was already there is taken back at the rate of a
@@ -886,22 +861,34 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
     return impact;
 }
 
-/* Entry e's friction patch in lane k, at the centre of its touching
-   points: tangent rows there, the twist row, the reach, and last step's
-   impulses unless the patch is new or struck this step. */
-static void set_up_patch(tb__contacts *c, tb__entry *e, tb__batch *bt, int k, int impacts, double lever)
+/* Entry e's anchors as lane k: each touching point's r from both centres
+   in its normal row's arms, and the friction patch's centre in the
+   patch's row 0, for tb__set_up_rows; the patch's twist reach. */
+static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
 {
-    const double sum = c->velocity[TB__MOTION * bt->a[k] + 6] + c->velocity[TB__MOTION * bt->b[k] + 6];
-    double ca[3] = { 0, 0, 0 }, cb[3] = { 0, 0, 0 }, reach = 0, mass;
+    double ca[3] = { 0, 0, 0 }, cb[3] = { 0, 0, 0 }, reach = 0;
     int n = 0, i, d;
-    for (i = 0; i < e->count; ++i)
-        if (e->point[i].active) {
-            for (d = 0; d < 3; ++d)
-                ca[d] += e->point[i].ra[d], cb[d] += e->point[i].rb[d];
-            ++n;
+    bt->a[k] = e->body_a + 1, bt->b[k] = e->body_b + 1;
+    bt->inv_world_a[k] = e->body_a >= 0 ? c->bodies[e->body_a].inv_world : no_inertia;
+    bt->inv_world_b[k] = e->body_b >= 0 ? c->bodies[e->body_b].inv_world : no_inertia;
+    for (d = 0; d < 3; ++d) {
+        const double *dir = d == 0 ? e->normal : e->tangent[d - 1];
+        bt->dir[d][0][k] = dir[0], bt->dir[d][1][k] = dir[1], bt->dir[d][2][k] = dir[2];
+    }
+    for (i = 0; i < e->count; ++i) {
+        const tb__point *p = &e->point[i];
+        if (!p->active)
+            continue;
+        for (d = 0; d < 3; ++d) {
+            bt->point[n].arm_a[d][k] = p->ra[d], bt->point[n].arm_b[d][k] = p->rb[d];
+            ca[d] += p->ra[d], cb[d] += p->rb[d];
         }
-    for (d = 0; d < 3; ++d)
+        bt->point[n++].source[k] = &e->point[i];
+    }
+    for (d = 0; d < 3; ++d) {
         ca[d] /= n, cb[d] /= n;
+        bt->arm_a[0][d][k] = ca[d], bt->arm_b[0][d][k] = cb[d];
+    }
     for (i = 0; i < e->count; ++i)
         if (e->point[i].active) {
             double off[3], along;
@@ -915,22 +902,30 @@ static void set_up_patch(tb__contacts *c, tb__entry *e, tb__batch *bt, int k, in
     bt->source[k] = e;
     bt->friction[k] = e->friction;
     bt->twist_reach[k] = reach / n;
-    bt->lever[k] = lever;
-    for (d = 0; d < 2; ++d) {
-        mass = sum + side_row(c, e->body_a, ca, e->tangent[d], bt->arm_a[d], bt->turn_a[d], k) +
-               side_row(c, e->body_b, cb, e->tangent[d], bt->arm_b[d], bt->turn_b[d], k);
-        bt->mass[d][k] = mass > 0 ? 1 / mass : 0;
-        bt->impulse[d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]);
+}
+
+/* Lane k's targets, levers and warm-start impulses, its rows set up. */
+static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double fraction)
+{
+    tb__entry *e = bt->source[k];
+    double lever = 0;
+    int j, d, impacts = 0;
+    for (j = 0; j < bt->points && bt->point[j].source[k]; ++j) {
+        impacts += set_up_point(c, e, bt->point[j].source[k], bt, k, j, h, fraction);
+        lever += bt->point[j].lever[k];
     }
-    mass = side_row(c, e->body_a, NULL, e->normal, bt->arm_a[2], bt->turn_a[2], k) +
-           side_row(c, e->body_b, NULL, e->normal, bt->arm_b[2], bt->turn_b[2], k);
-    bt->mass[2][k] = mass > 0 ? 1 / mass : 0;
+    /* friction acts on positions for as long as its points touched, and
+       starts afresh when one of them struck this step */
+    bt->lever[k] = lever / j;
+    for (d = 0; d < 2; ++d)
+        bt->impulse[d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]);
     bt->impulse[2][k] = impacts ? 0 : e->twist_impulse;
 }
 
 /* The touching entries into batches: by colour, and within a colour by
    how many points touch, most first, so that a batch's lanes mostly have
-   as many points as its first; each lane's touching points packed. */
+   as many points as its first; each lane's touching points packed. Then
+   their rows, in lanes, and their targets. */
 static void set_up_batches(tb__contacts *c, double h)
 {
     enum { CLASSES = TB__MANIFOLD_POINTS, BUCKETS = (TB__COLOURS + 1) * CLASSES };
@@ -938,7 +933,7 @@ static void set_up_batches(tb__contacts *c, double h)
     const double omega = 2 * 3.14159265358979323846 * s->hertz;
     const double fraction = fmin(1, h * omega / (2 * s->damping_ratio + h * omega));
     size_t start[BUCKETS + 1] = { 0 }, i, n = 0;
-    int last_colour = -1, lane = TB__BATCH_LANES;
+    int last_colour = -1, lane = TB__BATCH_LANES, k;
     tb__batch *bt = NULL;
     for (i = 0; i < c->entry_count; ++i) {
         tb__entry *e = &c->entries[c->order[i].index];
@@ -961,30 +956,24 @@ static void set_up_batches(tb__contacts *c, double h)
     c->batch_count = 0;
     for (i = 0; i < n; ++i) {
         tb__entry *e = &c->entries[c->bucket[i]];
-        double lever = 0;
-        int k, j = 0, impacts = 0;
         if (lane == TB__BATCH_LANES || e->colour != last_colour || e->colour == TB__COLOURS) {
-            /* a new batch: its first lane has the most points */
+            /* a new batch: its first lane has the most points; empty lanes
+               are on the static world */
             bt = &c->batches[c->batch_count++];
             memset(bt, 0, offsetof(tb__batch, point) + (size_t)e->touching * sizeof(tb__lane_point));
+            for (k = 0; k < TB__BATCH_LANES; ++k)
+                bt->inv_world_a[k] = bt->inv_world_b[k] = no_inertia;
             bt->points = e->touching;
             last_colour = e->colour;
             lane = 0;
         }
-        bt->a[lane] = e->body_a + 1, bt->b[lane] = e->body_b + 1;
-        for (k = 0; k < 3; ++k) {
-            const double *dir = k == 0 ? e->normal : e->tangent[k - 1];
-            bt->dir[k][0][lane] = dir[0], bt->dir[k][1][lane] = dir[1], bt->dir[k][2][lane] = dir[2];
-        }
-        for (k = 0; k < e->count; ++k)
-            if (e->point[k].active) {
-                impacts += set_up_point(c, e, &e->point[k], bt, lane, j, h, fraction);
-                lever += bt->point[j++].lever[lane];
-            }
-        /* friction acts on positions for as long as its points touched */
-        set_up_patch(c, e, bt, lane, impacts, lever / j);
-        ++lane;
+        place_lane(c, e, bt, lane++);
     }
+    tb__set_up_rows(c->batches, c->batch_count, c->velocity, c->isa);
+    for (i = 0; i < c->batch_count; ++i)
+        for (k = 0; k < TB__BATCH_LANES; ++k)
+            if (c->batches[i].source[k])
+                set_up_lane(c, &c->batches[i], k, h, fraction);
 }
 
 /* Runs body for every point p of every lane k of every batch bt, in batch

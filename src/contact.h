@@ -85,6 +85,7 @@ typedef struct tb__batch {
     double twist_reach[TB__BATCH_LANES];/* m: mean distance of the points from the centre */
     double lever[TB__BATCH_LANES];      /* s: how long friction acts on positions */
     struct tb__entry *source[TB__BATCH_LANES]; /* NULL: an empty lane */
+    const double *inv_world_a[TB__BATCH_LANES], *inv_world_b[TB__BATCH_LANES]; /* I^-1, 9 each */
     tb__lane_point point[TB__MANIFOLD_POINTS];
 } tb__batch;
 
@@ -94,6 +95,12 @@ typedef struct tb__batch {
    below, the same bits each. */
 void tb__sweep_velocities(tb__batch *batches, size_t n, double *m, int backwards, int isa);
 void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards, int isa);
+
+/* The rows of every batch from its lanes' anchors: on entry each normal
+   row's arm_a, arm_b hold the point's r from each centre, the patch's
+   tangent row 0 the centre's; I^-1 from inv_world_a, _b, inverse masses
+   from slot 6 of m. Fills every arm, turn and mass. */
+void tb__set_up_rows(tb__batch *batches, size_t n, const double *m, int isa);
 
 /* Every row's accumulated impulse pushed once into m, batch by batch:
    TB__PUSH_VELOCITY, on the velocities (the warm start);

@@ -19,43 +19,40 @@ typedef struct sides {
     double va[3][W], wa[3][W], vb[3][W], wb[3][W], ma[W], mb[W];
 } sides;
 
+/* out[k] = from[k][i] for every lane. GCC and Clang build the lanes in
+   registers and store them whole: a vector load of what was stored lane
+   by lane would wait for those stores (store forwarding fails), and the
+   sweeps load every gathered value that way. */
 #if defined(__GNUC__) && TB__BATCH_LANES == 8
-/* The lanes built in registers and stored whole: a vector load of what
-   was stored lane by lane would wait for the stores (store forwarding
-   fails), once for each of the fourteen. */
 typedef double tb__lanes __attribute__((vector_size(8 * sizeof(double))));
 
-TB__LANE void gather_one(const double *m, const int32_t *body, int i, double *out)
+TB__LANE void pick(const double *const *from, int i, double *out)
 {
-    const tb__lanes v = { m[TB__MOTION * body[0] + i], m[TB__MOTION * body[1] + i], m[TB__MOTION * body[2] + i],
-                          m[TB__MOTION * body[3] + i], m[TB__MOTION * body[4] + i], m[TB__MOTION * body[5] + i],
-                          m[TB__MOTION * body[6] + i], m[TB__MOTION * body[7] + i] };
+    const tb__lanes v = { from[0][i], from[1][i], from[2][i], from[3][i],
+                          from[4][i], from[5][i], from[6][i], from[7][i] };
     memcpy(out, &v, sizeof v);
 }
+#else
+TB__LANE void pick(const double *const *from, int i, double *out)
+{
+    int k;
+    for (k = 0; k < W; ++k)
+        out[k] = from[k][i];
+}
+#endif
 
 TB__LANE void gather(const tb__batch *bt, const double *m, sides *s)
 {
-    int i;
-    for (i = 0; i < 3; ++i) {
-        gather_one(m, bt->a, i, s->va[i]), gather_one(m, bt->a, 3 + i, s->wa[i]);
-        gather_one(m, bt->b, i, s->vb[i]), gather_one(m, bt->b, 3 + i, s->wb[i]);
-    }
-    gather_one(m, bt->a, 6, s->ma), gather_one(m, bt->b, 6, s->mb);
-}
-#else
-TB__LANE void gather(const tb__batch *bt, const double *m, sides *s)
-{
+    const double *A[W], *B[W];
     int k, i;
-    for (k = 0; k < W; ++k) {
-        const double *A = m + TB__MOTION * bt->a[k], *B = m + TB__MOTION * bt->b[k];
-        for (i = 0; i < 3; ++i) {
-            s->va[i][k] = A[i], s->wa[i][k] = A[3 + i];
-            s->vb[i][k] = B[i], s->wb[i][k] = B[3 + i];
-        }
-        s->ma[k] = A[6], s->mb[k] = B[6];
+    for (k = 0; k < W; ++k)
+        A[k] = m + TB__MOTION * bt->a[k], B[k] = m + TB__MOTION * bt->b[k];
+    for (i = 0; i < 3; ++i) {
+        pick(A, i, s->va[i]), pick(A, 3 + i, s->wa[i]);
+        pick(B, i, s->vb[i]), pick(B, 3 + i, s->wb[i]);
     }
+    pick(A, 6, s->ma), pick(B, 6, s->mb);
 }
-#endif
 
 /* Back in lane order. Lanes on the static world (0) write its zeros back:
    it has no inverse mass and its rows no turn, so nothing moved it. */
@@ -229,6 +226,85 @@ TB__LANE void position_batches(tb__batch *batches, size_t n, double *m, int back
     }
 }
 
+/* Lane k's part of a row along dir for one side: r x dir (r, [axis][lane],
+   the anchor; NULL: a twist, dir itself where the side moves) into arm,
+   I^-1 (r x dir) into turn; returns their dot, the side's turning share of
+   the row's 1 / mass. arm and turn are the caller's own arrays, so that
+   the lanes can become one instruction. */
+TB__LANE double side_row(const double (*r)[W], const double (*dir)[W], const double (*inv)[W], double moving,
+                         double (*arm)[W], double (*turn)[W], int k)
+{
+    double a0, a1, a2, t0, t1, t2;
+    if (r) {
+        a0 = r[1][k] * dir[2][k] - r[2][k] * dir[1][k];
+        a1 = r[2][k] * dir[0][k] - r[0][k] * dir[2][k];
+        a2 = r[0][k] * dir[1][k] - r[1][k] * dir[0][k];
+    } else {
+        a0 = moving * dir[0][k], a1 = moving * dir[1][k], a2 = moving * dir[2][k];
+    }
+    t0 = inv[0][k] * a0 + inv[1][k] * a1 + inv[2][k] * a2;
+    t1 = inv[3][k] * a0 + inv[4][k] * a1 + inv[5][k] * a2;
+    t2 = inv[6][k] * a0 + inv[7][k] * a1 + inv[8][k] * a2;
+    arm[0][k] = a0, arm[1][k] = a1, arm[2][k] = a2;
+    turn[0][k] = t0, turn[1][k] = t1, turn[2][k] = t2;
+    return a0 * t0 + a1 * t1 + a2 * t2;
+}
+
+/* 1 / mass, 0 for a row that nothing can move */
+#define ROW_MASS(mass) ((mass) > 0 ? 1 / (mass) : 0)
+
+/* A row of every lane: anchors ra, rb (NULL: a twist) along dir, into
+   the arms, turns and 1 / mass given (which may be where the anchors
+   were). */
+TB__LANE void lane_rows(const double (*ra)[W], const double (*rb)[W], const double (*dir)[W],
+                        const double (*ia)[W], const double (*ib)[W], const double *sum, const double *moving_a,
+                        const double *moving_b, double (*arm_a)[W], double (*arm_b)[W], double (*turn_a)[W],
+                        double (*turn_b)[W], double *mass)
+{
+    double a[3][W], b[3][W], ta[3][W], tb[3][W], m[W];
+    int k;
+    for (k = 0; k < W; ++k) {
+        const double inverse = sum[k] + side_row(ra, dir, ia, moving_a[k], a, ta, k) +
+                               side_row(rb, dir, ib, moving_b[k], b, tb, k);
+        m[k] = ROW_MASS(inverse);
+    }
+    memcpy(arm_a, a, sizeof a), memcpy(arm_b, b, sizeof b);
+    memcpy(turn_a, ta, sizeof ta), memcpy(turn_b, tb, sizeof tb);
+    memcpy(mass, m, sizeof m);
+}
+
+TB__LANE void rows_batches(tb__batch *batches, size_t n, const double *m)
+{
+    size_t b;
+    for (b = 0; b < n; ++b) {
+        tb__batch *bt = &batches[b];
+        double ia[9][W], ib[9][W], sum[W], moving_a[W], moving_b[W], ca[3][W], cb[3][W];
+        const double none[W] = { 0 };
+        int i, j, k;
+        for (i = 0; i < 9; ++i)
+            pick(bt->inv_world_a, i, ia[i]), pick(bt->inv_world_b, i, ib[i]);
+        for (k = 0; k < W; ++k) {
+            sum[k] = m[TB__MOTION * bt->a[k] + 6] + m[TB__MOTION * bt->b[k] + 6];
+            moving_a[k] = bt->a[k] != 0, moving_b[k] = bt->b[k] != 0;
+        }
+        for (j = 0; j < bt->points; ++j) {
+            tb__lane_point *p = &bt->point[j];
+            lane_rows((const double(*)[W])p->arm_a, (const double(*)[W])p->arm_b, (const double(*)[W])bt->dir[0],
+                      (const double(*)[W])ia, (const double(*)[W])ib, sum, none, none, p->arm_a, p->arm_b,
+                      p->turn_a, p->turn_b, p->mass);
+        }
+        /* the patch: both tangent rows at the centre held in row 0, then
+           the twist */
+        memcpy(ca, bt->arm_a[0], sizeof ca), memcpy(cb, bt->arm_b[0], sizeof cb);
+        for (i = 0; i < 2; ++i)
+            lane_rows((const double(*)[W])ca, (const double(*)[W])cb, (const double(*)[W])bt->dir[i + 1],
+                      (const double(*)[W])ia, (const double(*)[W])ib, sum, none, none, bt->arm_a[i], bt->arm_b[i],
+                      bt->turn_a[i], bt->turn_b[i], bt->mass[i]);
+        lane_rows(NULL, NULL, (const double(*)[W])bt->dir[0], (const double(*)[W])ia, (const double(*)[W])ib, none,
+                  moving_a, moving_b, bt->arm_a[2], bt->arm_b[2], bt->turn_a[2], bt->turn_b[2], bt->mass[2]);
+    }
+}
+
 /* One batch's impulse totals into m (tb__push_impulses). */
 TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what)
 {
@@ -273,6 +349,10 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what)
     attr static void push_##isa(tb__batch *batches, size_t n, double *m, int what)                 \
     {                                                                                              \
         push_batches(batches, n, m, what);                                                         \
+    }                                                                                              \
+    attr static void rows_##isa(tb__batch *batches, size_t n, const double *m)                     \
+    {                                                                                              \
+        rows_batches(batches, n, m);                                                               \
     }
 
 TB__SWEEPS(portable, )
@@ -317,5 +397,18 @@ void tb__push_impulses(tb__batch *batches, size_t n, double *m, int what, int is
     else
 #endif
         push_portable(batches, n, m, what);
+    (void)isa;
+}
+
+void tb__set_up_rows(tb__batch *batches, size_t n, const double *m, int isa)
+{
+#if TB__X86_DISPATCH
+    if (isa == TB__ISA_AVX512)
+        rows_avx512(batches, n, m);
+    else if (isa == TB__ISA_AVX2)
+        rows_avx2(batches, n, m);
+    else
+#endif
+        rows_portable(batches, n, m);
     (void)isa;
 }
