@@ -271,21 +271,17 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
     for (k = 0; k < m->count; ++k) {
         tb__point *p = &e->point[k];
         const double *at = m->point[k].pos;
-        double ra[3], rb[3], va[3], vb[3];
+        double va[3], vb[3];
         int j;
         p->normal_impulse = p->speed = p->predicted = 0;
         p->active = p->matched = 0;
         p->feature = m->point[k].feature;
         p->separation = -m->point[k].depth;
         memcpy(p->point, at, sizeof p->point);
-        /* (worked in locals: reading back what was just stored field by
-           field stalls on the stores) */
-        arm_of(c, e->body_a, at, ra);
-        arm_of(c, e->body_b, at, rb);
-        memcpy(p->ra, ra, sizeof ra);
-        memcpy(p->rb, rb, sizeof rb);
-        start_velocity(c, e->body_a, ra, va);
-        start_velocity(c, e->body_b, rb, vb);
+        arm_of(c, e->body_a, at, p->ra);
+        arm_of(c, e->body_b, at, p->rb);
+        start_velocity(c, e->body_a, p->ra, va);
+        start_velocity(c, e->body_b, p->rb, vb);
         for (j = 0; j < 3; ++j)
             vb[j] -= va[j];
         p->approach = dot3(vb, m->normal);
