@@ -186,8 +186,8 @@ struct tb__contacts {
        and their indices in key order */
     tb__entry *entries, *previous;
     size_t entry_count, entry_cap, previous_count, previous_cap;
-    tb__key *order, *previous_order;
-    size_t order_cap, previous_order_cap;
+    tb__key *order, *previous_order, *order_scratch;
+    size_t order_cap, previous_order_cap, order_scratch_cap;
 
     tb__batch *batches;        /* the touching manifolds of this step */
     size_t batch_count, batch_cap;
