@@ -361,54 +361,37 @@ TB__SWEEPS(avx2, TB__TARGET_AVX2)
 TB__SWEEPS(avx512, TB__TARGET_AVX512)
 #endif
 
+/* The variant of instruction set isa of sweep name, called with args. */
+#if TB__X86_DISPATCH
+#define TB__DISPATCH(isa, name, args)    \
+    do {                                 \
+        if ((isa) == TB__ISA_AVX512)     \
+            name##_avx512 args;          \
+        else if ((isa) == TB__ISA_AVX2)  \
+            name##_avx2 args;            \
+        else                             \
+            name##_portable args;        \
+    } while (0)
+#else
+#define TB__DISPATCH(isa, name, args) ((void)(isa), name##_portable args)
+#endif
+
 void tb__sweep_velocities(tb__batch *batches, size_t n, double *m, int backwards, int isa)
 {
-#if TB__X86_DISPATCH
-    if (isa == TB__ISA_AVX512)
-        velocity_avx512(batches, n, m, backwards);
-    else if (isa == TB__ISA_AVX2)
-        velocity_avx2(batches, n, m, backwards);
-    else
-#endif
-        velocity_portable(batches, n, m, backwards);
-    (void)isa;
+    TB__DISPATCH(isa, velocity, (batches, n, m, backwards));
 }
 
 void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards, int isa)
 {
-#if TB__X86_DISPATCH
-    if (isa == TB__ISA_AVX512)
-        position_avx512(batches, n, m, backwards);
-    else if (isa == TB__ISA_AVX2)
-        position_avx2(batches, n, m, backwards);
-    else
-#endif
-        position_portable(batches, n, m, backwards);
-    (void)isa;
+    TB__DISPATCH(isa, position, (batches, n, m, backwards));
 }
 
 void tb__push_impulses(tb__batch *batches, size_t n, double *m, int what, int isa)
 {
-#if TB__X86_DISPATCH
-    if (isa == TB__ISA_AVX512)
-        push_avx512(batches, n, m, what);
-    else if (isa == TB__ISA_AVX2)
-        push_avx2(batches, n, m, what);
-    else
-#endif
-        push_portable(batches, n, m, what);
-    (void)isa;
+    TB__DISPATCH(isa, push, (batches, n, m, what));
 }
 
 void tb__set_up_rows(tb__batch *batches, size_t n, const double *m, int isa)
 {
-#if TB__X86_DISPATCH
-    if (isa == TB__ISA_AVX512)
-        rows_avx512(batches, n, m);
-    else if (isa == TB__ISA_AVX2)
-        rows_avx2(batches, n, m);
-    else
-#endif
-        rows_portable(batches, n, m);
-    (void)isa;
+    TB__DISPATCH(isa, rows, (batches, n, m));
 }
