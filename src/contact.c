@@ -882,7 +882,7 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
    patch's row 0, for tb__set_up_rows; the patch's twist reach. */
 static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
 {
-    double ca[3] = { 0, 0, 0 }, cb[3] = { 0, 0, 0 }, reach = 0;
+    double ca[3] = { 0, 0, 0 }, cb[3] = { 0, 0, 0 }, centre[3] = { 0, 0, 0 }, reach = 0;
     int n = 0, i, d;
     bt->a[k] = e->body_a + 1, bt->b[k] = e->body_b + 1;
     bt->inv_world_a[k] = e->body_a >= 0 ? c->bodies[e->body_a].inv_world : no_inertia;
@@ -897,23 +897,24 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
             continue;
         for (d = 0; d < 3; ++d) {
             bt->point[n].arm_a[d][k] = p->ra[d], bt->point[n].arm_b[d][k] = p->rb[d];
-            ca[d] += p->ra[d], cb[d] += p->rb[d];
+            ca[d] += p->ra[d], cb[d] += p->rb[d], centre[d] += p->point[d];
         }
         bt->point[n++].source[k] = &e->point[i];
     }
     for (d = 0; d < 3; ++d) {
-        ca[d] /= n, cb[d] /= n;
+        ca[d] /= n, cb[d] /= n, centre[d] /= n;
         bt->arm_a[0][d][k] = ca[d], bt->arm_b[0][d][k] = cb[d];
     }
+    /* (from the points themselves: a static side's arms are all 0) */
     for (i = 0; i < e->count; ++i)
         if (e->point[i].active) {
             double off[3], along;
             for (d = 0; d < 3; ++d)
-                off[d] = e->point[i].ra[d] - ca[d] + e->point[i].rb[d] - cb[d];
+                off[d] = e->point[i].point[d] - centre[d];
             along = dot3(off, e->normal);
             for (d = 0; d < 3; ++d)
                 off[d] -= along * e->normal[d];
-            reach += 0.5 * norm3(off);
+            reach += norm3(off);
         }
     bt->source[k] = e;
     bt->friction[k] = e->friction;

@@ -161,6 +161,42 @@ static void box_slides_to_v2_over_2_mu_g(void **state)
     assert_true(fabs(d60 - truth) < fabs(o60 - truth));
 }
 
+/* A unit cube (1 kg, I_z = 1/6 kg m^2) spinning at 10 rad/s about the
+   vertical on the plane, mu = 0.5, at 60 Hz. Friction at its four corners
+   (what a box-box or box-plane manifold is) brakes the spin with a torque
+   mu m g r, r = sqrt(1/2) m the corners' distance from the axis: the
+   patch's twist row must give exactly that (its reach is the corners' mean
+   distance), a steady deceleration of 24.97 rad/s^2, to rest after 0.40 s.
+   Each step's friction impulse is mu times the step's normal impulse,
+   m g h, times r: after 12 steps the spin is 10 - 12 mu g r h / I_z; the
+   normal impulses converge to m g h within the sweeps, so 1e-6 relative
+   is asserted. The cube must not slide meanwhile. */
+static void spinning_box_stops_as_its_corners_rub(void **state)
+{
+    const double mu = 0.5, h = 1.0 / 60, r = sqrt(0.5), inertia = 1.0 / 6;
+    const double start[3] = { 0, 0, 0.5 }, spin[3] = { 0, 0, 10 };
+    const double expected = 10 - 12 * mu * G * r * h / inertia;
+    tb_world *w = world_on_plane(mu, 0);
+    tb_body_id id = add_box(w, start, 1, mu);
+    double wv[3], x[3];
+    int i;
+    (void)state;
+    assert_int_equal(tb_body_set_angular_velocity(w, id, spin), TB_OK);
+    for (i = 0; i < 12; ++i)
+        assert_int_equal(tb_world_step(w, h), TB_OK);
+    tb_body_angular_velocity(w, id, wv);
+    tb_body_position(w, id, x);
+    print_message("spinning box: %.9f rad/s after 0.2 s (corner friction: %.9f), centre moved %.2e m\n", wv[2],
+                  expected, sqrt(x[0] * x[0] + x[1] * x[1]));
+    assert_rel(wv[2], expected, 1e-6);
+    assert_below(sqrt(x[0] * x[0] + x[1] * x[1]), 1e-9);
+    for (i = 0; i < 30; ++i)
+        assert_int_equal(tb_world_step(w, h), TB_OK);
+    tb_body_angular_velocity(w, id, wv);
+    assert_below(fabs(wv[2]), 1e-9); /* at rest, 0.4 s after the start */
+    tb_world_destroy(w);
+}
+
 /* After sliding to rest, 10 s more on the plane, awake: it must not creep or
    jitter. A resting contact's impulse cancels gravity's kick and its h/2
    lever cancels gravity's drop exactly, so the drift is rounding: 1e-12 m
@@ -662,6 +698,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(sliding_ball_starts_rolling_at_five_sevenths),
     cmocka_unit_test(ball_bounces_to_e_squared),
     cmocka_unit_test(box_slides_to_v2_over_2_mu_g),
+    cmocka_unit_test(spinning_box_stops_as_its_corners_rub),
     cmocka_unit_test(box_rests_without_drift),
     cmocka_unit_test(stack_of_ten_stands),
     cmocka_unit_test(fast_sphere_does_not_tunnel),
