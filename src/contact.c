@@ -188,19 +188,18 @@ static void sort_keys(tb__key *keys, tb__key *scratch, size_t n)
         memcpy(out, keys, n * sizeof *keys);
 }
 
+/* Last step's entry between the keys: among key_a's few, where they
+   start in key order. */
 static const tb__entry *previous_entry(const tb__contacts *c, uint32_t key_a, uint32_t key_b)
 {
     const uint64_t key = key_of(key_a, key_b);
-    size_t lo = 0, hi = c->previous_count;
-    while (lo < hi) {
-        const size_t mid = (lo + hi) / 2;
-        if (c->previous_order[mid].key < key)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo < c->previous_count && c->previous_order[lo].key == key ? &c->previous[c->previous_order[lo].index]
-                                                                      : NULL;
+    size_t i;
+    if ((size_t)key_a + 1 >= c->previous_starts_count)
+        return NULL;
+    for (i = c->previous_starts[key_a]; i < c->previous_starts[key_a + 1]; ++i)
+        if (c->previous_order[i].key >= key)
+            return c->previous_order[i].key == key ? &c->previous[c->previous_order[i].index] : NULL;
+    return NULL;
 }
 
 static void tangents(const double n[3], double t1[3], double t2[3])
@@ -516,6 +515,24 @@ static tb_status collide_pair(tb_world *w, tb__contacts *c, const tb__geom *a, c
 
 static tb_status colour_entries(tb_world *w, tb__contacts *c);
 
+/* Where each key_a's entries start in order (keys run to the ids handed
+   out), for the next step's previous_entry. */
+static tb_status index_keys(tb_world *w, tb__contacts *c)
+{
+    const size_t count = (size_t)c->ids.used + 2;
+    size_t i;
+    tb_status st = tb__contacts_reserve(w, (void **)&c->starts, &c->starts_cap, count, sizeof *c->starts);
+    if (st != TB_OK)
+        return st;
+    memset(c->starts, 0, count * sizeof *c->starts);
+    for (i = 0; i < c->entry_count; ++i)
+        c->starts[(c->order[i].key >> 32) + 1]++;
+    for (i = 0; i + 1 < count; ++i)
+        c->starts[i + 1] += c->starts[i];
+    c->starts_count = count;
+    return TB_OK;
+}
+
 tb_status tb__contacts_prepare(tb_world *w, double h)
 {
     tb__contacts *c = w->contacts;
@@ -525,6 +542,7 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
     size_t i, k, cap;
     tb__entry *swap;
     tb__key *swap_order;
+    uint32_t *swap_starts;
     tb_status st;
     /* last step's entries become the previous ones (for warm starting and
        events), unless that step never got to solve them */
@@ -533,6 +551,9 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
         cap = c->previous_cap, c->previous_cap = c->entry_cap, c->entry_cap = cap;
         swap_order = c->previous_order, c->previous_order = c->order, c->order = swap_order;
         cap = c->previous_order_cap, c->previous_order_cap = c->order_cap, c->order_cap = cap;
+        swap_starts = c->previous_starts, c->previous_starts = c->starts, c->starts = swap_starts;
+        cap = c->previous_starts_cap, c->previous_starts_cap = c->starts_cap, c->starts_cap = cap;
+        c->previous_starts_count = c->starts_count;
         c->previous_count = c->entry_count;
     }
     c->entry_count = 0;
@@ -657,6 +678,8 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
         c->order[i].index = (uint32_t)i;
     }
     sort_keys(c->order, c->order_scratch, c->entry_count);
+    if ((st = index_keys(w, c)) != TB_OK)
+        return st;
     /* the solver's room: batches for the entries, motion for every body */
     if ((st = colour_entries(w, c)) != TB_OK || (st = reserve_motion(w, c)) != TB_OK)
         return st;

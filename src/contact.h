@@ -188,6 +188,8 @@ struct tb__contacts {
     size_t entry_count, entry_cap, previous_count, previous_cap;
     tb__key *order, *previous_order, *order_scratch;
     size_t order_cap, previous_order_cap, order_scratch_cap;
+    uint32_t *starts, *previous_starts; /* [key_a]: where key_a's entries start in (previous_)order */
+    size_t starts_cap, previous_starts_cap, starts_count, previous_starts_count;
 
     tb__batch *batches;        /* the touching manifolds of this step */
     size_t batch_count, batch_cap;

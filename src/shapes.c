@@ -93,6 +93,8 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->order, c->order_cap * sizeof *c->order, 0);
     tb__alloc(w, c->previous_order, c->previous_order_cap * sizeof *c->previous_order, 0);
     tb__alloc(w, c->order_scratch, c->order_scratch_cap * sizeof *c->order_scratch, 0);
+    tb__alloc(w, c->starts, c->starts_cap * sizeof *c->starts, 0);
+    tb__alloc(w, c->previous_starts, c->previous_starts_cap * sizeof *c->previous_starts, 0);
     tb__alloc(w, c->batches, c->batch_cap * sizeof *c->batches, 0);
     tb__alloc(w, c->colours, c->colours_cap * sizeof *c->colours, 0);
     tb__alloc(w, c->bucket, c->bucket_cap * sizeof *c->bucket, 0);
