@@ -133,11 +133,14 @@ static tb_status reserve_motion(tb_world *w, tb__contacts *c)
         return TB_OK;
     while (cap < need)
         cap = cap ? 2 * cap : 64;
-    /* one block for the three arrays; what they held is not needed again */
-    block = tb__alloc(w, NULL, 0, 3 * TB__MOTION * cap * sizeof *block);
+    /* one block for the three arrays, its rows on cache lines (the sweeps
+       move whole rows); what they held is not needed again */
+    block = tb__alloc(w, NULL, 0, TB__MOTION_BYTES(cap));
     if (!block)
         return tb__fail(w, TB_ERR_MEMORY, "out of memory for the contact solver");
-    tb__alloc(w, c->velocity, 3 * TB__MOTION * c->motion_cap * sizeof *block, 0);
+    tb__alloc(w, c->motion_block, TB__MOTION_BYTES(c->motion_cap), 0);
+    c->motion_block = block;
+    block += (64 - (uintptr_t)block % 64) % 64 / sizeof *block;
     c->velocity = block;
     c->motion = block + TB__MOTION * cap;
     c->momenta = block + 2 * TB__MOTION * cap;

@@ -150,6 +150,8 @@ typedef struct tb__solver_body {
    the static world): a velocity (v, w) or position change (dp, dtheta),
    then the inverse mass; one cache line each. */
 #define TB__MOTION 8
+/* the three arrays' block, with room to start them on a 64-byte line */
+#define TB__MOTION_BYTES(cap) (3 * TB__MOTION * (cap) * sizeof(double) + 64)
 
 /* A sleeping body's pose, put back after the free motion. */
 typedef struct tb__pose {
@@ -200,6 +202,7 @@ struct tb__contacts {
     int isa;                   /* the sweeps' instruction set (tb__isa) */
     double *velocity, *motion, *momenta; /* [TB__MOTION * motion_cap] each, one block: see
                                   TB__MOTION (momenta: P, L, then 1 or 0 for the static world) */
+    double *motion_block;      /* the block as allocated: TB__MOTION_BYTES(motion_cap) */
     size_t motion_cap;
 
     tb__solver_body *bodies;

@@ -19,11 +19,18 @@ typedef struct sides {
     double va[3][W], wa[3][W], vb[3][W], wb[3][W], ma[W], mb[W];
 } sides;
 
-/* out[k] = from[k][i] for every lane. GCC and Clang build the lanes in
-   registers and store them whole: a vector load of what was stored lane
-   by lane would wait for those stores (store forwarding fails), and the
-   sweeps load every gathered value that way. */
-#if defined(__GNUC__) && TB__BATCH_LANES == 8
+/* out[k] = from[k][i] for every lane; and a batch's sides gathered from
+   the per-body arrays m and scattered back. GCC and Clang build lanes in
+   registers and store them whole (a vector load of what was stored lane
+   by lane waits for those stores: store forwarding fails). With AVX-512
+   they move a side's eight bodies as eight rows of TB__MOTION = 8 doubles
+   (a cache line each) turned into columns by a transpose: 24 shuffles
+   where lane by lane took some 200 loads, inserts and extracts, most of
+   the cost of a batch of one-point manifolds (14% of the pile's sweep,
+   8% of the pyramid's). With narrower vectors the shuffles cost more than
+   they save. Slot 7 of a row is unused and comes back 0. */
+#if (defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12)) && TB__BATCH_LANES == 8 && TB__MOTION == 8
+#define TB__ROWS 1
 typedef double tb__lanes __attribute__((vector_size(8 * sizeof(double))));
 
 TB__LANE void pick(const double *const *from, int i, double *out)
@@ -32,7 +39,58 @@ TB__LANE void pick(const double *const *from, int i, double *out)
                           from[4][i], from[5][i], from[6][i], from[7][i] };
     memcpy(out, &v, sizeof v);
 }
+
+/* rows to columns (and back: it is its own inverse); written out, as
+   loops kept the halfway steps in memory */
+#define TB__EVEN(x, y) __builtin_shufflevector(x, y, 0, 8, 2, 10, 4, 12, 6, 14)
+#define TB__ODD(x, y) __builtin_shufflevector(x, y, 1, 9, 3, 11, 5, 13, 7, 15)
+#define TB__LOW_PAIRS(x, y) __builtin_shufflevector(x, y, 0, 1, 8, 9, 4, 5, 12, 13)
+#define TB__HIGH_PAIRS(x, y) __builtin_shufflevector(x, y, 2, 3, 10, 11, 6, 7, 14, 15)
+#define TB__LOW_HALVES(x, y) __builtin_shufflevector(x, y, 0, 1, 2, 3, 8, 9, 10, 11)
+#define TB__HIGH_HALVES(x, y) __builtin_shufflevector(x, y, 4, 5, 6, 7, 12, 13, 14, 15)
+TB__LANE void transpose(tb__lanes r[8])
+{
+    const tb__lanes t0 = TB__EVEN(r[0], r[1]), t1 = TB__ODD(r[0], r[1]);
+    const tb__lanes t2 = TB__EVEN(r[2], r[3]), t3 = TB__ODD(r[2], r[3]);
+    const tb__lanes t4 = TB__EVEN(r[4], r[5]), t5 = TB__ODD(r[4], r[5]);
+    const tb__lanes t6 = TB__EVEN(r[6], r[7]), t7 = TB__ODD(r[6], r[7]);
+    const tb__lanes u0 = TB__LOW_PAIRS(t0, t2), u1 = TB__LOW_PAIRS(t1, t3);
+    const tb__lanes u2 = TB__HIGH_PAIRS(t0, t2), u3 = TB__HIGH_PAIRS(t1, t3);
+    const tb__lanes u4 = TB__LOW_PAIRS(t4, t6), u5 = TB__LOW_PAIRS(t5, t7);
+    const tb__lanes u6 = TB__HIGH_PAIRS(t4, t6), u7 = TB__HIGH_PAIRS(t5, t7);
+    r[0] = TB__LOW_HALVES(u0, u4), r[4] = TB__HIGH_HALVES(u0, u4);
+    r[1] = TB__LOW_HALVES(u1, u5), r[5] = TB__HIGH_HALVES(u1, u5);
+    r[2] = TB__LOW_HALVES(u2, u6), r[6] = TB__HIGH_HALVES(u2, u6);
+    r[3] = TB__LOW_HALVES(u3, u7), r[7] = TB__HIGH_HALVES(u3, u7);
+}
+
+TB__LANE void gather_rows(const int32_t *body, const double *m, double (*v)[W], double (*w)[W], double *mass)
+{
+    tb__lanes r[8];
+    int k;
+    for (k = 0; k < 8; ++k)
+        memcpy(&r[k], m + TB__MOTION * body[k], sizeof r[k]);
+    transpose(r);
+    for (k = 0; k < 3; ++k)
+        memcpy(v[k], &r[k], sizeof r[k]), memcpy(w[k], &r[3 + k], sizeof r[k]);
+    memcpy(mass, &r[6], sizeof r[6]);
+}
+
+TB__LANE void scatter_rows(const int32_t *body, double *m, const double (*v)[W], const double (*w)[W],
+                           const double *mass)
+{
+    tb__lanes r[8];
+    int k;
+    for (k = 0; k < 3; ++k)
+        memcpy(&r[k], v[k], sizeof r[k]), memcpy(&r[3 + k], w[k], sizeof r[k]);
+    memcpy(&r[6], mass, sizeof r[6]);
+    memset(&r[7], 0, sizeof r[7]);
+    transpose(r);
+    for (k = 0; k < 8; ++k)
+        memcpy(m + TB__MOTION * body[k], &r[k], sizeof r[k]);
+}
 #else
+#define TB__ROWS 0
 TB__LANE void pick(const double *const *from, int i, double *out)
 {
     int k;
@@ -41,31 +99,56 @@ TB__LANE void pick(const double *const *from, int i, double *out)
 }
 #endif
 
-TB__LANE void gather(const tb__batch *bt, const double *m, sides *s)
+TB__LANE void gather_lanes(const int32_t *body, const double *m, double (*v)[W], double (*w)[W], double *mass)
 {
-    const double *A[W], *B[W];
+    const double *rows[W];
     int k, i;
     for (k = 0; k < W; ++k)
-        A[k] = m + TB__MOTION * bt->a[k], B[k] = m + TB__MOTION * bt->b[k];
-    for (i = 0; i < 3; ++i) {
-        pick(A, i, s->va[i]), pick(A, 3 + i, s->wa[i]);
-        pick(B, i, s->vb[i]), pick(B, 3 + i, s->wb[i]);
+        rows[k] = m + TB__MOTION * body[k];
+    for (i = 0; i < 3; ++i)
+        pick(rows, i, v[i]), pick(rows, 3 + i, w[i]);
+    pick(rows, 6, mass);
+}
+
+TB__LANE void scatter_lanes(const int32_t *body, double *m, const double (*v)[W], const double (*w)[W])
+{
+    int k, i;
+    for (k = 0; k < W; ++k) {
+        double *row = m + TB__MOTION * body[k];
+        for (i = 0; i < 3; ++i)
+            row[i] = v[i][k], row[3 + i] = w[i][k];
     }
-    pick(A, 6, s->ma), pick(B, 6, s->mb);
+}
+
+/* wide: by rows (AVX-512 only; a constant where it is inlined) */
+TB__LANE void gather(const tb__batch *bt, const double *m, sides *s, int wide)
+{
+#if TB__ROWS
+    if (wide) {
+        gather_rows(bt->a, m, s->va, s->wa, s->ma);
+        gather_rows(bt->b, m, s->vb, s->wb, s->mb);
+        return;
+    }
+#endif
+    (void)wide;
+    gather_lanes(bt->a, m, s->va, s->wa, s->ma);
+    gather_lanes(bt->b, m, s->vb, s->wb, s->mb);
 }
 
 /* Back in lane order. Lanes on the static world (0) write its zeros back:
    it has no inverse mass and its rows no turn, so nothing moved it. */
-TB__LANE void scatter(const tb__batch *bt, double *m, const sides *s)
+TB__LANE void scatter(const tb__batch *bt, double *m, const sides *s, int wide)
 {
-    int k, i;
-    for (k = 0; k < W; ++k) {
-        double *A = m + TB__MOTION * bt->a[k], *B = m + TB__MOTION * bt->b[k];
-        for (i = 0; i < 3; ++i) {
-            A[i] = s->va[i][k], A[3 + i] = s->wa[i][k];
-            B[i] = s->vb[i][k], B[3 + i] = s->wb[i][k];
-        }
+#if TB__ROWS
+    if (wide) {
+        scatter_rows(bt->a, m, (const double(*)[W])s->va, (const double(*)[W])s->wa, s->ma);
+        scatter_rows(bt->b, m, (const double(*)[W])s->vb, (const double(*)[W])s->wb, s->mb);
+        return;
     }
+#endif
+    (void)wide;
+    scatter_lanes(bt->a, m, (const double(*)[W])s->va, (const double(*)[W])s->wa);
+    scatter_lanes(bt->b, m, (const double(*)[W])s->vb, (const double(*)[W])s->wb);
 }
 
 /* Lane k's relative velocity along a row with direction dir (or none, for
@@ -191,14 +274,14 @@ TB__LANE void position_point(const tb__batch *restrict bt, tb__lane_point *restr
     }
 }
 
-TB__LANE void velocity_batches(tb__batch *batches, size_t n, double *m, int backwards)
+TB__LANE void velocity_batches(tb__batch *batches, size_t n, double *m, int backwards, int wide)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
         tb__batch *bt = &batches[backwards ? n - 1 - i : i];
         sides s;
         int j;
-        gather(bt, m, &s);
+        gather(bt, m, &s, wide);
         /* a backward sweep is the forward one reversed, row by row (its
            friction last): a pair of sweeps is then symmetric Gauss-Seidel,
            which leans a tall stack less than friction first both ways */
@@ -208,21 +291,21 @@ TB__LANE void velocity_batches(tb__batch *batches, size_t n, double *m, int back
             normal_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s);
         if (backwards)
             friction_patch(bt, &s);
-        scatter(bt, m, &s);
+        scatter(bt, m, &s, wide);
     }
 }
 
-TB__LANE void position_batches(tb__batch *batches, size_t n, double *m, int backwards)
+TB__LANE void position_batches(tb__batch *batches, size_t n, double *m, int backwards, int wide)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
         tb__batch *bt = &batches[backwards ? n - 1 - i : i];
         sides s;
         int j;
-        gather(bt, m, &s);
+        gather(bt, m, &s, wide);
         for (j = 0; j < bt->points; ++j)
             position_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s);
-        scatter(bt, m, &s);
+        scatter(bt, m, &s, wide);
     }
 }
 
@@ -306,7 +389,7 @@ TB__LANE void rows_batches(tb__batch *batches, size_t n, const double *m)
 }
 
 /* One batch's impulse totals into m (tb__push_impulses). */
-TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what)
+TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, int wide)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
@@ -316,7 +399,7 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what)
         double l[3][W];
         sides s;
         int j, k, d;
-        gather(bt, m, &s);
+        gather(bt, m, &s, wide);
         for (d = 0; d < 3; ++d)
             for (k = 0; k < W; ++k)
                 l[d][k] = motion ? bt->lever[k] * bt->impulse[d][k] : bt->impulse[d][k];
@@ -333,32 +416,32 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what)
                 PUSH(bt->dir[0], pa, pb, &s, k, ln);
             }
         }
-        scatter(bt, m, &s);
+        scatter(bt, m, &s, wide);
     }
 }
 
-#define TB__SWEEPS(isa, attr)                                                                      \
+#define TB__SWEEPS(isa, attr, wide)                                                                      \
     attr static void velocity_##isa(tb__batch *batches, size_t n, double *m, int backwards)        \
     {                                                                                              \
-        velocity_batches(batches, n, m, backwards);                                                \
+        velocity_batches(batches, n, m, backwards, wide);                                         \
     }                                                                                              \
     attr static void position_##isa(tb__batch *batches, size_t n, double *m, int backwards)        \
     {                                                                                              \
-        position_batches(batches, n, m, backwards);                                                \
+        position_batches(batches, n, m, backwards, wide);                                         \
     }                                                                                              \
     attr static void push_##isa(tb__batch *batches, size_t n, double *m, int what)                 \
     {                                                                                              \
-        push_batches(batches, n, m, what);                                                         \
+        push_batches(batches, n, m, what, wide);                                                  \
     }                                                                                              \
     attr static void rows_##isa(tb__batch *batches, size_t n, const double *m)                     \
     {                                                                                              \
         rows_batches(batches, n, m);                                                               \
     }
 
-TB__SWEEPS(portable, )
+TB__SWEEPS(portable, , 0)
 #if TB__X86_DISPATCH
-TB__SWEEPS(avx2, TB__TARGET_AVX2)
-TB__SWEEPS(avx512, TB__TARGET_AVX512)
+TB__SWEEPS(avx2, TB__TARGET_AVX2, 0)
+TB__SWEEPS(avx512, TB__TARGET_AVX512, 1)
 #endif
 
 /* The variant of instruction set isa of sweep name, called with args. */

@@ -101,7 +101,7 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->owner, c->proxy_cap * sizeof(uint32_t), 0);
     tb__alloc(w, c->poses, c->pose_cap * sizeof *c->poses, 0);
     tb__alloc(w, c->island_scratch, c->island_scratch_cap * sizeof(double), 0);
-    tb__alloc(w, c->velocity, 3 * TB__MOTION * c->motion_cap * sizeof(double), 0); /* and motion, momenta */
+    tb__alloc(w, c->motion_block, TB__MOTION_BYTES(c->motion_cap), 0); /* velocity, motion, momenta */
     tb__alloc(w, c->bodies, c->body_cap * sizeof *c->bodies, 0);
     tb__alloc(w, c->body_map, c->body_map_cap * sizeof(int32_t), 0);
     tb__alloc(w, c->particle_map, c->particle_map_cap * sizeof(int32_t), 0);
