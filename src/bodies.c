@@ -94,7 +94,7 @@ static tb_status check_def(tb_world *w, const tb_body_def *def)
 
 /* ---- adding and removing ----------------------------------------------------- */
 
-#define BODY_ARRAYS 11
+#define BODY_ARRAYS 15
 static void arrays_of(tb_world *w, void **arrays[BODY_ARRAYS], size_t sizes[BODY_ARRAYS])
 {
     arrays[0] = (void **)&w->body_mass;        sizes[0] = sizeof(double);
@@ -108,6 +108,10 @@ static void arrays_of(tb_world *w, void **arrays[BODY_ARRAYS], size_t sizes[BODY
     arrays[8] = (void **)&w->body_frame;       sizes[8] = sizeof(tb__split_frame);
     arrays[9] = (void **)&w->body_rest;        sizes[9] = sizeof(double);
     arrays[10] = (void **)&w->body_island;     sizes[10] = sizeof(uint32_t);
+    arrays[11] = (void **)&w->body_lane_frame[0]; sizes[11] = sizeof(double);
+    arrays[12] = (void **)&w->body_lane_frame[1]; sizes[12] = sizeof(double);
+    arrays[13] = (void **)&w->body_lane_frame[2]; sizes[13] = sizeof(double);
+    arrays[14] = (void **)&w->body_lane_frame[3]; sizes[14] = sizeof(double);
 }
 
 static tb_status grow(tb_world *w)
@@ -181,6 +185,8 @@ tb_status tb_world_add_body(tb_world *w, const tb_body_def *def, tb_body_id *id)
     }
     set_spin(w, s, def->angular_velocity);
     tb__split_frame_of(w->body_inv_inertia + 3 * s, &w->body_frame[s]);
+    tb__lane_frame_of(w->body_inv_inertia + 3 * s, &w->body_lane_frame[0][s], &w->body_lane_frame[1][s],
+                      &w->body_lane_frame[2][s], &w->body_lane_frame[3][s]);
     w->body_isotropic += w->body_frame[s].isotropic;
     w->body_damping[2 * s] = def->linear_damping;
     w->body_damping[2 * s + 1] = def->angular_damping;

@@ -314,6 +314,7 @@ static void turn(tb_world *w, size_t b, size_t m, const tb__split_op *op, int is
     double *q = w->y + w->off[TB__BODY_ROT] + 4 * b;
     const double *L = w->y + w->off[TB__BODY_ANG] + 3 * b, *invI = w->body_inv_inertia + 3 * b;
     const tb__split_frame *frame = w->body_frame + b;
+    tb__lane_frames frames;
     const double h = op->h;
     size_t s, iso = w->body_isotropic == w->body_count ? m : 0;
     if (w->body_isotropic && iso == 0)
@@ -321,12 +322,14 @@ static void turn(tb_world *w, size_t b, size_t m, const tb__split_op *op, int is
             iso += frame[s].isotropic;
     /* an isotropic body turns about a fixed axis, exactly and cheaply, with
        no gyroscopic work (the splitting lanes send it there too) */
+    frames.a = w->body_lane_frame[0] + b, frames.ca = w->body_lane_frame[1] + b;
+    frames.cb = w->body_lane_frame[2] + b, frames.code = w->body_lane_frame[3] + b;
     if (iso == m)
         tb__isotropic_lanes(q, L, invI, h, (int)m, isa);
     else if (op->rotation == TB__ROTATE_SPLIT2)
-        tb__split2_lanes(q, L, invI, h, (int)m, isa);
+        tb__split2_lanes_framed(q, L, invI, &frames, h, (int)m, isa);
     else if (op->rotation == TB__ROTATE_ACCURATE)
-        tb__accurate_lanes(q, L, invI, h, (int)m, isa);
+        tb__accurate_lanes_framed(q, L, invI, &frames, h, (int)m, isa);
     else if (iso == 0)
         tb__frozen_lanes(q, L, invI, h, (int)m, isa);
     else
@@ -378,6 +381,24 @@ TB__LANE void kick_drift(double *restrict x, double *restrict P, const double *r
         const double p = P[i] + hk * (m3[i] * g3[i]);
         P[i] = p;
         x[i] += hd * p * inv3[i];
+    }
+}
+
+/* ... and then the same kick again (verlet's closing kick, when nothing
+   the drift changes moves the forces: integrators.c): the operations of
+   kick_drift and kick_gravity one after the other, the same bits, with
+   P, the masses and the kick h m g gone through once. */
+TB__LANE void kick_drift_kick(double *restrict x, double *restrict P, const double *restrict mass,
+                              const double *restrict inv_mass, double hk, double hd, const double *restrict g3)
+{
+    double m3[3 * TB__LANES], inv3[3 * TB__LANES];
+    int i;
+    spread3(mass, m3);
+    spread3(inv_mass, inv3);
+    for (i = 0; i < 3 * TB__LANES; ++i) {
+        const double kick = hk * (m3[i] * g3[i]), p = P[i] + kick;
+        x[i] += hd * p * inv3[i];
+        P[i] = p + kick;
     }
 }
 
@@ -448,6 +469,14 @@ TB__LANE void sweep_blocks(tb_world *w, const tb__split_op *ops, int n, int only
     for (b = 0; b < w->body_count; b += TB__LANES) {
         const size_t m = w->body_count - b < TB__LANES ? w->body_count - b : TB__LANES;
         for (i = 0; i < n; ++i) {
+            if (only_gravity && m == TB__LANES && !ops[i].drift && i + 2 < n && ops[i + 1].drift && !ops[i + 2].drift
+                && ops[i + 2].h == ops[i].h) {
+                kick_drift_kick(x + 3 * b, P + 3 * b, w->body_mass + b, w->body_inv_mass + b, ops[i].h, ops[i + 1].h,
+                                g3);
+                turn(w, b, m, &ops[i + 1], isa);
+                i += 2;
+                continue;
+            }
             if (only_gravity && m == TB__LANES && !ops[i].drift && i + 1 < n && ops[i + 1].drift) {
                 kick_drift(x + 3 * b, P + 3 * b, w->body_mass + b, w->body_inv_mass + b, ops[i].h, ops[i + 1].h, g3);
                 turn(w, b, m, &ops[++i], isa);

@@ -92,6 +92,18 @@ static tb_status verlet_with(tb_world *w, double h, tb__rotation_kind rotation)
     const tb__split_op kick[1] = { { 0, h / 2, rotation } };
     double *predicted = NULL;
     tb_status st;
+    if (w->forces.count == 0 && w->spring_count == 0 && w->particle_count == 0 && !tb__split_velocity_dependent(w)) {
+        /* Bodies alone, whose forces (gravity, held forces) depend on
+           nothing the drift changes: the closing kick adds what it would
+           add after a second evaluation, so one sweep does the three ops
+           on each block while it sits in L1 (the same operations, the same
+           bits), instead of walking the momenta twice. */
+        const tb__split_op kick_drift_kick[3] = { { 0, h / 2, rotation }, { 1, h, rotation }, { 0, h / 2, rotation } };
+        if ((st = tb__split_prepare(w, w->time, NULL)) != TB_OK)
+            return st;
+        tb__split_sweep(w, kick_drift_kick, 3);
+        return TB_OK;
+    }
     if (tb__split_velocity_dependent(w)) {
         if ((st = tb__state_scratch(w, 1)) != TB_OK)
             return st;

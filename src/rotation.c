@@ -67,38 +67,55 @@
 #include "rotation.h"
 
 #include <math.h>
+#include <stddef.h>
+#include <string.h>
 
 /* ------------------------------------------------ small-angle trigonometry -- */
 
-/* sin x and cos x for |x| <= 1/4 from their Taylor series in u = x^2, through
-   x^11 and x^12. The first terms left out, x^13/13! and x^14/14!, are at most
-   9.6e-18 of sin x and 4.3e-20 of cos x there: the results are as good as a
-   correctly rounded libm's, and no sqrt or range reduction is needed. (At
-   1/8 two terms fewer would do, but then the lanes sent a body spinning at
-   45 rad/s about a thin axis down the slow general path at every step.) */
+/* sin x and cos x for |x| <= 1/4 as polynomials in u = x^2, no sqrt or
+   range reduction needed. sin x is its Taylor series through x^11: the
+   first term left out, x^13/13!, is at most 9.6e-18 of sin x there. cos x
+   (and sin(x) / x below) is 1 - u/2 (1 - u/6) and then the minimax
+   polynomial of degree 3 for the rest, (cos x - 1 + u/2) / u^2, weighted
+   by u^2 on 0 <= u <= 1/16 (Remez exchange, 60 digits, rounded to double):
+   cos x within 3.1e-19 (sin(x) / x within 2.4e-20) of the exact value,
+   where the Taylor series needs a term more, x^12, for 4.3e-20 (1e-19).
+   Evaluated in double, both are within 1.5 units in the last place of
+   cos x on a dense grid, like the Taylor series (and as good as a
+   correctly rounded libm's after the rounding of u). (At 1/8 two terms
+   fewer would do, but then the lanes sent a body spinning at 45 rad/s
+   about a thin axis down the slow general path at every step.) */
 #define TB__SMALL 0.25
+#define TB__COS2 0.04166666666666468       /* 1/24 - 2.0e-15 */
+#define TB__COS3 (-0.0013888888885387693)  /* -1/720 + 3.5e-13 */
+#define TB__COS4 2.4801569985195017e-05    /* 1/40320 - 1.7e-11 */
+#define TB__COS5 (-2.7524717767692497e-07) /* -1/3628800 + 3.3e-10 */
+#define TB__SINC2 0.00833333333333318       /* 1/120 - 1.5e-16 */
+#define TB__SINC3 (-0.00019841269838576317) /* -1/5040 + 2.7e-14 */
+#define TB__SINC4 2.7557305902356644e-06    /* 1/362880 - 1.3e-12 */
+#define TB__SINC5 (-2.5027028447633727e-08) /* -1/39916800 + 2.5e-11 */
+
+static inline double tb__cos_poly(double u, double u2, double u4)
+{
+    /* Estrin's scheme: Horner's chain of dependent operations was the
+       critical path of the lanes */
+    return (1 + u * (-1.0 / 2)) + u2 * (TB__COS2 + u * TB__COS3) + u4 * (TB__COS4 + u * TB__COS5);
+}
 
 static inline void tb__sincos4(double x, double *s, double *c)
 {
     const double u = x * x, u2 = u * u, u4 = u2 * u2;
-    /* Estrin's scheme: the same polynomials in fewer dependent steps */
     *s = x + x * u * (((-1.0 / 6 + u * (1.0 / 120)) + u2 * (-1.0 / 5040 + u * (1.0 / 362880)))
                       + u4 * (-1.0 / 39916800));
-    *c = (1 + u * (-1.0 / 2)) + u2 * (1.0 / 24 + u * (-1.0 / 720))
-         + u4 * ((1.0 / 40320 + u * (-1.0 / 3628800)) + u2 * (1.0 / 479001600.0));
+    *c = tb__cos_poly(u, u2, u4);
 }
 
-/* sin(x) / x and cos x from u = x^2 <= 1/16 (|x| <= 1/4), through x^12: the
-   first terms left out, x^14/15! and x^14/14!, are below 1e-19. */
+/* sin(x) / x and cos x from u = x^2 <= 1/16 (|x| <= 1/4). */
 static inline void tb__sinc_cos4(double u, double *sinc, double *c)
 {
     const double u2 = u * u, u4 = u2 * u2;
-    /* Estrin's scheme, as in tb__sincos4: Horner's chain of 12 dependent
-       operations was the critical path of the lanes */
-    *sinc = (1 + u * (-1.0 / 6)) + u2 * (1.0 / 120 + u * (-1.0 / 5040))
-            + u4 * ((1.0 / 362880 + u * (-1.0 / 39916800)) + u2 * (1.0 / 6227020800.0));
-    *c = (1 + u * (-1.0 / 2)) + u2 * (1.0 / 24 + u * (-1.0 / 720))
-         + u4 * ((1.0 / 40320 + u * (-1.0 / 3628800)) + u2 * (1.0 / 479001600.0));
+    *sinc = (1 + u * (-1.0 / 6)) + u2 * (TB__SINC2 + u * TB__SINC3) + u4 * (TB__SINC4 + u * TB__SINC5);
+    *c = tb__cos_poly(u, u2, u4);
 }
 
 /* The quaternion (cos x, (sin x / x) k v) of a rotation by 2 x about v, for
@@ -136,16 +153,19 @@ static inline void tb__half_turn(double u, double k, const double v[3], double r
 
 /* ------------------------------------------------------ quaternion algebra -- */
 
-/* v_b = R(q)^T v: v + 2 w (p x v) + 2 p x (p x v) with p = -(x, y, z). */
+/* v_b = R(q)^T v: v + 2 w (p x v) + 2 p x (p x v) with p = -(x, y, z),
+   written with t = -2 (p x v) = 2 (x, y, z) x v: v - w t + (x, y, z) x t.
+   The negations are exact, so this is the same arithmetic to the bit,
+   without them. */
 static inline void tb__to_body(const double q[4], const double v[3], double out[3])
 {
-    const double w = q[0], x = -q[1], y = -q[2], z = -q[3];
+    const double w = q[0], x = q[1], y = q[2], z = q[3];
     const double tx = 2 * (y * v[2] - z * v[1]);
     const double ty = 2 * (z * v[0] - x * v[2]);
     const double tz = 2 * (x * v[1] - y * v[0]);
-    out[0] = v[0] + w * tx + (y * tz - z * ty);
-    out[1] = v[1] + w * ty + (z * tx - x * tz);
-    out[2] = v[2] + w * tz + (x * ty - y * tx);
+    out[0] = v[0] - w * tx + (y * tz - z * ty);
+    out[1] = v[1] - w * ty + (z * tx - x * tz);
+    out[2] = v[2] - w * tz + (x * ty - y * tx);
 }
 
 /* out = a b (Hamilton product). out may be a or b. */
@@ -354,8 +374,11 @@ TB__LANE void tb__frozen_lanes_t(double *restrict q, const double *restrict L, c
    2; with ties the first of 1, 0, 2), whether A is the axis after it
    cyclically (up_a: then det P = -1) or the one before, and the rates.
    Minima, maxima and selects, no branches or indices, so that the loops
-   over lanes vectorise it: the lanes relabel every body at every step from
-   invI, which costs less than loading a frame stored per body. */
+   over lanes vectorise it. The world keeps it for each body as the lanes
+   read it, four numbers in four arrays (tb__frame_put): loaded so, it
+   costs less than working it out at every step (about 30 operations per
+   8 lanes with AVX-512, and the transposition of invI), where the old
+   tb__split_frame, one struct per body, cost more than that. */
 typedef struct tb__relabel {
     int mid0, mid1, up_a, isotropic;
     double a, ca, cb;
@@ -389,26 +412,34 @@ TB__LANE void tb__relabel_of(const double i[3], tb__relabel *r)
     r->isotropic = r->ca == 0; /* |ca| >= |cb|: both moments equal the middle one */
 }
 
-/* A body-frame vector v in the relabelled axes: det P (v_A, v_mid, v_B). */
+/* A body-frame vector v in the relabelled axes: (v_A, v_mid, v_B) when P
+   is even; when it is odd, (v_A, -v_mid, v_B), which turns the relabelled
+   frame right-handed again as det P (v_A, v_mid, v_B) would (the general
+   path's choice): the two frames differ by a half turn about the middle
+   axis, D = diag(-1, 1, -1), and every operation of a composition (turns
+   by odd polynomials of angles proportional to L_A or L_B, products of
+   quaternions, turns of L_b) commutes with D exactly, as negation is
+   exact. The same bits, with one negation in place of three. mid0, mid1:
+   the middle axis is 0, 1 (neither: 2). */
 TB__LANE void tb__relabel_in(int mid0, int mid1, int up_a, const double v[3], double out[3])
 {
-    const double m = mid1 ? v[1] : mid0 ? v[0] : v[2];
-    const double up = mid1 ? v[2] : mid0 ? v[1] : v[0];
-    const double down = mid1 ? v[0] : mid0 ? v[2] : v[1];
-    out[0] = up_a ? -up : down;
+    const double m0 = mid0 ? v[0] : v[2], up0 = mid0 ? v[1] : v[0], down0 = mid0 ? v[2] : v[1];
+    const double m = mid1 ? v[1] : m0, up = mid1 ? v[2] : up0, down = mid1 ? v[0] : down0;
+    out[0] = up_a ? up : down;
     out[1] = up_a ? -m : m;
-    out[2] = up_a ? -down : up;
+    out[2] = up_a ? down : up;
 }
 
 /* ... and back. */
 TB__LANE void tb__relabel_out(int mid0, int mid1, int up_a, const double in[3], double out[3])
 {
     const double m = up_a ? -in[1] : in[1];
-    const double up = up_a ? -in[0] : in[2];
-    const double down = up_a ? -in[2] : in[0];
-    out[0] = mid1 ? down : mid0 ? m : up;
-    out[1] = mid1 ? m : mid0 ? up : down;
-    out[2] = mid1 ? up : mid0 ? down : m;
+    const double up = up_a ? in[0] : in[2];
+    const double down = up_a ? in[2] : in[0];
+    const double o0 = mid0 ? m : up, o1 = mid0 ? up : down, o2 = mid0 ? down : m;
+    out[0] = mid1 ? down : o0;
+    out[1] = mid1 ? m : o1;
+    out[2] = mid1 ? up : o2;
 }
 
 /* The frame the general path (tb__split_any) works in: the same choice. */
@@ -467,6 +498,26 @@ TB__LANE void tb__turn_b(tb__spin *p, double s, double c, int l0_only)
         p->l1 = C * l1 - S * l0;
 }
 
+/* The relabelling as the lanes read it, one number per quantity: the
+   rates a, c_A, c_B and a code +-(1 + the middle axis), negative when A
+   comes after the middle axis (det P = -1). The world keeps these for its
+   bodies (tb__lane_frame_of); the other callers' lanes work them out from
+   invI first, in a loop of their own. */
+TB__LANE void tb__frame_put(const double invI[3], double *a, double *ca, double *cb, double *code)
+{
+    tb__relabel r;
+    tb__relabel_of(invI, &r);
+    *a = r.a;
+    *ca = r.ca;
+    *cb = r.cb;
+    *code = r.up_a ? (r.mid1 ? -2.0 : r.mid0 ? -1.0 : -3.0) : (r.mid1 ? 2.0 : r.mid0 ? 1.0 : 3.0);
+}
+
+void tb__lane_frame_of(const double invI[3], double *a, double *ca, double *cb, double *code)
+{
+    tb__frame_put(invI, a, ca, cb, code);
+}
+
 /* Bodies in lanes for the splitting kernels, one array per quantity. The
    lanes leave q alone until the last piece: they compose the step's turns
    into one quaternion T in the relabelled body frame (each turn on the
@@ -477,9 +528,10 @@ typedef struct tb__spin_lanes {
     double l0[TB__LANES], l1[TB__LANES], l2[TB__LANES];             /* L_b, relabelled */
     double ka[TB__LANES], kb[TB__LANES]; /* half angle per unit L_A, L_B */
     double k[TB__LANES], u[TB__LANES];   /* the turn about L: k = a h / 2, u = (k |L|)^2 */
-    double big[TB__LANES];               /* largest half angle so far */
+    double sinc[TB__LANES];              /* ... and sin(x) / x of its half angle x */
+    double big[TB__LANES];               /* largest squared half angle so far */
     double q[4][TB__LANES];              /* q at the start */
-    double mid0[TB__LANES], mid1[TB__LANES], up_a[TB__LANES]; /* the relabelling, 0 or 1 */
+    double code[TB__LANES];              /* the relabelling (tb__frame_put) */
 } tb__spin_lanes;
 
 /* A composition in lanes runs piece by piece: each piece is one loop over
@@ -487,17 +539,29 @@ typedef struct tb__spin_lanes {
    partial block, or one body, with the same arithmetic), so the lanes'
    chains of dependent turns overlap instead of one waiting for the last:
    a whole composition per loop iteration would be too long for the
-   processor to look past. Between pieces the lanes stay in L1. */
-#define TB__EACH_LANE(i, n, lane)                          \
-    do {                                                   \
-        if ((n) == TB__LANES)                              \
-            for ((i) = 0; (i) < TB__LANES; ++(i)) {        \
-                lane;                                      \
-            }                                              \
-        else                                               \
-            for ((i) = 0; (i) < (n); ++(i)) {              \
-                lane;                                      \
-            }                                              \
+   processor to look past. Between pieces the lanes stay in L1. A partial
+   block of a multiple of TB__GROUP lanes runs in groups of that fixed
+   length, which GCC vectorises too (a block of any other size is padded
+   to one: tb__split_padded). */
+#define TB__GROUP 8
+#define TB__EACH_LANE(i, n, lane)                                          \
+    do {                                                                   \
+        if ((n) == TB__LANES) {                                            \
+            for ((i) = 0; (i) < TB__LANES; ++(i)) {                        \
+                lane;                                                      \
+            }                                                              \
+        } else if ((n) % TB__GROUP == 0) {                                 \
+            int g_, j_;                                                    \
+            for (g_ = 0; g_ < (n); g_ += TB__GROUP)                        \
+                for (j_ = 0; j_ < TB__GROUP; ++j_) {                       \
+                    (i) = g_ + j_;                                         \
+                    lane;                                                  \
+                }                                                          \
+        } else {                                                           \
+            for ((i) = 0; (i) < (n); ++(i)) {                              \
+                lane;                                                      \
+            }                                                              \
+        }                                                                  \
     } while (0)
 
 TB__LANE void tb__spin_get(const tb__spin_lanes *lanes, int i, tb__spin *p)
@@ -512,55 +576,69 @@ TB__LANE void tb__spin_put(tb__spin_lanes *lanes, int i, const tb__spin *p)
     lanes->l0[i] = p->l0, lanes->l1[i] = p->l1, lanes->l2[i] = p->l2;
 }
 
-/* The first piece, straight from the world's arrays: body i relabelled,
-   its q kept, its L_b from q and L. hh = h / 2. An isotropic body starts
-   with big = HUGE_VAL: the lanes do not finish it (tb__rotation_isotropic
-   is its kernel). */
-TB__LANE void tb__lane_load(tb__spin_lanes *lanes, int i, const double *q, const double *L, const double *invI,
-                            double hh)
+/* The relabelling's selects from its code. */
+TB__LANE void tb__code_masks(double code, int *mid0, int *mid1, int *up_a)
 {
-    double qi[4], li[3], lb[3], lr[3], k;
-    tb__relabel f;
-    tb__relabel_of(invI + 3 * i, &f);
+    const double m = fabs(code);
+    *mid0 = m == 1;
+    *mid1 = m == 2;
+    *up_a = code < 0;
+}
+
+/* The first piece, straight from the world's arrays: body i relabelled by
+   its frame (fa, fca, fcb, fcode: tb__frame_put), its q kept, its L_b from
+   q and L. hh = h / 2; ha multiplies c_A (the composition's coefficients
+   for A then need no multiplication of their own when all are equal). big
+   starts at the turn about L's own u: an isotropic body starts with
+   HUGE_VAL, as the lanes do not finish it (tb__rotation_isotropic is its
+   kernel). */
+TB__LANE void tb__lane_load(tb__spin_lanes *lanes, int i, const double *q, const double *L, const double *fa,
+                            const double *fca, const double *fcb, const double *fcode, double hh, double ha)
+{
+    const double code = fcode[i], ca = fca[i], k = hh * fa[i];
+    double qi[4], li[3], lb[3], lr[3], u;
+    int mid0, mid1, up_a;
+    tb__code_masks(code, &mid0, &mid1, &up_a);
     qi[0] = q[4 * i], qi[1] = q[4 * i + 1], qi[2] = q[4 * i + 2], qi[3] = q[4 * i + 3];
     li[0] = L[3 * i], li[1] = L[3 * i + 1], li[2] = L[3 * i + 2];
     lanes->q[0][i] = qi[0], lanes->q[1][i] = qi[1], lanes->q[2][i] = qi[2], lanes->q[3][i] = qi[3];
     tb__to_body(qi, li, lb);
-    tb__relabel_in(f.mid0, f.mid1, f.up_a, lb, lr);
-    k = hh * f.a;
-    lanes->ka[i] = hh * f.ca;
-    lanes->kb[i] = hh * f.cb;
+    tb__relabel_in(mid0, mid1, up_a, lb, lr);
+    lanes->ka[i] = ha * ca;
+    lanes->kb[i] = hh * fcb[i];
     lanes->k[i] = k;
-    lanes->u[i] = k * k * (li[0] * li[0] + li[1] * li[1] + li[2] * li[2]);
+    u = k * k * (li[0] * li[0] + li[1] * li[1] + li[2] * li[2]);
+    lanes->u[i] = u;
     lanes->l0[i] = lr[0], lanes->l1[i] = lr[1], lanes->l2[i] = lr[2];
-    lanes->big[i] = f.isotropic ? HUGE_VAL : 0;
-    lanes->mid0[i] = f.mid0 ? 1.0 : 0.0; /* selects: an int here would halve the lanes' width */
-    lanes->mid1[i] = f.mid1 ? 1.0 : 0.0;
-    lanes->up_a[i] = f.up_a ? 1.0 : 0.0;
+    lanes->big[i] = ca == 0 ? HUGE_VAL : u; /* ca = 0: isotropic (|ca| >= |cb|) */
+    lanes->code[i] = code;
 }
 
 /* Then T = the turn about L_b by the angle a h |L|: a loop of its own, as
    one with the piece above held too many numbers for the registers. A turn
-   beyond the polynomial (or not finite) marks the lane to be redone. */
+   beyond the polynomial (or not finite) has marked the lane to be redone
+   (big). */
 TB__LANE void tb__lane_begin(tb__spin_lanes *lanes, int i)
 {
     const double k = lanes->k[i], u = lanes->u[i];
     double sinc, c;
     tb__sinc_cos4(u, &sinc, &c);
+    lanes->sinc[i] = sinc;
     sinc *= k;
     lanes->w[i] = c, lanes->x[i] = sinc * lanes->l0[i], lanes->y[i] = sinc * lanes->l1[i];
     lanes->z[i] = sinc * lanes->l2[i];
-    lanes->big[i] = !(u <= TB__SMALL * TB__SMALL) ? HUGE_VAL : lanes->big[i];
 }
 
 /* The exact flow of c_A L_A^2 / 2 over the time g h is a turn about axis A
    by g h c_A L_A: with ka = h c_A / 2 the half angle is g ka L_A (B: the
    same with kb and L_B). The lanes take every angle to the polynomial and
-   note the largest: a lane that went beyond it is redone afterwards. */
+   note the largest square (the polynomial's own x^2): a lane that went
+   beyond it is redone afterwards. A NaN never replaces big, as a NaN big
+   (from the turn about L) stays. */
 TB__LANE double tb__lane_angle(tb__spin_lanes *lanes, int i, double x)
 {
-    const double ax = fabs(x), big = lanes->big[i];
-    lanes->big[i] = ax > big ? ax : big;
+    const double u = x * x, big = lanes->big[i];
+    lanes->big[i] = u > big ? u : big;
     return x;
 }
 
@@ -590,13 +668,15 @@ TB__LANE double tb__lane_end(tb__spin_lanes *lanes, int i, double g, double *q)
 {
     tb__spin p;
     double s, c, t[4], qi[4];
+    int mid0, mid1, up_a;
     tb__spin_get(lanes, i, &p);
     tb__sincos4(tb__lane_angle(lanes, i, (g * lanes->ka[i]) * p.l0), &s, &c);
     tb__turn_a(&p, s, c, 1);
     t[0] = p.w;
+    tb__code_masks(lanes->code[i], &mid0, &mid1, &up_a);
     {
         const double tr[3] = { p.x, p.y, p.z };
-        tb__relabel_out(lanes->mid0[i] != 0, lanes->mid1[i] != 0, lanes->up_a[i] != 0, tr, t + 1);
+        tb__relabel_out(mid0, mid1, up_a, tr, t + 1);
     }
     qi[0] = lanes->q[0][i], qi[1] = lanes->q[1][i], qi[2] = lanes->q[2][i], qi[3] = lanes->q[3][i];
     tb__qmul(qi, t, t);
@@ -684,7 +764,7 @@ static void tb__lanes_redo(double *q, const double *L, const double *invI, doubl
 {
     int i, k;
     for (i = 0; i < n; ++i)
-        if (!(lanes->big[i] <= TB__SMALL)) {
+        if (!(lanes->big[i] <= TB__SMALL * TB__SMALL)) {
             for (k = 0; k < 4; ++k)
                 q[4 * i + k] = lanes->q[k][i];
             tb__split_general(q + 4 * i, L + 3 * i, invI + 3 * i, h, accurate);
@@ -693,41 +773,99 @@ static void tb__lanes_redo(double *q, const double *L, const double *invI, doubl
 
 /* ----------------------------------------------------------- compositions -- */
 
+/* A block's frames: f[0..3][i] = a, c_A, c_B, code of body i (pointers at
+   the block). */
 TB__LANE void tb__split2_lanes_t(double *restrict q, const double *restrict L, const double *restrict invI,
-                                 double h, int n)
+                                 const double *restrict fa, const double *restrict fca, const double *restrict fcb,
+                                 const double *restrict fcode, double h, int n)
 {
     tb__spin_lanes p;
     const double hh = 0.5 * h;
     double redo = 0; /* 1: some lane is to be redone (a double: every instruction set vectorises this) */
     int i;
     /* A(h/2) B(h) A(h/2), the turn about L (which commutes) in the first
-       piece; B's turn of L_b,1 is left out: the last A reads L_b,0 alone */
-    TB__EACH_LANE(i, n, tb__lane_load(&p, i, q, L, invI, hh));
+       piece; B's turn of L_b,1 is left out: the last A reads L_b,0 alone.
+       ka is h/2 c_A / 2 = h c_A / 4 (the halving is exact), so both A
+       turns take g = 1, which costs nothing. */
+    TB__EACH_LANE(i, n, tb__lane_load(&p, i, q, L, fa, fca, fcb, fcode, hh, 0.5 * hh));
     TB__EACH_LANE(i, n, tb__lane_begin(&p, i));
-    TB__EACH_LANE(i, n, tb__lane_a(&p, i, 0.5));
+    TB__EACH_LANE(i, n, tb__lane_a(&p, i, 1.0));
     TB__EACH_LANE(i, n, tb__lane_b(&p, i, 1.0, 1));
-    TB__EACH_LANE(i, n, redo = tb__lane_end(&p, i, 0.5, q) <= TB__SMALL ? redo : 1);
+    TB__EACH_LANE(i, n, redo = tb__lane_end(&p, i, 1.0, q) <= TB__SMALL * TB__SMALL ? redo : 1);
     if (redo != 0)
         tb__lanes_redo(q, L, invI, h, n, 0, &p);
 }
 
 TB__LANE void tb__accurate_lanes_t(double *restrict q, const double *restrict L, const double *restrict invI,
-                                   double h, int n)
+                                   const double *restrict fa, const double *restrict fca,
+                                   const double *restrict fcb, const double *restrict fcode, double h, int n)
 {
     tb__spin_lanes p;
     const double hh = 0.5 * h;
     double redo = 0; /* 1: some lane is to be redone (a double: every instruction set vectorises this) */
     int i, j;
-    TB__EACH_LANE(i, n, tb__lane_load(&p, i, q, L, invI, hh));
+    TB__EACH_LANE(i, n, tb__lane_load(&p, i, q, L, fa, fca, fcb, fcode, hh, hh));
     TB__EACH_LANE(i, n, tb__lane_begin(&p, i));
     for (j = 0; j < 6; ++j) { /* the loops of fixed length inside are what count */
         const double ga = tb__bm_a[j], gb = tb__bm_b[j];
         TB__EACH_LANE(i, n, tb__lane_a(&p, i, ga));
         TB__EACH_LANE(i, n, tb__lane_b(&p, i, gb, 0));
     }
-    TB__EACH_LANE(i, n, redo = tb__lane_end(&p, i, TB__BM_A1, q) <= TB__SMALL ? redo : 1);
+    TB__EACH_LANE(i, n, redo = tb__lane_end(&p, i, TB__BM_A1, q) <= TB__SMALL * TB__SMALL ? redo : 1);
     if (redo != 0)
         tb__lanes_redo(q, L, invI, h, n, 1, &p);
+}
+
+/* A splitting kernel for a block of n bodies with their frames (f, or
+   NULL: from invI, in a loop of its own). A block of more than one body
+   and of no multiple of TB__GROUP is padded to the next one with copies of
+   its first body: every lane does the arithmetic of one body whatever its
+   neighbours, so the real lanes get the same bits. */
+TB__LANE void tb__split_unpadded(double *restrict q, const double *restrict L, const double *restrict invI,
+                                 const tb__lane_frames *f, double h, int n, int accurate)
+{
+    double frame[4][TB__LANES];
+    int i;
+    if (!f) {
+        TB__EACH_LANE(i, n, tb__frame_put(invI + 3 * i, &frame[0][i], &frame[1][i], &frame[2][i], &frame[3][i]));
+        if (accurate)
+            tb__accurate_lanes_t(q, L, invI, frame[0], frame[1], frame[2], frame[3], h, n);
+        else
+            tb__split2_lanes_t(q, L, invI, frame[0], frame[1], frame[2], frame[3], h, n);
+    } else if (accurate) {
+        tb__accurate_lanes_t(q, L, invI, f->a, f->ca, f->cb, f->code, h, n);
+    } else {
+        tb__split2_lanes_t(q, L, invI, f->a, f->ca, f->cb, f->code, h, n);
+    }
+}
+
+TB__LANE void tb__split_block(double *restrict q, const double *restrict L, const double *restrict invI,
+                              const tb__lane_frames *f, double h, int n, int accurate)
+{
+    int i;
+    if (n > 1 && n % TB__GROUP != 0) {
+        const int m = (n / TB__GROUP + 1) * TB__GROUP;
+        double qp[4 * TB__LANES], Lp[3 * TB__LANES], ip[3 * TB__LANES], fp[4][TB__LANES];
+        tb__lane_frames padded;
+        int k;
+        for (i = 0; i < m; ++i) {
+            const int from = i < n ? i : 0;
+            for (k = 0; k < 4; ++k)
+                qp[4 * i + k] = q[4 * from + k];
+            for (k = 0; k < 3; ++k) {
+                Lp[3 * i + k] = L[3 * from + k];
+                ip[3 * i + k] = invI[3 * from + k];
+            }
+            if (f)
+                fp[0][i] = f->a[from], fp[1][i] = f->ca[from], fp[2][i] = f->cb[from], fp[3][i] = f->code[from];
+        }
+        padded.a = fp[0], padded.ca = fp[1], padded.cb = fp[2], padded.code = fp[3];
+        tb__split_unpadded(qp, Lp, ip, f ? &padded : NULL, h, m, accurate);
+        for (i = 0; i < 4 * n; ++i)
+            q[i] = qp[i];
+    } else {
+        tb__split_unpadded(q, L, invI, f, h, n, accurate);
+    }
 }
 
 /* ------------------------------------------------ instruction sets -- */
@@ -746,13 +884,15 @@ TB__LANE void tb__accurate_lanes_t(double *restrict q, const double *restrict L,
     {                                                                                                   \
         tb__frozen_lanes_t(q, L, invI, h, n);                                                           \
     }                                                                                                   \
-    attr static void tb__split2_##isa(double *q, const double *L, const double *invI, double h, int n)  \
+    attr static void tb__split2_##isa(double *q, const double *L, const double *invI,                   \
+                                      const tb__lane_frames *f, double h, int n)                        \
     {                                                                                                   \
-        tb__split2_lanes_t(q, L, invI, h, n);                                                           \
+        tb__split_block(q, L, invI, f, h, n, 0);                                                        \
     }                                                                                                   \
-    attr static void tb__accurate_##isa(double *q, const double *L, const double *invI, double h, int n) \
+    attr static void tb__accurate_##isa(double *q, const double *L, const double *invI,                 \
+                                        const tb__lane_frames *f, double h, int n)                      \
     {                                                                                                   \
-        tb__accurate_lanes_t(q, L, invI, h, n);                                                         \
+        tb__split_block(q, L, invI, f, h, n, 1);                                                        \
     }
 
 TB__KERNELS(portable, )
@@ -799,12 +939,24 @@ void tb__frozen_lanes(double *q, const double *L, const double *invI, double h, 
 
 void tb__split2_lanes(double *q, const double *L, const double *invI, double h, int n, int isa)
 {
-    TB__DISPATCH(split2, (q, L, invI, h, n));
+    TB__DISPATCH(split2, (q, L, invI, NULL, h, n));
 }
 
 void tb__accurate_lanes(double *q, const double *L, const double *invI, double h, int n, int isa)
 {
-    TB__DISPATCH(accurate, (q, L, invI, h, n));
+    TB__DISPATCH(accurate, (q, L, invI, NULL, h, n));
+}
+
+void tb__split2_lanes_framed(double *q, const double *L, const double *invI, const tb__lane_frames *frame, double h,
+                             int n, int isa)
+{
+    TB__DISPATCH(split2, (q, L, invI, frame, h, n));
+}
+
+void tb__accurate_lanes_framed(double *q, const double *L, const double *invI, const tb__lane_frames *frame,
+                               double h, int n, int isa)
+{
+    TB__DISPATCH(accurate, (q, L, invI, frame, h, n));
 }
 
 /* --------------------------------------------------------- one body -- */
@@ -819,7 +971,7 @@ void tb__accurate_lanes(double *q, const double *L, const double *invI, double h
 void tb__rotation_split2(double q[4], const double L[3], const double invI[3], double h)
 {
     if (TB__NEAR_UNIT(q))
-        tb__split2_portable(q, L, invI, h, 1);
+        tb__split2_portable(q, L, invI, NULL, h, 1);
     else
         tb__split_general(q, L, invI, h, 0);
 }
@@ -827,7 +979,7 @@ void tb__rotation_split2(double q[4], const double L[3], const double invI[3], d
 void tb__rotation_accurate(double q[4], const double L[3], const double invI[3], double h)
 {
     if (TB__NEAR_UNIT(q))
-        tb__accurate_portable(q, L, invI, h, 1);
+        tb__accurate_portable(q, L, invI, NULL, h, 1);
     else
         tb__split_general(q, L, invI, h, 1);
 }

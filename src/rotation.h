@@ -123,11 +123,24 @@ void tb__frozen_lanes(double *q, const double *L, const double *invI, double h, 
 void tb__split2_lanes(double *q, const double *L, const double *invI, double h, int n, int isa);
 void tb__accurate_lanes(double *q, const double *L, const double *invI, double h, int n, int isa);
 
+/* The lanes' relabelling of a body (rotation.c), which they otherwise work
+   out from invI at every step: the rates a, c_A, c_B and a code for the
+   axes. The world keeps these four numbers for each body, one array each,
+   and passes the block's pointers in a tb__lane_frames below; the kernels
+   then give the same bits as above, without the relabelling's arithmetic. */
+void tb__lane_frame_of(const double invI[3], double *a, double *ca, double *cb, double *code);
+typedef struct tb__lane_frames {
+    const double *a, *ca, *cb, *code;
+} tb__lane_frames;
+void tb__split2_lanes_framed(double *q, const double *L, const double *invI, const tb__lane_frames *frame, double h,
+                             int n, int isa);
+void tb__accurate_lanes_framed(double *q, const double *L, const double *invI, const tb__lane_frames *frame,
+                               double h, int n, int isa);
+
 /* How the splitting kernels relabel a body's axes (rotation.c): which
-   play A, middle and B, and the rates. The lanes work it out at every
-   step from invI (cheaper than loading it); the general path and the
-   world's isotropic test read it from here (tb__split_frame_of, once per
-   body). */
+   play A, middle and B, and the rates. The lanes read it as
+   tb__lane_frame_of gives it (above); the general path and the world's
+   isotropic test read it from here (tb__split_frame_of, once per body). */
 typedef struct tb__split_frame {
     double a;            /* 1/(kg m^2): inverse middle moment, the rate of the turn about L per |L| */
     double ca, cb;       /* invI_A - a, invI_B - a, with |ca| >= |cb| */

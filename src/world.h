@@ -173,6 +173,9 @@ struct tb_world {
                                  callbacks */
     tb__split_frame *body_frame; /* [body_cap] the axes and rates the rotation
                                  kernels need, fixed by the moments */
+    double *body_lane_frame[4]; /* [body_cap] each: the same as the splitting
+                                 lanes read it, one array per number
+                                 (tb__lane_frame_of) */
     double *body_rest;        /* [body_cap] s: how long the body has been slow
                                  (sleep.c) */
     uint32_t *body_island;    /* [body_cap] the sleeping island it is in; 0: awake */

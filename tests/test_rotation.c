@@ -672,15 +672,18 @@ static void lane_body(unsigned long long *s, int k, double q[4], double L[3], do
 static void lanes_match_one_body(int isa)
 {
     enum { N = 3 * TB__LANES + 5, STEPS = 50 };
-    static double q[N][4], L[N][3], invI[N][3], one[N][4];
+    static double q[N][4], L[N][3], invI[N][3], one[N][4], frame[4][N];
     unsigned long long seed = 42;
     int kind, k, s;
-    for (kind = 0; kind < 4; ++kind) {
+    /* kinds 4 and 5: split2 and accurate with the world's frames
+       (rotation.h) */
+    for (kind = 0; kind < 6; ++kind) {
         for (k = 0; k < N; ++k) {
             lane_body(&seed, k, q[k], L[k], invI[k]);
             if (kind == 0) /* the isotropic kernel reads invI[0] alone */
                 invI[k][1] = invI[k][2] = invI[k][0];
             memcpy(one[k], q[k], sizeof one[k]);
+            tb__lane_frame_of(invI[k], &frame[0][k], &frame[1][k], &frame[2][k], &frame[3][k]);
         }
         for (s = 0; s < STEPS; ++s) {
             const double h = s % 7 == 3 ? -1.0 / 60 : 1.0 / 60;
@@ -693,14 +696,22 @@ static void lanes_match_one_body(int isa)
                     tb__frozen_lanes(q[b], L[b], invI[b], h, n, isa);
                 else if (kind == 2)
                     tb__split2_lanes(q[b], L[b], invI[b], h, n, isa);
-                else
+                else if (kind == 3)
                     tb__accurate_lanes(q[b], L[b], invI[b], h, n, isa);
+                else {
+                    tb__lane_frames f;
+                    f.a = frame[0] + b, f.ca = frame[1] + b, f.cb = frame[2] + b, f.code = frame[3] + b;
+                    if (kind == 4)
+                        tb__split2_lanes_framed(q[b], L[b], invI[b], &f, h, n, isa);
+                    else
+                        tb__accurate_lanes_framed(q[b], L[b], invI[b], &f, h, n, isa);
+                }
             }
             for (k = 0; k < N; ++k) {
                 if (kind == 0)
                     tb__rotation_isotropic(one[k], L[k], invI[k][0], h);
                 else
-                    kernels[kind - 1].step(one[k], L[k], invI[k], h);
+                    kernels[kind < 4 ? kind - 1 : kind - 3].step(one[k], L[k], invI[k], h);
             }
         }
         for (k = 0; k < N; ++k)
@@ -811,6 +822,60 @@ static void fast_paths_give_the_general_bits(void **state)
         }
 }
 
+/* A world turns its free bodies by the lanes with the frames it keeps
+   (rotation.h), and verlet does kick, drift and kick in one sweep
+   (integrators.c): each body gets the bits of the one-body kernel, full
+   blocks and a partial one, through steps of two sizes. */
+static void world_turns_give_the_one_body_bits(void **state)
+{
+    enum { N = 2 * TB__LANES + 5, STEPS = 40 };
+    static const char *const methods[2] = { "verlet", "verlet_exact" };
+    static double q[N][4], L[N][3], invI[N][3];
+    int m;
+    (void)state;
+    for (m = 0; m < 2; ++m) {
+        tb_world_def def = tb_default_world_def();
+        tb_world *w;
+        unsigned long long seed = 11;
+        const double *wq;
+        int k, i, s;
+        def.integrator = methods[m];
+        def.gravity[2] = 0;
+        assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+        for (k = 0; k < N; ++k) {
+            tb_body_def b = tb_default_body_def();
+            double a[3], qk[4], lk[3], ik[3];
+            lane_body(&seed, k, qk, lk, ik);
+            memcpy(b.orientation, qk, sizeof qk);
+            for (i = 0; i < 3; ++i) /* a box, isotropic for k % 6 = 5, a top for 4 */
+                a[i] = k % 6 == 5 ? 1 : 0.25 + uniform(&seed);
+            if (k % 6 == 4)
+                a[1] = a[0];
+            b.mass.inertia[0] = (a[1] * a[1] + a[2] * a[2]) / 12;
+            b.mass.inertia[1] = (a[0] * a[0] + a[2] * a[2]) / 12;
+            b.mass.inertia[2] = (a[0] * a[0] + a[1] * a[1]) / 12;
+            for (i = 0; i < 3; ++i) {
+                b.angular_velocity[i] = lk[i] * (k % 11 == 5 ? 4 : 1); /* some beyond the polynomials */
+                invI[k][i] = 1 / b.mass.inertia[i];
+            }
+            assert_int_equal(tb_world_add_body(w, &b, NULL), TB_OK);
+            assert_int_equal(tb_body_momentum(w, tb_world_body_at(w, (size_t)k), NULL, L[k]), TB_OK);
+            memcpy(q[k], tb_world_body_orientations(w) + 4 * k, sizeof q[k]);
+        }
+        for (s = 0; s < STEPS; ++s) {
+            const double h = s >= 20 && s < 25 ? 1.0 / 30 : 1.0 / 60;
+            assert_int_equal(tb_world_step(w, h), TB_OK);
+            for (k = 0; k < N; ++k)
+                kernels[m + 1].step(q[k], L[k], invI[k], h);
+        }
+        wq = tb_world_body_orientations(w);
+        for (k = 0; k < N; ++k)
+            assert_memory_equal(wq + 4 * k, q[k], sizeof q[k]);
+        print_message("%-12s the one-body bits for %d bodies\n", methods[m], N);
+        tb_world_destroy(w);
+    }
+}
+
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(reference_converges),
     cmocka_unit_test(isotropic_bodies_rotate_exactly),
@@ -827,6 +892,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(large_steps_stay_exact),
     cmocka_unit_test(lanes_give_the_one_body_bits),
     cmocka_unit_test(fast_paths_give_the_general_bits),
+    cmocka_unit_test(world_turns_give_the_one_body_bits),
 };
 
 TB_TEST_MAIN(tests)
