@@ -191,18 +191,26 @@ static void sort_keys(tb__key *keys, tb__key *scratch, size_t n)
         memcpy(out, keys, n * sizeof *keys);
 }
 
-/* Last step's entry between the keys: among key_a's few, where they
-   start in key order. */
+/* Last step's entry between the keys: a binary search among key_a's
+   entries, from where they start in key order (a shape has a few; a plane
+   may have thousands). */
 static const tb__entry *previous_entry(const tb__contacts *c, uint32_t key_a, uint32_t key_b)
 {
     const uint64_t key = key_of(key_a, key_b);
-    size_t i;
+    size_t lo, hi;
     if ((size_t)key_a + 1 >= c->previous_starts_count)
         return NULL;
-    for (i = c->previous_starts[key_a]; i < c->previous_starts[key_a + 1]; ++i)
-        if (c->previous_order[i].key >= key)
-            return c->previous_order[i].key == key ? &c->previous[c->previous_order[i].index] : NULL;
-    return NULL;
+    lo = c->previous_starts[key_a], hi = c->previous_starts[key_a + 1];
+    while (lo < hi) {
+        const size_t mid = (lo + hi) / 2;
+        if (c->previous_order[mid].key < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < c->previous_starts[key_a + 1] && c->previous_order[lo].key == key
+               ? &c->previous[c->previous_order[lo].index]
+               : NULL;
 }
 
 static void tangents(const double n[3], double t1[3], double t2[3])
