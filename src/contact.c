@@ -768,6 +768,32 @@ static void load_bodies(tb_world *w, tb__contacts *c)
 
 /* ---- batches ----------------------------------------------------------------- */
 
+/* The highest and the lowest set bit of x != 0 (one instruction each where
+   the compiler has them: the colouring scanned 64 bits an entry). */
+static int highest_bit(uint64_t x)
+{
+#if defined(__GNUC__)
+    return 63 - __builtin_clzll(x);
+#else
+    int n = 0;
+    while (x >>= 1)
+        ++n;
+    return n;
+#endif
+}
+
+static int lowest_bit(uint64_t x)
+{
+#if defined(__GNUC__)
+    return __builtin_ctzll(x);
+#else
+    int n = 0;
+    while (!(x & 1))
+        x >>= 1, ++n;
+    return n;
+#endif
+}
+
 /* Colour the entries to solve (in key order) so that no two of a colour
    share a moving body, or give one TB__COLOURS (a batch of its own) when
    no colour is free at both its bodies. Then room for the batches,
@@ -798,13 +824,9 @@ static tb_status colour_entries(tb_world *w, tb__contacts *c)
            loop over the entries would, so weight still reaches down a
            stack within a pair of sweeps; past the last colour, the lowest
            free one */
-        colour = TB__COLOURS;
-        while (colour > 0 && !(used >> (colour - 1) & 1))
-            --colour;
+        colour = used ? highest_bit(used) + 1 : 0;
         if (colour == TB__COLOURS)
-            colour = 0;
-        while (colour < TB__COLOURS && (used >> colour & 1))
-            ++colour;
+            colour = ~used ? lowest_bit(~used) : TB__COLOURS;
         if (colour < TB__COLOURS) {
             if (e->body_a >= 0)
                 c->colours[e->body_a] |= (uint64_t)1 << colour;
