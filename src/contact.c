@@ -978,12 +978,13 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
 }
 
 /* Lane k's targets, levers and warm-start impulses, its rows set up. */
-static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double fraction)
+static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double fraction, size_t *cold)
 {
     tb__entry *e = bt->source[k];
     double lever = 0;
     int j, d, impacts = 0;
     for (j = 0; j < bt->points && bt->point[j].source[k]; ++j) {
+        *cold += !bt->point[j].source[k]->matched;
         impacts += set_up_point(c, e, bt->point[j].source[k], bt, k, j, h, fraction);
         lever += bt->point[j].lever[k];
     }
@@ -998,8 +999,9 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
 /* The touching entries into batches: by colour, and within a colour by
    how many points touch, most first, so that a batch's lanes mostly have
    as many points as its first; each lane's touching points packed. Then
-   their rows, in lanes, and their targets. */
-static void set_up_batches(tb__contacts *c, double h)
+   their rows, in lanes, and their targets. Counts the touching points,
+   and those without last step's impulses (cold). */
+static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t *cold)
 {
     enum { CLASSES = TB__MANIFOLD_POINTS, BUCKETS = (TB__COLOURS + 1) * CLASSES };
     const tb_contact_settings *s = &c->settings;
@@ -1015,6 +1017,7 @@ static void set_up_batches(tb__contacts *c, double h)
         /* (make_events sets touching again after the solve) */
         if ((e->touching = predict_points(c, e)) > 0)
             start[e->colour * CLASSES + CLASSES - e->touching + 1]++;
+        *points += (size_t)e->touching;
     }
     for (i = 0; i < BUCKETS; ++i)
         start[i + 1] += start[i];
@@ -1046,7 +1049,7 @@ static void set_up_batches(tb__contacts *c, double h)
     for (i = 0; i < c->batch_count; ++i)
         for (k = 0; k < TB__BATCH_LANES; ++k)
             if (c->batches[i].source[k])
-                set_up_lane(c, &c->batches[i], k, h, fraction);
+                set_up_lane(c, &c->batches[i], k, h, fraction, cold);
 }
 
 /* Runs body for every point p of every lane k of every batch bt, in batch
@@ -1217,17 +1220,16 @@ void tb__contacts_solve(tb_world *w, double h)
 {
     tb__contacts *c = w->contacts;
     size_t points = 0, cold = 0;
-    int it, iterations, k;
+    int it, iterations;
     if (!c->prepared)
         return;
     tb__sleep_restore(w, c);
     load_bodies(w, c);
-    set_up_batches(c, h);
+    set_up_batches(c, h, &points, &cold);
     tb__push_impulses(c->batches, c->batch_count, c->velocity, TB__PUSH_VELOCITY, c->isa);
     /* a contact without last step's impulses to start from needs more
        sweeps to reach them: a stack built at rest would otherwise sink and
        lean in its first steps */
-    EACH_LANE_POINT(c, bt, p, k, (points++, cold += !p->source[k]->matched));
     iterations = c->settings.velocity_iterations * (8 * cold > points ? 4 : 1);
     for (it = 0; it < iterations; ++it)
         tb__sweep_velocities(c->batches, c->batch_count, c->velocity, it & 1, c->isa);
