@@ -836,8 +836,8 @@ static tb_status colour_entries(tb_world *w, tb__contacts *c)
         e->colour = colour;
         count[colour]++;
     }
-    for (k = 0; k < TB__COLOURS; ++k)
-        batches += (count[k] + TB__BATCH_LANES - 1) / TB__BATCH_LANES;
+    for (k = 0; k < TB__COLOURS; ++k) /* (+1: those against the static world apart) */
+        batches += count[k] ? (count[k] + TB__BATCH_LANES - 1) / TB__BATCH_LANES + 1 : 0;
     batches += count[TB__COLOURS];
     return tb__contacts_reserve(w, (void **)&c->batches, &c->batch_cap, batches + 1, sizeof *c->batches);
 }
@@ -996,19 +996,28 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
     bt->impulse[2][k] = impacts ? 0 : e->twist_impulse;
 }
 
-/* The touching entries into batches: by colour, and within a colour by
+/* An entry's place among the batches: by colour, then against the static
+   world (side a) or not, then by how many points touch, most first. */
+static size_t bucket_of(const tb__entry *e)
+{
+    return ((size_t)e->colour * 2 + (e->body_a < 0)) * TB__MANIFOLD_POINTS + TB__MANIFOLD_POINTS - (size_t)e->touching;
+}
+
+/* The touching entries into batches: by colour, and within a colour those
+   against the static world apart (the sweeps skip their side a), and by
    how many points touch, most first, so that a batch's lanes mostly have
    as many points as its first; each lane's touching points packed. Then
    their rows, in lanes, and their targets. Counts the touching points,
    and those without last step's impulses (cold). */
 static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t *cold)
 {
-    enum { CLASSES = TB__MANIFOLD_POINTS, BUCKETS = (TB__COLOURS + 1) * CLASSES };
+    enum { CLASSES = TB__MANIFOLD_POINTS, BUCKETS = (TB__COLOURS + 1) * 2 * CLASSES };
     const tb_contact_settings *s = &c->settings;
     const double omega = 2 * 3.14159265358979323846 * s->hertz;
     const double fraction = fmin(1, h * omega / (2 * s->damping_ratio + h * omega));
     size_t start[BUCKETS + 1] = { 0 }, i, n = 0;
-    int last_colour = -1, lane = TB__BATCH_LANES, k;
+    size_t last = SIZE_MAX; /* the last batch's colour and side */
+    int lane = TB__BATCH_LANES, k;
     tb__batch *bt = NULL;
     for (i = 0; i < c->entry_count; ++i) {
         tb__entry *e = &c->entries[c->order[i].index];
@@ -1016,7 +1025,7 @@ static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t *co
             continue;
         /* (make_events sets touching again after the solve) */
         if ((e->touching = predict_points(c, e)) > 0)
-            start[e->colour * CLASSES + CLASSES - e->touching + 1]++;
+            start[bucket_of(e) + 1]++;
         *points += (size_t)e->touching;
     }
     for (i = 0; i < BUCKETS; ++i)
@@ -1025,14 +1034,14 @@ static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t *co
         const uint32_t index = c->order[i].index;
         const tb__entry *e = &c->entries[index];
         if (e->colour >= 0 && e->touching) {
-            c->bucket[start[e->colour * CLASSES + CLASSES - e->touching]++] = index;
+            c->bucket[start[bucket_of(e)]++] = index;
             ++n;
         }
     }
     c->batch_count = 0;
     for (i = 0; i < n; ++i) {
         tb__entry *e = &c->entries[c->bucket[i]];
-        if (lane == TB__BATCH_LANES || e->colour != last_colour || e->colour == TB__COLOURS) {
+        if (lane == TB__BATCH_LANES || bucket_of(e) / CLASSES != last || e->colour == TB__COLOURS) {
             /* a new batch: its first lane has the most points; empty lanes
                are on the static world */
             bt = &c->batches[c->batch_count++];
@@ -1040,7 +1049,8 @@ static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t *co
             for (k = 0; k < TB__BATCH_LANES; ++k)
                 bt->inv_world_a[k] = bt->inv_world_b[k] = no_inertia;
             bt->points = e->touching;
-            last_colour = e->colour;
+            bt->one_sided = e->body_a < 0;
+            last = bucket_of(e) / CLASSES;
             lane = 0;
         }
         place_lane(c, e, bt, lane++);

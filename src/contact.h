@@ -74,6 +74,8 @@ typedef struct tb__lane_point {
 typedef struct tb__batch {
     int32_t a[TB__BATCH_LANES], b[TB__BATCH_LANES];
     int points;                         /* the most points of any lane */
+    int one_sided;                      /* every lane's a is the static world: the sweeps
+                                           skip side a (a plane's contacts) */
     double dir[3][3][TB__BATCH_LANES];  /* [row][axis][lane]: the manifold's normal, tangents */
     double friction[TB__BATCH_LANES];
     /* the friction patch: rows 0 and 1 along the tangents at the centre,

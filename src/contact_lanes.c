@@ -121,77 +121,90 @@ TB__LANE void scatter_lanes(const int32_t *body, double *m, const double (*v)[W]
 }
 
 /* wide: by rows (AVX-512 only; a constant where it is inlined) */
-TB__LANE void gather(const tb__batch *bt, const double *m, sides *s, int wide)
+TB__LANE void gather(const tb__batch *bt, const double *m, sides *s, int wide, int one)
 {
 #if TB__ROWS
     if (wide) {
-        gather_rows(bt->a, m, s->va, s->wa, s->ma);
+        if (!one)
+            gather_rows(bt->a, m, s->va, s->wa, s->ma);
         gather_rows(bt->b, m, s->vb, s->wb, s->mb);
         return;
     }
 #endif
     (void)wide;
-    gather_lanes(bt->a, m, s->va, s->wa, s->ma);
+    if (!one)
+        gather_lanes(bt->a, m, s->va, s->wa, s->ma);
     gather_lanes(bt->b, m, s->vb, s->wb, s->mb);
 }
 
 /* Back in lane order. Lanes on the static world (0) write its zeros back:
    it has no inverse mass and its rows no turn, so nothing moved it. */
-TB__LANE void scatter(const tb__batch *bt, double *m, const sides *s, int wide)
+TB__LANE void scatter(const tb__batch *bt, double *m, const sides *s, int wide, int one)
 {
 #if TB__ROWS
     if (wide) {
-        scatter_rows(bt->a, m, (const double(*)[W])s->va, (const double(*)[W])s->wa, s->ma);
+        if (!one)
+            scatter_rows(bt->a, m, (const double(*)[W])s->va, (const double(*)[W])s->wa, s->ma);
         scatter_rows(bt->b, m, (const double(*)[W])s->vb, (const double(*)[W])s->wb, s->mb);
         return;
     }
 #endif
     (void)wide;
-    scatter_lanes(bt->a, m, (const double(*)[W])s->va, (const double(*)[W])s->wa);
+    if (!one)
+        scatter_lanes(bt->a, m, (const double(*)[W])s->va, (const double(*)[W])s->wa);
     scatter_lanes(bt->b, m, (const double(*)[W])s->vb, (const double(*)[W])s->wb);
 }
 
 /* Lane k's relative velocity along a row with direction dir (or none, for
    the twist) and arms arm_a, arm_b ([axis][lane]): three dot products
    summed as a tree, so that the sweep's chain of dependent operations
-   (each row waits for the last one's push) stays short. */
+   (each row waits for the last one's push) stays short. one: a batch
+   whose every a is the static world (tb__batch), its terms left out (the
+   same values: they are zeros). */
 #define DOT3(x, y, k) ((x)[0][k] * (y)[0][k] + (x)[1][k] * (y)[1][k] + (x)[2][k] * (y)[2][k])
-#define LINEAR(dir, s, k)                                                                        \
-    ((dir)[0][k] * ((s)->vb[0][k] - (s)->va[0][k]) + (dir)[1][k] * ((s)->vb[1][k] - (s)->va[1][k]) + \
-     (dir)[2][k] * ((s)->vb[2][k] - (s)->va[2][k]))
-#define ANGULAR(arm_a, arm_b, s, k) (DOT3(arm_b, (s)->wb, k) - DOT3(arm_a, (s)->wa, k))
-#define RATE(dir, arm_a, arm_b, s, k) (LINEAR(dir, s, k) + ANGULAR(arm_a, arm_b, s, k))
+#define LINEAR(dir, s, k, one)                                                                        \
+    ((one) ? (dir)[0][k] * (s)->vb[0][k] + (dir)[1][k] * (s)->vb[1][k] + (dir)[2][k] * (s)->vb[2][k]        \
+           : (dir)[0][k] * ((s)->vb[0][k] - (s)->va[0][k]) + (dir)[1][k] * ((s)->vb[1][k] - (s)->va[1][k]) + \
+                 (dir)[2][k] * ((s)->vb[2][k] - (s)->va[2][k]))
+#define ANGULAR(arm_a, arm_b, s, k, one) \
+    ((one) ? DOT3(arm_b, (s)->wb, k) : DOT3(arm_b, (s)->wb, k) - DOT3(arm_a, (s)->wa, k))
+#define RATE(dir, arm_a, arm_b, s, k, one) (LINEAR(dir, s, k, one) + ANGULAR(arm_a, arm_b, s, k, one))
 
 /* An impulse l on lane k along a row: -l on a, +l on b; the linear part
    along dir (skipped for the twist, LINEAR_PUSH 0), the turn along
    turn_a, turn_b. (Written out: a loop over the axes inside the loop over
    lanes keeps GCC from vectorising the lanes.) */
-#define ANGULAR_PUSH(turn_a, turn_b, s, k, l)  \
-    do {                                       \
-        (s)->wa[0][k] -= (l) * (turn_a)[0][k]; \
-        (s)->wa[1][k] -= (l) * (turn_a)[1][k]; \
-        (s)->wa[2][k] -= (l) * (turn_a)[2][k]; \
-        (s)->wb[0][k] += (l) * (turn_b)[0][k]; \
-        (s)->wb[1][k] += (l) * (turn_b)[1][k]; \
-        (s)->wb[2][k] += (l) * (turn_b)[2][k]; \
+#define ANGULAR_PUSH(turn_a, turn_b, s, k, l, one) \
+    do {                                           \
+        if (!(one)) {                              \
+            (s)->wa[0][k] -= (l) * (turn_a)[0][k]; \
+            (s)->wa[1][k] -= (l) * (turn_a)[1][k]; \
+            (s)->wa[2][k] -= (l) * (turn_a)[2][k]; \
+        }                                          \
+        (s)->wb[0][k] += (l) * (turn_b)[0][k];     \
+        (s)->wb[1][k] += (l) * (turn_b)[1][k];     \
+        (s)->wb[2][k] += (l) * (turn_b)[2][k];     \
     } while (0)
-#define PUSH(dir, turn_a, turn_b, s, k, l)                           \
-    do {                                                             \
-        const double la_ = (l) * (s)->ma[k], lb_ = (l) * (s)->mb[k]; \
-        (s)->va[0][k] -= la_ * (dir)[0][k];                          \
-        (s)->va[1][k] -= la_ * (dir)[1][k];                          \
-        (s)->va[2][k] -= la_ * (dir)[2][k];                          \
-        (s)->vb[0][k] += lb_ * (dir)[0][k];                          \
-        (s)->vb[1][k] += lb_ * (dir)[1][k];                          \
-        (s)->vb[2][k] += lb_ * (dir)[2][k];                          \
-        ANGULAR_PUSH(turn_a, turn_b, s, k, l);                       \
+#define PUSH(dir, turn_a, turn_b, s, k, l, one)       \
+    do {                                              \
+        const double lb_ = (l) * (s)->mb[k];          \
+        if (!(one)) {                                 \
+            const double la_ = (l) * (s)->ma[k];      \
+            (s)->va[0][k] -= la_ * (dir)[0][k];       \
+            (s)->va[1][k] -= la_ * (dir)[1][k];       \
+            (s)->va[2][k] -= la_ * (dir)[2][k];       \
+        }                                             \
+        (s)->vb[0][k] += lb_ * (dir)[0][k];           \
+        (s)->vb[1][k] += lb_ * (dir)[1][k];           \
+        (s)->vb[2][k] += lb_ * (dir)[2][k];           \
+        ANGULAR_PUSH(turn_a, turn_b, s, k, l, one);   \
     } while (0)
 
 /* The friction patch of every lane: the two tangent rows at the centre,
    within the circle mu times the manifold's normal impulse, then the
    twist within that times the twist reach. An empty lane has zero
    masses and friction, so its impulses stay 0. */
-TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s)
+TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s, int one)
 {
     double t0[W], t1[W], len2[W], limit[W], limit2[W];
     int k, j, outside = 0;
@@ -202,8 +215,8 @@ TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s)
             limit[k] += bt->point[j].impulse[k];
     for (k = 0; k < W; ++k) {
         limit[k] *= bt->friction[k];
-        t0[k] = bt->impulse[0][k] - bt->mass[0][k] * RATE(bt->dir[1], bt->arm_a[0], bt->arm_b[0], s, k);
-        t1[k] = bt->impulse[1][k] - bt->mass[1][k] * RATE(bt->dir[2], bt->arm_a[1], bt->arm_b[1], s, k);
+        t0[k] = bt->impulse[0][k] - bt->mass[0][k] * RATE(bt->dir[1], bt->arm_a[0], bt->arm_b[0], s, k, one);
+        t1[k] = bt->impulse[1][k] - bt->mass[1][k] * RATE(bt->dir[2], bt->arm_a[1], bt->arm_b[1], s, k, one);
         len2[k] = t0[k] * t0[k] + t1[k] * t1[k];
         limit2[k] = limit[k] * limit[k];
     }
@@ -223,8 +236,8 @@ TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s)
         }
     for (k = 0; k < W; ++k) {
         const double d0 = t0[k] - bt->impulse[0][k], d1 = t1[k] - bt->impulse[1][k];
-        PUSH(bt->dir[1], bt->turn_a[0], bt->turn_b[0], s, k, d0);
-        PUSH(bt->dir[2], bt->turn_a[1], bt->turn_b[1], s, k, d1);
+        PUSH(bt->dir[1], bt->turn_a[0], bt->turn_b[0], s, k, d0, one);
+        PUSH(bt->dir[2], bt->turn_a[1], bt->turn_b[1], s, k, d1, one);
         bt->impulse[0][k] = t0[k], bt->impulse[1][k] = t1[k];
     }
     /* a batch of one-point manifolds (its first lane has the most points)
@@ -232,25 +245,25 @@ TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s)
     if (bt->points > 1)
         for (k = 0; k < W; ++k) {
             const double reach = limit[k] * bt->twist_reach[k];
-            double twist = bt->impulse[2][k] - bt->mass[2][k] * ANGULAR(bt->dir[0], bt->dir[0], s, k), dt;
+            double twist = bt->impulse[2][k] - bt->mass[2][k] * ANGULAR(bt->dir[0], bt->dir[0], s, k, one), dt;
             twist = twist > reach ? reach : twist < -reach ? -reach : twist;
             dt = twist - bt->impulse[2][k];
-            ANGULAR_PUSH(bt->turn_a[2], bt->turn_b[2], s, k, dt);
+            ANGULAR_PUSH(bt->turn_a[2], bt->turn_b[2], s, k, dt, one);
             bt->impulse[2][k] = twist;
         }
 }
 
 /* One point of every lane: its normal row, v_n >= target. A lane without
    this point has zero masses, so its impulse stays 0. */
-TB__LANE void normal_point(const tb__batch *restrict bt, tb__lane_point *restrict p, sides *restrict s)
+TB__LANE void normal_point(const tb__batch *restrict bt, tb__lane_point *restrict p, sides *restrict s, int one)
 {
     int k;
     for (k = 0; k < W; ++k) {
-        double total = p->impulse[k] - p->mass[k] * (RATE(bt->dir[0], p->arm_a, p->arm_b, s, k) - p->target[k]);
+        double total = p->impulse[k] - p->mass[k] * (RATE(bt->dir[0], p->arm_a, p->arm_b, s, k, one) - p->target[k]);
         double dn;
         total = total > 0 ? total : 0;
         dn = total - p->impulse[k];
-        PUSH(bt->dir[0], p->turn_a, p->turn_b, s, k, dn);
+        PUSH(bt->dir[0], p->turn_a, p->turn_b, s, k, dn, one);
         p->impulse[k] = total;
     }
 }
@@ -258,41 +271,61 @@ TB__LANE void normal_point(const tb__batch *restrict bt, tb__lane_point *restric
 /* One point of every lane in the position pass: the normal row only, on
    (dp, dtheta), toward push_target; a row that never pushed and is not
    short of its target is left alone. */
-TB__LANE void position_point(const tb__batch *restrict bt, tb__lane_point *restrict p, sides *restrict s)
+TB__LANE void position_point(const tb__batch *restrict bt, tb__lane_point *restrict p, sides *restrict s,
+                             int one)
 {
     int k;
     for (k = 0; k < W; ++k) {
-        const double now = p->predicted[k] + RATE(bt->dir[0], p->arm_a, p->arm_b, s, k);
+        const double now = p->predicted[k] + RATE(bt->dir[0], p->arm_a, p->arm_b, s, k, one);
         const double old = p->position_impulse[k];
         double total = old - p->mass[k] * (now - p->push_target[k]);
         double dn;
         total = total > 0 ? total : 0;
         total = now >= p->push_target[k] && old == 0 ? 0 : total; /* idle */
         dn = total - p->position_impulse[k];
-        PUSH(bt->dir[0], p->turn_a, p->turn_b, s, k, dn);
+        PUSH(bt->dir[0], p->turn_a, p->turn_b, s, k, dn, one);
         p->position_impulse[k] = total;
     }
 }
 
+TB__LANE void velocity_batch(tb__batch *bt, double *m, int backwards, int wide, int one)
+{
+    sides s;
+    int j;
+    gather(bt, m, &s, wide, one);
+    /* a backward sweep is the forward one reversed, row by row (its
+       friction last): a pair of sweeps is then symmetric Gauss-Seidel,
+       which leans a tall stack less than friction first both ways */
+    if (!backwards)
+        friction_patch(bt, &s, one);
+    for (j = 0; j < bt->points; ++j)
+        normal_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s, one);
+    if (backwards)
+        friction_patch(bt, &s, one);
+    scatter(bt, m, &s, wide, one);
+}
+
+/* (each batch through one of two copies, with and without side a) */
 TB__LANE void velocity_batches(tb__batch *batches, size_t n, double *m, int backwards, int wide)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
         tb__batch *bt = &batches[backwards ? n - 1 - i : i];
-        sides s;
-        int j;
-        gather(bt, m, &s, wide);
-        /* a backward sweep is the forward one reversed, row by row (its
-           friction last): a pair of sweeps is then symmetric Gauss-Seidel,
-           which leans a tall stack less than friction first both ways */
-        if (!backwards)
-            friction_patch(bt, &s);
-        for (j = 0; j < bt->points; ++j)
-            normal_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s);
-        if (backwards)
-            friction_patch(bt, &s);
-        scatter(bt, m, &s, wide);
+        if (bt->one_sided)
+            velocity_batch(bt, m, backwards, wide, 1);
+        else
+            velocity_batch(bt, m, backwards, wide, 0);
     }
+}
+
+TB__LANE void position_batch(tb__batch *bt, double *m, int backwards, int wide, int one)
+{
+    sides s;
+    int j;
+    gather(bt, m, &s, wide, one);
+    for (j = 0; j < bt->points; ++j)
+        position_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s, one);
+    scatter(bt, m, &s, wide, one);
 }
 
 TB__LANE void position_batches(tb__batch *batches, size_t n, double *m, int backwards, int wide)
@@ -300,12 +333,10 @@ TB__LANE void position_batches(tb__batch *batches, size_t n, double *m, int back
     size_t i;
     for (i = 0; i < n; ++i) {
         tb__batch *bt = &batches[backwards ? n - 1 - i : i];
-        sides s;
-        int j;
-        gather(bt, m, &s, wide);
-        for (j = 0; j < bt->points; ++j)
-            position_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s);
-        scatter(bt, m, &s, wide);
+        if (bt->one_sided)
+            position_batch(bt, m, backwards, wide, 1);
+        else
+            position_batch(bt, m, backwards, wide, 0);
     }
 }
 
@@ -394,29 +425,29 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, in
     size_t i;
     for (i = 0; i < n; ++i) {
         tb__batch *bt = &batches[i];
-        const int momenta = what == TB__PUSH_MOMENTA, motion = what == TB__PUSH_MOTION;
+        const int momenta = what == TB__PUSH_MOMENTA, motion = what == TB__PUSH_MOTION, one = 0;
         double(*ta)[3][W] = momenta ? bt->arm_a : bt->turn_a, (*tb)[3][W] = momenta ? bt->arm_b : bt->turn_b;
         double l[3][W];
         sides s;
         int j, k, d;
-        gather(bt, m, &s, wide);
+        gather(bt, m, &s, wide, one);
         for (d = 0; d < 3; ++d)
             for (k = 0; k < W; ++k)
                 l[d][k] = motion ? bt->lever[k] * bt->impulse[d][k] : bt->impulse[d][k];
         for (k = 0; k < W; ++k) {
-            PUSH(bt->dir[1], ta[0], tb[0], &s, k, l[0][k]);
-            PUSH(bt->dir[2], ta[1], tb[1], &s, k, l[1][k]);
-            ANGULAR_PUSH(ta[2], tb[2], &s, k, l[2][k]);
+            PUSH(bt->dir[1], ta[0], tb[0], &s, k, l[0][k], one);
+            PUSH(bt->dir[2], ta[1], tb[1], &s, k, l[1][k], one);
+            ANGULAR_PUSH(ta[2], tb[2], &s, k, l[2][k], one);
         }
         for (j = 0; j < bt->points; ++j) {
             tb__lane_point *p = &bt->point[j];
             double(*pa)[W] = momenta ? p->arm_a : p->turn_a, (*pb)[W] = momenta ? p->arm_b : p->turn_b;
             for (k = 0; k < W; ++k) {
                 const double ln = motion ? p->lever[k] * p->impulse[k] : p->impulse[k];
-                PUSH(bt->dir[0], pa, pb, &s, k, ln);
+                PUSH(bt->dir[0], pa, pb, &s, k, ln, one);
             }
         }
-        scatter(bt, m, &s, wide);
+        scatter(bt, m, &s, wide, one);
     }
 }
 
