@@ -305,17 +305,23 @@ TB__LANE void velocity_batch(tb__batch *bt, double *m, int backwards, int wide, 
     scatter(bt, m, &s, wide, one);
 }
 
-/* (each batch through one of two copies, with and without side a) */
+/* Every batch (backwards: the last first) through one of two copies of
+   batch_fn, with side a or without (one-sided batches). */
+#define EACH_BATCH(batches, n, backwards, batch_fn, m, wide)              \
+    do {                                                                  \
+        size_t i_;                                                        \
+        for (i_ = 0; i_ < (n); ++i_) {                                    \
+            tb__batch *bt_ = &(batches)[(backwards) ? (n) - 1 - i_ : i_]; \
+            if (bt_->one_sided)                                           \
+                batch_fn(bt_, m, backwards, wide, 1);                     \
+            else                                                          \
+                batch_fn(bt_, m, backwards, wide, 0);                     \
+        }                                                                 \
+    } while (0)
+
 TB__LANE void velocity_batches(tb__batch *batches, size_t n, double *m, int backwards, int wide)
 {
-    size_t i;
-    for (i = 0; i < n; ++i) {
-        tb__batch *bt = &batches[backwards ? n - 1 - i : i];
-        if (bt->one_sided)
-            velocity_batch(bt, m, backwards, wide, 1);
-        else
-            velocity_batch(bt, m, backwards, wide, 0);
-    }
+    EACH_BATCH(batches, n, backwards, velocity_batch, m, wide);
 }
 
 TB__LANE void position_batch(tb__batch *bt, double *m, int backwards, int wide, int one)
@@ -330,14 +336,7 @@ TB__LANE void position_batch(tb__batch *bt, double *m, int backwards, int wide, 
 
 TB__LANE void position_batches(tb__batch *batches, size_t n, double *m, int backwards, int wide)
 {
-    size_t i;
-    for (i = 0; i < n; ++i) {
-        tb__batch *bt = &batches[backwards ? n - 1 - i : i];
-        if (bt->one_sided)
-            position_batch(bt, m, backwards, wide, 1);
-        else
-            position_batch(bt, m, backwards, wide, 0);
-    }
+    EACH_BATCH(batches, n, backwards, position_batch, m, wide);
 }
 
 /* Lane k's part of a row along dir for one side: r x dir (r, [axis][lane],
