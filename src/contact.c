@@ -734,10 +734,9 @@ static void load_bodies(tb_world *w, tb__contacts *c)
             const double q0c[4] = { b->q0[0], -b->q0[1], -b->q0[2], -b->q0[3] };
             double R[9], D[9], dq[4];
             memcpy(b->x, body_x(w, b->slot), sizeof b->x);
-            memcpy(b->P, w->y + w->off[TB__BODY_MOM] + 3 * b->slot, sizeof b->P);
-            memcpy(b->L, w->y + w->off[TB__BODY_ANG] + 3 * b->slot, sizeof b->L);
-            memcpy(c->momenta + TB__MOTION * (i + 1), b->P, sizeof b->P);
-            memcpy(c->momenta + TB__MOTION * (i + 1) + 3, b->L, sizeof b->L);
+            double *const P = c->momenta + TB__MOTION * (i + 1), *const L = P + 3;
+            memcpy(P, w->y + w->off[TB__BODY_MOM] + 3 * b->slot, 3 * sizeof *P);
+            memcpy(L, w->y + w->off[TB__BODY_ANG] + 3 * b->slot, 3 * sizeof *L);
             c->momenta[TB__MOTION * (i + 1) + 6] = 1;
             matrix_of(q, R);
             /* the free motion's turn, q q0^-1 = (cos, sin n) -> 2 sin n */
@@ -754,8 +753,8 @@ static void load_bodies(tb_world *w, tb__contacts *c)
                 b->inv_world[k] = D[3 * r] * R[3 * col] + D[3 * r + 1] * R[3 * col + 1] + D[3 * r + 2] * R[3 * col + 2];
             }
             for (k = 0; k < 3; ++k)
-                v[k] = b->P[k] * b->inv_mass;
-            mul(b->inv_world, b->L, v + 3);
+                v[k] = P[k] * b->inv_mass;
+            mul(b->inv_world, L, v + 3);
         } else {
             const double *vp = w->y + w->off[TB__PARTICLE_VEL] + 3 * b->slot;
             memcpy(b->x, w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot, sizeof b->x);
@@ -842,17 +841,15 @@ static tb_status colour_entries(tb_world *w, tb__contacts *c)
     return tb__contacts_reserve(w, (void **)&c->batches, &c->batch_cap, batches + 1, sizeof *c->batches);
 }
 
-/* Lane k's relative velocity along a row (dir NULL: a twist about
-   bt's normal), from the array m. */
-static double lane_rate(const tb__batch *bt, int k, const double *m, double (*dir)[TB__BATCH_LANES],
-                        double (*arm_a)[TB__BATCH_LANES], double (*arm_b)[TB__BATCH_LANES])
+/* Lane k's relative velocity along point p's normal row, from the
+   array m. */
+static double lane_rate(const tb__batch *bt, const tb__lane_point *p, int k, const double *m)
 {
     const double *A = m + TB__MOTION * bt->a[k], *B = m + TB__MOTION * bt->b[k];
     double rate = 0;
     int i;
-    (void)bt;
     for (i = 0; i < 3; ++i)
-        rate += (dir ? dir[i][k] * (B[i] - A[i]) : 0) + arm_b[i][k] * B[3 + i] - arm_a[i][k] * A[3 + i];
+        rate += bt->dir[0][i][k] * (B[i] - A[i]) + p->arm_b[i][k] * B[3 + i] - p->arm_a[i][k] * A[3 + i];
     return rate;
 }
 
@@ -910,7 +907,7 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
            motion, s + u t + a t^2 / 2 with the free motion's acceleration
            a, reaches 0 at tau */
         const double u = p->approach;
-        const double a = (lane_rate(bt, k, c->velocity, bt->dir[0], lp->arm_a, lp->arm_b) - u) / h;
+        const double a = (lane_rate(bt, lp, k, c->velocity) - u) / h;
         double tau, disc, vi;
         disc = u * u - 2 * a * p->separation;
         if (a != 0 && disc >= 0)
@@ -1124,8 +1121,9 @@ static void store_bodies(tb_world *w, tb__contacts *c)
             for (k = 0; k < 4; ++k)
                 q[k] += dq[k];
             normalise(q);
-            memcpy(w->y + w->off[TB__BODY_MOM] + 3 * b->slot, c->momenta + TB__MOTION * (i + 1), sizeof b->P);
-            memcpy(w->y + w->off[TB__BODY_ANG] + 3 * b->slot, c->momenta + TB__MOTION * (i + 1) + 3, sizeof b->L);
+            memcpy(w->y + w->off[TB__BODY_MOM] + 3 * b->slot, c->momenta + TB__MOTION * (i + 1), 3 * sizeof(double));
+            memcpy(w->y + w->off[TB__BODY_ANG] + 3 * b->slot, c->momenta + TB__MOTION * (i + 1) + 3,
+                   3 * sizeof(double));
         } else {
             double *x = w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot, *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * b->slot;
             for (k = 0; k < 3; ++k) {

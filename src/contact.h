@@ -145,7 +145,6 @@ typedef struct tb__solver_body {
     double v0[3], w0[3];       /* velocities at the start of the step */
     double x[3];               /* position after the free motion */
     double turn[3];            /* the free motion's rotation over the step (vector) */
-    double P[3], L[3];         /* momenta after the free motion, then the impulses */
 } tb__solver_body;
 
 /* The sweeps' per-body arrays: TB__MOTION doubles per solver body + 1 (0 is

@@ -151,6 +151,17 @@ static dWorldID make_world(double gravity)
     return w;
 }
 
+/* The pyramid's and the pile's world: QuickStep with the given iterations,
+   a hash space holding the ground plane z = 0. */
+static dWorldID quick_world(double gravity, int iterations, dSpaceID *space)
+{
+    dWorldID world = make_world(gravity);
+    dWorldSetQuickStepNumIterations(world, iterations);
+    *space = dHashSpaceCreate(0);
+    dCreatePlane(*space, 0, 0, 1, 0);
+    return world;
+}
+
 /* --------------------------------------------------------- bouncing ball -- */
 
 ode_ball_def ode_default_ball_def(void)
@@ -442,12 +453,9 @@ int ode_pyramid(const ode_pyramid_def *def, ode_pyramid_result *out)
     ode_pyramid_positions(def, pos);
 
     h = 1 / def->hz;
-    world = make_world(def->gravity);
-    dWorldSetQuickStepNumIterations(world, def->iterations);
+    world = quick_world(def->gravity, def->iterations, &space);
     if (def->auto_disable)
         dWorldSetAutoDisableFlag(world, 1); /* (new bodies take the flag) */
-    space = dHashSpaceCreate(0);
-    dCreatePlane(space, 0, 0, 1, 0);
     dMassSetBoxTotal(&mass, def->mass, def->edge, def->edge, def->edge);
     for (i = 0; i < count; ++i) {
         dGeomID g = dCreateBox(space, def->edge, def->edge, def->edge);
@@ -600,10 +608,7 @@ int ode_pile(const ode_pile_def *def, ode_pile_result *out)
     ode_pile_scene(def, shapes);
 
     h = 1 / def->hz;
-    world = make_world(def->gravity);
-    dWorldSetQuickStepNumIterations(world, def->iterations);
-    space = dHashSpaceCreate(0);
-    dCreatePlane(space, 0, 0, 1, 0);
+    world = quick_world(def->gravity, def->iterations, &space);
     for (i = 0; i < def->count; ++i) {
         const ode_shape *s = &shapes[i];
         dGeomID g;

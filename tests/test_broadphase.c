@@ -5,6 +5,7 @@
    edges of the overlap test (touching), the filters, the output order, and
    its memory (allocation failures, no allocation in steady state). */
 #include "test_main.h"
+#include "counting_alloc.h"
 #include "broadphase.h"
 
 #include <math.h>
@@ -124,33 +125,6 @@ static size_t brute_force(const scene *s, tb__pair *out)
 }
 
 /* ---- a world, a sap and a pair buffer, through a counting allocator ---- */
-
-typedef struct budget { long live_bytes, allocations, fail_after; int size_mismatch; } budget;
-
-/* Each block carries its size in a header so the test can check old_size. */
-static void *counting_realloc(void *user, void *ptr, size_t old_size, size_t new_size)
-{
-    budget *b = user;
-    size_t *p = ptr ? (size_t *)ptr - 2 : NULL;
-    if (p && p[0] != old_size)
-        b->size_mismatch = 1;
-    if (new_size == 0) {
-        if (p) {
-            b->live_bytes -= (long)old_size;
-            free(p);
-        }
-        return NULL;
-    }
-    if (b->fail_after >= 0 && b->allocations >= b->fail_after)
-        return NULL;
-    b->allocations++;
-    p = realloc(p, new_size + 2 * sizeof(size_t));
-    if (!p)
-        return NULL;
-    b->live_bytes += (long)new_size - (long)old_size;
-    p[0] = new_size;
-    return p + 2;
-}
 
 typedef struct fixture {
     budget mem;

@@ -5,7 +5,7 @@
    then that the kernels in lanes, and the world's fast paths built on them,
    give a body the bits of the one-body kernels and of the general paths. */
 #include "test_main.h"
-#include "rotation.h"
+#include "body_math.h"
 #include "tumble.h"
 
 #include <math.h>
@@ -24,16 +24,6 @@ static const struct {
 #define KERNELS ((int)(sizeof kernels / sizeof kernels[0]))
 
 /* ------------------------------------------------------------ helpers -- */
-
-static void qmul(const double a[4], const double b[4], double out[4])
-{
-    double r[4];
-    r[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-    r[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-    r[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-    r[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
-    memcpy(out, r, sizeof r);
-}
 
 static double qnorm(const double q[4])
 {
@@ -59,11 +49,11 @@ static void rotate(const double q[4], double sign, const double v[3], double out
     c[2] = -q[2];
     c[3] = -q[3];
     if (sign > 0) {
-        qmul(q, p, t);
-        qmul(t, c, t);
+        quat_mul(q, p, t);
+        quat_mul(t, c, t);
     } else {
-        qmul(c, p, t);
-        qmul(t, q, t);
+        quat_mul(c, p, t);
+        quat_mul(t, q, t);
     }
     out[0] = t[1];
     out[1] = t[2];
@@ -113,11 +103,10 @@ static double angle_between(const double a[4], const double b[4])
 {
     const double c[4] = { a[0], -a[1], -a[2], -a[3] };
     double d[4];
-    qmul(c, b, d);
+    quat_mul(c, b, d);
     return 2 * atan2(sqrt(d[1] * d[1] + d[2] * d[2] + d[3] * d[3]), fabs(d[0]));
 }
 
-static double norm3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 static double energy(const double q[4], const double L[3], const double invI[3])
 {
@@ -270,7 +259,7 @@ static void isotropic_bodies_rotate_exactly(void **state)
         axis[1] = L[1] / norm3(L);
         axis[2] = L[2] / norm3(L);
         axis_angle(axis, rate * t, turn);
-        qmul(turn, q0, exact);
+        quat_mul(turn, q0, exact);
         for (k = 0; k < KERNELS; ++k) {
             double q[4];
             memcpy(q, q0, sizeof q);
@@ -319,10 +308,10 @@ static void check_top(kernel_fn *step, const char *name, int sym, double Is, dou
     axis[1] = L[1] / norm3(L);
     axis[2] = L[2] / norm3(L);
     axis_angle(axis, t * invI[o1] * norm3(L), turn);
-    qmul(turn, q0, exact);
+    quat_mul(turn, q0, exact);
     es[sym] = 1;
     axis_angle(es, t * (invI[sym] - invI[o1]) * I[sym] * w0[sym], turn);
-    qmul(exact, turn, exact);
+    quat_mul(exact, turn, exact);
     err_q = angle_between(q, exact);
 
     /* w in the body frame: (w_o1 + i w_o2)(t) = (w_o1 + i w_o2)(0) e^{i Omega t} */
@@ -541,9 +530,9 @@ static void axis_order_does_not_matter(void **state)
                 invI2[n] = invI[perm[j][n]];
             }
             matrix_to_quaternion(P, p);
-            qmul(q0, p, q2);
+            quat_mul(q0, p, q2);
             run(kernels[k].step, q2, L, invI2, 1.0 / 60, 600);
-            qmul(q, p, qp);
+            quat_mul(q, p, qp);
             print_message("%-8s order (%d %d %d): %.2e rad\n", kernels[k].name, perm[j][0], perm[j][1], perm[j][2],
                           angle_between(qp, q2));
             assert_below(angle_between(qp, q2), 1e-12);

@@ -2,6 +2,7 @@
    Every refusal must leave the world exactly as it was: the tests compare a
    fingerprint of the whole observable state before and after. */
 #include "test_main.h"
+#include "counting_alloc.h"
 #include "tumble.h"
 
 #include <math.h>
@@ -409,33 +410,6 @@ static void structural_changes_are_refused_while_stepping(void **state)
 }
 
 /* ---- allocation ----------------------------------------------------------- */
-
-typedef struct budget { long live_bytes; long allocations, fail_after; int size_mismatch; } budget;
-
-/* Each block carries its size in a header so the test can check old_size. */
-static void *counting_realloc(void *user, void *ptr, size_t old_size, size_t new_size)
-{
-    budget *b = user;
-    size_t *p = ptr ? (size_t *)ptr - 2 : NULL;
-    if (p && p[0] != old_size)
-        b->size_mismatch = 1;
-    if (new_size == 0) {
-        if (p) {
-            b->live_bytes -= (long)old_size;
-            free(p);
-        }
-        return NULL;
-    }
-    if (b->fail_after >= 0 && b->allocations >= b->fail_after)
-        return NULL;
-    b->allocations++;
-    p = realloc(p, new_size + 2 * sizeof(size_t));
-    if (!p)
-        return NULL;
-    b->live_bytes += (long)new_size - (long)old_size;
-    p[0] = new_size;
-    return p + 2;
-}
 
 static void allocator_hooks_see_every_byte(void **state)
 {
