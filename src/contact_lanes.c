@@ -402,8 +402,14 @@ TB__LANE void rows_batches(tb__batch *batches, size_t n, const double *m)
         }
         for (j = 0; j < bt->points; ++j) {
             tb__lane_point *p = &bt->point[j];
+            /* a lane with fewer points than the batch's first has no row
+               here: no inverse mass either, so its mass is 0 (its zero
+               arms alone would leave a row between the two centres) */
+            double point_sum[W];
+            for (k = 0; k < W; ++k)
+                point_sum[k] = p->source[k] ? sum[k] : 0;
             lane_rows((const double(*)[W])p->arm_a, (const double(*)[W])p->arm_b, (const double(*)[W])bt->dir[0],
-                      (const double(*)[W])ia, (const double(*)[W])ib, sum, none, none, p->arm_a, p->arm_b,
+                      (const double(*)[W])ia, (const double(*)[W])ib, point_sum, none, none, p->arm_a, p->arm_b,
                       p->turn_a, p->turn_b, p->mass);
         }
         /* the patch: both tangent rows at the centre held in row 0, then

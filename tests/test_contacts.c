@@ -272,6 +272,59 @@ static void stack_of_ten_stands(void **state)
     tb_world_destroy(w);
 }
 
+/* Manifolds that share no moving body are independent: a capsule falling
+   tilted onto the plane, end first, must move to the bit the same with or
+   without a box resting far away. The solver lays such manifolds side by
+   side in one batch, the box's four points first; the capsule's lane then
+   has rows for points it lacks, which must be empty (once they held the
+   inverse masses, and stopped the capsule's centre at its first touch). */
+static tb_body_id drop_capsule(tb_world *w)
+{
+    tb_body_def b = tb_default_body_def();
+    tb_shape_def s = tb_default_shape_def();
+    const double turn = 0.3; /* rad about y: one end 0.12 m lower */
+    tb_body_id id;
+    assert_int_equal(tb_mass_capsule(1000, 0.1, 0.4, &b.mass, NULL), TB_OK);
+    b.position[2] = 0.45;
+    b.orientation[0] = cos(turn / 2), b.orientation[2] = sin(turn / 2);
+    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
+    s.type = TB_SHAPE_CAPSULE;
+    s.body = id;
+    s.radius = 0.1;
+    s.half_length = 0.2;
+    assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
+    return id;
+}
+
+static void far_box_leaves_a_capsule_alone(void **state)
+{
+    tb_world *alone = world_on_plane(0.6, 0), *beside = world_on_plane(0.6, 0);
+    const double far[3] = { 10, 0, 0.5 };
+    tb_body_id a, b;
+    int i, k, touched = 0;
+    (void)state;
+    awake(alone);
+    awake(beside);
+    a = drop_capsule(alone);
+    add_box(beside, far, 1, 0.6);
+    b = drop_capsule(beside);
+    for (i = 0; i < 60; ++i) {
+        double xa[3], xb[3], qa[4], qb[4];
+        assert_int_equal(tb_world_step(alone, 1.0 / 60), TB_OK);
+        assert_int_equal(tb_world_step(beside, 1.0 / 60), TB_OK);
+        tb_body_position(alone, a, xa), tb_body_position(beside, b, xb);
+        tb_body_orientation(alone, a, qa), tb_body_orientation(beside, b, qb);
+        for (k = 0; k < 3; ++k)
+            assert_true(xa[k] == xb[k]);
+        for (k = 0; k < 4; ++k)
+            assert_true(qa[k] == qb[k]);
+        touched += tb_world_contact_count(alone) > 0;
+    }
+    assert_true(touched > 30); /* it landed and lay there */
+    tb_world_destroy(alone);
+    tb_world_destroy(beside);
+}
+
 /* ---- speed and momentum ----------------------------------------------------- */
 
 /* A 0.1 m sphere at 50 m/s towards a static box 5 cm thick, 60 Hz: it moves
@@ -704,6 +757,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(stack_of_ten_stands),
     cmocka_unit_test(fast_sphere_does_not_tunnel),
     cmocka_unit_test(collision_keeps_momentum),
+    cmocka_unit_test(far_box_leaves_a_capsule_alone),
     cmocka_unit_test(events_report_impacts),
     cmocka_unit_test(bad_shapes_are_refused),
 };
