@@ -213,16 +213,16 @@ static const tb__entry *previous_entry(const tb__contacts *c, uint32_t key_a, ui
                : NULL;
 }
 
+/* Two unit tangents with (t1, t2, n) right-handed, for a unit n: Duff et
+   al.'s branch-free basis (JCGT 2017), one division and no square root
+   (the cross product with the axis least along n took a root, three
+   divisions and a branch on which axis: 2.5% of a resting pyramid's
+   step, once per manifold). */
 static void tangents(const double n[3], double t1[3], double t2[3])
 {
-    /* the axis least along n, crossed with it */
-    const double ax = fabs(n[0]), ay = fabs(n[1]), az = fabs(n[2]);
-    double a[3] = { 0, 0, 0 }, len;
-    a[ax <= ay && ax <= az ? 0 : ay <= az ? 1 : 2] = 1;
-    cross(n, a, t1);
-    len = norm3(t1);
-    t1[0] /= len, t1[1] /= len, t1[2] /= len;
-    cross(n, t1, t2);
+    const double sign = n[2] >= 0 ? 1 : -1, a = -1 / (sign + n[2]), b = n[0] * n[1] * a;
+    t1[0] = 1 + sign * n[0] * n[0] * a, t1[1] = sign * b, t1[2] = -sign * n[0];
+    t2[0] = b, t2[1] = sign + n[1] * n[1] * a, t2[2] = -n[1];
 }
 
 /* The key, side and solver body of a proxy. */
