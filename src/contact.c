@@ -342,12 +342,16 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
     }
     /* the patch's friction, into this step's contact plane */
     if (old) {
-        const double along = dot3(old->friction_impulse, e->normal);
+        double along = dot3(old->friction_impulse, e->normal);
         for (k = 0; k < 3; ++k)
             e->friction_impulse[k] = old->friction_impulse[k] - along * e->normal[k];
         e->twist_impulse = old->twist_impulse;
+        along = dot3(old->tilt_impulse, e->normal);
+        for (k = 0; k < 3; ++k)
+            e->tilt_impulse[k] = old->tilt_impulse[k] - along * e->normal[k];
     } else {
         e->friction_impulse[0] = e->friction_impulse[1] = e->friction_impulse[2] = e->twist_impulse = 0;
+        e->tilt_impulse[0] = e->tilt_impulse[1] = e->tilt_impulse[2] = 0;
     }
     return TB_OK;
 }
@@ -926,7 +930,6 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
         lp->lever[k] = h / 2; /* a contact force acting through the step */
         lp->target[k] = 0;
     }
-    lp->impulse[k] = p->normal_impulse;
     return impact;
 }
 
@@ -972,25 +975,48 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
     bt->source[k] = e;
     bt->friction[k] = e->friction;
     bt->twist_reach[k] = reach / n;
+    /* a unit normal force at a point turns b about tangent d, from the
+       centre, by (point - centre) x n . t_d = (point - centre) . (n x t_d) */
+    for (d = 0; d < 2; ++d) {
+        double axis[3], low = 0, high = 0;
+        cross(e->normal, e->tangent[d], axis);
+        for (i = 0; i < e->count; ++i)
+            if (e->point[i].active) {
+                const double *at = e->point[i].point;
+                const double lever = (at[0] - centre[0]) * axis[0] + (at[1] - centre[1]) * axis[1] +
+                                     (at[2] - centre[2]) * axis[2];
+                low = fmin(low, lever), high = fmax(high, lever);
+            }
+        bt->tilt_low[d][k] = low, bt->tilt_high[d][k] = high;
+    }
 }
 
 /* Lane k's targets, levers and warm-start impulses, its rows set up. */
 static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double fraction, size_t *cold)
 {
     tb__entry *e = bt->source[k];
-    double lever = 0;
+    double lever = 0, target = 0, force = 0;
     int j, d, impacts = 0;
     for (j = 0; j < bt->points && bt->point[j].source[k]; ++j) {
-        *cold += !bt->point[j].source[k]->matched;
+        const tb__point *p = bt->point[j].source[k];
+        *cold += !p->matched;
         impacts += set_up_point(c, e, bt->point[j].source[k], bt, k, j, h, fraction);
         lever += bt->point[j].lever[k];
+        target += bt->point[j].target[k];
+        force += p->normal_impulse; /* (0 for a point that struck) */
     }
-    /* friction acts on positions for as long as its points touched, and
-       starts afresh when one of them struck this step */
+    /* the patch acts on positions for as long as its points touched,
+       aims at their mean normal velocity, and starts from their warm
+       starts; its friction and tilts start afresh when one of them struck
+       this step */
     bt->lever[k] = lever / j;
-    for (d = 0; d < 2; ++d)
-        bt->impulse[d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]);
-    bt->impulse[2][k] = impacts ? 0 : e->twist_impulse;
+    bt->press_target[k] = target / j;
+    bt->impulse[TB__ROW_PRESS][k] = force;
+    for (d = 0; d < 2; ++d) {
+        bt->impulse[TB__ROW_TANGENT1 + d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]);
+        bt->impulse[TB__ROW_TILT1 + d][k] = impacts ? 0 : dot3(e->tilt_impulse, e->tangent[d]);
+    }
+    bt->impulse[TB__ROW_TWIST][k] = impacts ? 0 : e->twist_impulse;
 }
 
 /* An entry's place among the batches: by colour, then against the static
@@ -1059,49 +1085,33 @@ static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t *co
                 set_up_lane(c, &c->batches[i], k, h, fraction, cold);
 }
 
-/* Runs body for every point p of every lane k of every batch bt, in batch
-   order. */
-#define EACH_LANE_POINT(c, bt, p, k, body)                            \
-    do {                                                              \
-        size_t i_;                                                    \
-        int j_;                                                       \
-        for (i_ = 0; i_ < (c)->batch_count; ++i_) {                   \
-            tb__batch *bt = &(c)->batches[i_];                        \
-            for (j_ = 0; j_ < bt->points; ++j_) {                     \
-                tb__lane_point *p = &bt->point[j_];                   \
-                for (k = 0; k < TB__BATCH_LANES; ++k)                 \
-                    if (p->source[k]) {                               \
-                        body;                                         \
-                    }                                                 \
-            }                                                         \
-        }                                                             \
-    } while (0)
-
-/* Runs body for every lane k (a manifold) of every batch bt. */
-#define EACH_LANE(c, bt, k, body)                                     \
-    do {                                                              \
-        size_t i_;                                                    \
-        for (i_ = 0; i_ < (c)->batch_count; ++i_) {                   \
-            tb__batch *bt = &(c)->batches[i_];                        \
-            for (k = 0; k < TB__BATCH_LANES; ++k)                     \
-                if (bt->source[k]) {                                  \
-                    body;                                             \
-                }                                                     \
-        }                                                             \
-    } while (0)
-
 /* The impulse totals back to the points and entries, for the next step's
    warm start. */
 static void keep_impulses(tb__contacts *c)
 {
-    int k, i;
-    EACH_LANE_POINT(c, bt, p, k, p->source[k]->normal_impulse = p->impulse[k]);
-    EACH_LANE(c, bt, k, {
-        tb__entry *e = bt->source[k];
-        for (i = 0; i < 3; ++i)
-            e->friction_impulse[i] = bt->impulse[0][k] * e->tangent[0][i] + bt->impulse[1][k] * e->tangent[1][i];
-        e->twist_impulse = bt->impulse[2][k];
-    });
+    size_t b;
+    int k, i, n;
+    for (b = 0; b < c->batch_count; ++b) {
+        const tb__batch *bt = &c->batches[b];
+        for (k = 0; k < TB__BATCH_LANES; ++k) {
+            tb__entry *e = bt->source[k];
+            if (!e)
+                continue;
+            for (i = 0; i < 3; ++i) {
+                e->friction_impulse[i] = bt->impulse[TB__ROW_TANGENT1][k] * e->tangent[0][i] +
+                                         bt->impulse[TB__ROW_TANGENT2][k] * e->tangent[1][i];
+                e->tilt_impulse[i] = bt->impulse[TB__ROW_TILT1][k] * e->tangent[0][i] +
+                                     bt->impulse[TB__ROW_TILT2][k] * e->tangent[1][i];
+            }
+            e->twist_impulse = bt->impulse[TB__ROW_TWIST][k];
+            /* the press's force, shared by the points, so that the points
+               still touching next step bring their share */
+            for (n = 0; n < bt->points && bt->point[n].source[k]; ++n)
+                ;
+            for (i = 0; i < n; ++i)
+                bt->point[i].source[k]->normal_impulse = bt->impulse[TB__ROW_PRESS][k] / n;
+        }
+    }
 }
 
 static void store_bodies(tb_world *w, tb__contacts *c)

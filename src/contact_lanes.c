@@ -200,21 +200,16 @@ TB__LANE void scatter(const tb__batch *bt, double *m, const sides *s, int wide, 
         ANGULAR_PUSH(turn_a, turn_b, s, k, l, one);   \
     } while (0)
 
-/* The friction patch of every lane: the two tangent rows at the centre,
-   within the circle mu times the manifold's normal impulse, then the
-   twist within that times the twist reach. An empty lane has zero
-   masses and friction, so its impulses stay 0. */
+/* The friction of every lane's patch: the two tangent rows at the centre,
+   within the circle mu times the patch's normal force, then the twist
+   within that times the twist reach. An empty lane has zero masses and
+   friction, so its impulses stay 0. */
 TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s, int one)
 {
     double t0[W], t1[W], len2[W], limit[W], limit2[W];
-    int k, j, outside = 0;
-    for (k = 0; k < W; ++k)
-        limit[k] = 0;
-    for (j = 0; j < bt->points; ++j)
-        for (k = 0; k < W; ++k)
-            limit[k] += bt->point[j].impulse[k];
+    int k, outside = 0;
     for (k = 0; k < W; ++k) {
-        limit[k] *= bt->friction[k];
+        limit[k] = bt->friction[k] * bt->impulse[TB__ROW_PRESS][k];
         t0[k] = bt->impulse[0][k] - bt->mass[0][k] * RATE(bt->dir[1], bt->arm_a[0], bt->arm_b[0], s, k, one);
         t1[k] = bt->impulse[1][k] - bt->mass[1][k] * RATE(bt->dir[2], bt->arm_a[1], bt->arm_b[1], s, k, one);
         len2[k] = t0[k] * t0[k] + t1[k] * t1[k];
@@ -253,19 +248,51 @@ TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s, int one)
         }
 }
 
-/* One point of every lane: its normal row, v_n >= target. A lane without
-   this point has zero masses, so its impulse stays 0. */
-TB__LANE void normal_point(const tb__batch *restrict bt, tb__lane_point *restrict p, sides *restrict s, int one)
+/* Every lane's press row: the normal velocity at the centre of its
+   points >= the mean of their targets. An empty lane has zero masses, so
+   its impulse stays 0. */
+TB__LANE void press(tb__batch *restrict bt, sides *restrict s, int one)
 {
+    enum { P = TB__ROW_PRESS };
     int k;
     for (k = 0; k < W; ++k) {
-        double total = p->impulse[k] - p->mass[k] * (RATE(bt->dir[0], p->arm_a, p->arm_b, s, k, one) - p->target[k]);
+        double total = bt->impulse[P][k] -
+                       bt->mass[P][k] * (RATE(bt->dir[0], bt->arm_a[P], bt->arm_b[P], s, k, one) - bt->press_target[k]);
         double dn;
         total = total > 0 ? total : 0;
-        dn = total - p->impulse[k];
-        PUSH(bt->dir[0], p->turn_a, p->turn_b, s, k, dn, one);
-        p->impulse[k] = total;
+        dn = total - bt->impulse[P][k];
+        PUSH(bt->dir[0], bt->turn_a[P], bt->turn_b[P], s, k, dn, one);
+        bt->impulse[P][k] = total;
     }
+}
+
+/* Every lane's tilts, about each tangent: no turn of one side on the
+   other, within the press row's force times the range of the points'
+   levers (a lane with one point, or points on a line, has no range
+   across it and does not resist that tilt). */
+TB__LANE void tilt(tb__batch *restrict bt, sides *restrict s, int d, int one)
+{
+    const int r = TB__ROW_TILT1 + d;
+    int k;
+    for (k = 0; k < W; ++k) {
+        const double high = bt->impulse[TB__ROW_PRESS][k] * bt->tilt_high[d][k];
+        const double low = bt->impulse[TB__ROW_PRESS][k] * bt->tilt_low[d][k];
+        double turn = bt->impulse[r][k] - bt->mass[r][k] * ANGULAR(bt->dir[1 + d], bt->dir[1 + d], s, k, one);
+        double dt;
+        turn = turn > high ? high : turn;
+        turn = turn < low ? low : turn;
+        dt = turn - bt->impulse[r][k];
+        ANGULAR_PUSH(bt->turn_a[r], bt->turn_b[r], s, k, dt, one);
+        bt->impulse[r][k] = turn;
+    }
+}
+
+TB__LANE void tilts(tb__batch *restrict bt, sides *restrict s, int one)
+{
+    if (bt->points < 2) /* (its first lane has the most points) */
+        return;
+    tilt(bt, s, 0, one);
+    tilt(bt, s, 1, one);
 }
 
 /* One point of every lane in the position pass: the normal row only, on
@@ -291,17 +318,19 @@ TB__LANE void position_point(const tb__batch *restrict bt, tb__lane_point *restr
 TB__LANE void velocity_batch(tb__batch *bt, double *m, int backwards, int wide, int one)
 {
     sides s;
-    int j;
     gather(bt, m, &s, wide, one);
-    /* a backward sweep is the forward one reversed, row by row (its
-       friction last): a pair of sweeps is then symmetric Gauss-Seidel,
-       which leans a tall stack less than friction first both ways */
-    if (!backwards)
+    /* a backward sweep is the forward one reversed (friction last): a pair
+       of sweeps is then symmetric Gauss-Seidel, which leans a tall stack
+       less than friction first both ways */
+    if (!backwards) {
         friction_patch(bt, &s, one);
-    for (j = 0; j < bt->points; ++j)
-        normal_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s, one);
-    if (backwards)
+        press(bt, &s, one);
+        tilts(bt, &s, one);
+    } else {
+        tilts(bt, &s, one);
+        press(bt, &s, one);
         friction_patch(bt, &s, one);
+    }
     scatter(bt, m, &s, wide, one);
 }
 
@@ -421,6 +450,16 @@ TB__LANE void rows_batches(tb__batch *batches, size_t n, const double *m)
                       bt->turn_a[i], bt->turn_b[i], bt->mass[i]);
         lane_rows(NULL, NULL, (const double(*)[W])bt->dir[0], (const double(*)[W])ia, (const double(*)[W])ib, none,
                   moving_a, moving_b, bt->arm_a[2], bt->arm_b[2], bt->turn_a[2], bt->turn_b[2], bt->mass[2]);
+        /* the tilts about the tangents, and the press at the centre */
+        for (i = 0; i < 2; ++i)
+            lane_rows(NULL, NULL, (const double(*)[W])bt->dir[1 + i], (const double(*)[W])ia,
+                      (const double(*)[W])ib, none, moving_a, moving_b, bt->arm_a[TB__ROW_TILT1 + i],
+                      bt->arm_b[TB__ROW_TILT1 + i], bt->turn_a[TB__ROW_TILT1 + i], bt->turn_b[TB__ROW_TILT1 + i],
+                      bt->mass[TB__ROW_TILT1 + i]);
+        lane_rows((const double(*)[W])ca, (const double(*)[W])cb, (const double(*)[W])bt->dir[0],
+                  (const double(*)[W])ia, (const double(*)[W])ib, sum, none, none, bt->arm_a[TB__ROW_PRESS],
+                  bt->arm_b[TB__ROW_PRESS], bt->turn_a[TB__ROW_PRESS], bt->turn_b[TB__ROW_PRESS],
+                  bt->mass[TB__ROW_PRESS]);
     }
 }
 
@@ -432,25 +471,20 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, in
         tb__batch *bt = &batches[i];
         const int momenta = what == TB__PUSH_MOMENTA, motion = what == TB__PUSH_MOTION, one = 0;
         double(*ta)[3][W] = momenta ? bt->arm_a : bt->turn_a, (*tb)[3][W] = momenta ? bt->arm_b : bt->turn_b;
-        double l[3][W];
+        double l[TB__PATCH_ROWS][W];
         sides s;
-        int j, k, d;
+        int k, d;
         gather(bt, m, &s, wide, one);
-        for (d = 0; d < 3; ++d)
+        for (d = 0; d < TB__PATCH_ROWS; ++d)
             for (k = 0; k < W; ++k)
                 l[d][k] = motion ? bt->lever[k] * bt->impulse[d][k] : bt->impulse[d][k];
         for (k = 0; k < W; ++k) {
-            PUSH(bt->dir[1], ta[0], tb[0], &s, k, l[0][k], one);
-            PUSH(bt->dir[2], ta[1], tb[1], &s, k, l[1][k], one);
-            ANGULAR_PUSH(ta[2], tb[2], &s, k, l[2][k], one);
-        }
-        for (j = 0; j < bt->points; ++j) {
-            tb__lane_point *p = &bt->point[j];
-            double(*pa)[W] = momenta ? p->arm_a : p->turn_a, (*pb)[W] = momenta ? p->arm_b : p->turn_b;
-            for (k = 0; k < W; ++k) {
-                const double ln = motion ? p->lever[k] * p->impulse[k] : p->impulse[k];
-                PUSH(bt->dir[0], pa, pb, &s, k, ln, one);
-            }
+            PUSH(bt->dir[1], ta[TB__ROW_TANGENT1], tb[TB__ROW_TANGENT1], &s, k, l[TB__ROW_TANGENT1][k], one);
+            PUSH(bt->dir[2], ta[TB__ROW_TANGENT2], tb[TB__ROW_TANGENT2], &s, k, l[TB__ROW_TANGENT2][k], one);
+            ANGULAR_PUSH(ta[TB__ROW_TWIST], tb[TB__ROW_TWIST], &s, k, l[TB__ROW_TWIST][k], one);
+            ANGULAR_PUSH(ta[TB__ROW_TILT1], tb[TB__ROW_TILT1], &s, k, l[TB__ROW_TILT1][k], one);
+            ANGULAR_PUSH(ta[TB__ROW_TILT2], tb[TB__ROW_TILT2], &s, k, l[TB__ROW_TILT2][k], one);
+            PUSH(bt->dir[0], ta[TB__ROW_PRESS], tb[TB__ROW_PRESS], &s, k, l[TB__ROW_PRESS][k], one);
         }
         scatter(bt, m, &s, wide, one);
     }
