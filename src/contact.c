@@ -1234,6 +1234,21 @@ static tb_status make_events(tb_world *w, tb__contacts *c)
     return TB_OK;
 }
 
+/* The sum of every manifold's normal impulse, to see the sweeps settle. */
+static double total_press(const tb__contacts *c)
+{
+    double sum = 0;
+    size_t b;
+    int k;
+    for (b = 0; b < c->batch_count; ++b)
+        for (k = 0; k < TB__BATCH_LANES; ++k)
+            sum += c->batches[b].impulse[TB__ROW_PRESS][k];
+    return sum;
+}
+
+#define TB__COLD_TIMES 16
+#define TB__COLD_SETTLED 1e-3
+
 void tb__contacts_solve(tb_world *w, double h)
 {
     tb__contacts *c = w->contacts;
@@ -1245,12 +1260,30 @@ void tb__contacts_solve(tb_world *w, double h)
     load_bodies(w, c);
     set_up_batches(c, h, &points, &cold);
     tb__push_impulses(c->batches, c->batch_count, c->velocity, TB__PUSH_VELOCITY, c->isa);
-    /* a contact without last step's impulses to start from needs more
-       sweeps to reach them: a stack built at rest would otherwise sink and
-       lean in its first steps */
-    iterations = c->settings.velocity_iterations * (8 * cold > points ? 4 : 1);
+    iterations = c->settings.velocity_iterations;
     for (it = 0; it < iterations; ++it)
         tb__sweep_velocities(c->batches, c->batch_count, c->velocity, it & 1, c->isa);
+    if (8 * cold > points) {
+        /* contacts without last step's impulses to start from (a scene
+           just built, a crowd landing) need more sweeps to reach them: a
+           stack built at rest would otherwise sink in its first steps. In
+           pairs, until the total normal impulse changes by less than
+           TB__COLD_SETTLED of itself in a pair, or TB__COLD_TIMES times
+           the sweeps. The 210-box pyramid's first step takes 288 sweeps
+           and its top box then moves 1.7 mm in 10 s (at 80 sweeps, all a
+           cold step had before, it sank 1.4 cm in its first 7 steps); the
+           1000-shape pile's 88 cold steps take 52 sweeps each on average
+           (they took 80). */
+        double before = total_press(c), after;
+        for (; it + 1 < TB__COLD_TIMES * iterations; it += 2) {
+            tb__sweep_velocities(c->batches, c->batch_count, c->velocity, it & 1, c->isa);
+            tb__sweep_velocities(c->batches, c->batch_count, c->velocity, (it + 1) & 1, c->isa);
+            after = total_press(c);
+            if (fabs(after - before) <= TB__COLD_SETTLED * after)
+                break;
+            before = after;
+        }
+    }
     /* the impulses' whole effect: momenta, and positions over their lever
        times */
     tb__push_impulses(c->batches, c->batch_count, c->momenta, TB__PUSH_MOMENTA, c->isa);

@@ -681,9 +681,8 @@ static void sleep_settings(void **state)
 /* The issue's pyramid (tests/ode_contacts.c's layout: 20 levels, 210 unit
    cubes 1 cm apart, mu 0.6), default settings, 10 s at 60 Hz. Standing
    means no cube sinks 1 cm (ODE's top cube sinks 5 cm) and the top cube
-   ends within 1 cm of where it started (the issue's bound; measured 8 mm,
-   most of it the sink while the contacts settle), no cube 2 cm; the
-   pyramid must also fall asleep. (With rows per contact point the wall,
+   ends within 1 cm of where it started (the issue's bound; measured 1.1
+   mm), no cube 2 cm; the pyramid must also fall asleep. (With rows per contact point the wall,
    20 m high and one cube deep, rocked out of its plane as it settled:
    the top cube ended 7 mm to 4 cm away, depending on rounding.) */
 static void pyramid_stands_and_sleeps(void **state)
