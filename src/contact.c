@@ -939,6 +939,7 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
 static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
 {
     double ca[3] = { 0, 0, 0 }, cb[3] = { 0, 0, 0 }, centre[3] = { 0, 0, 0 }, reach = 0;
+    double low[2] = { 0, 0 }, high[2] = { 0, 0 };
     int n = 0, i, d;
     bt->a[k] = e->body_a + 1, bt->b[k] = e->body_b + 1;
     bt->inv_world_a[k] = e->body_a >= 0 ? c->bodies[e->body_a].inv_world : no_inertia;
@@ -958,15 +959,24 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
         bt->point[n++].source[k] = &e->point[i];
     }
     for (d = 0; d < 3; ++d) {
-        ca[d] /= n, cb[d] /= n, centre[d] /= n;
+        ca[d] *= 1.0 / n, cb[d] *= 1.0 / n, centre[d] *= 1.0 / n;
         bt->arm_a[0][d][k] = ca[d], bt->arm_b[0][d][k] = cb[d];
     }
-    /* (from the points themselves: a static side's arms are all 0) */
+    /* From the points themselves (a static side's arms are all 0): their
+       mean distance from the centre across the normal, and the range of
+       their levers for each tilt: a unit normal force at a point turns b
+       about tangent d, from the centre, by (point - centre) x n . t_d =
+       (point - centre) . (n x t_d), where n x t_1 = t_2, n x t_2 = -t_1. */
     for (i = 0; i < e->count; ++i)
         if (e->point[i].active) {
-            double off[3], along;
+            double off[3], along, lever[2];
             for (d = 0; d < 3; ++d)
                 off[d] = e->point[i].point[d] - centre[d];
+            lever[0] = dot3(off, e->tangent[1]), lever[1] = -dot3(off, e->tangent[0]);
+            for (d = 0; d < 2; ++d) {
+                low[d] = lever[d] < low[d] ? lever[d] : low[d];
+                high[d] = lever[d] > high[d] ? lever[d] : high[d];
+            }
             along = dot3(off, e->normal);
             for (d = 0; d < 3; ++d)
                 off[d] -= along * e->normal[d];
@@ -975,20 +985,8 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
     bt->source[k] = e;
     bt->friction[k] = e->friction;
     bt->twist_reach[k] = reach / n;
-    /* a unit normal force at a point turns b about tangent d, from the
-       centre, by (point - centre) x n . t_d = (point - centre) . (n x t_d) */
-    for (d = 0; d < 2; ++d) {
-        double axis[3], low = 0, high = 0;
-        cross(e->normal, e->tangent[d], axis);
-        for (i = 0; i < e->count; ++i)
-            if (e->point[i].active) {
-                const double *at = e->point[i].point;
-                const double lever = (at[0] - centre[0]) * axis[0] + (at[1] - centre[1]) * axis[1] +
-                                     (at[2] - centre[2]) * axis[2];
-                low = fmin(low, lever), high = fmax(high, lever);
-            }
-        bt->tilt_low[d][k] = low, bt->tilt_high[d][k] = high;
-    }
+    for (d = 0; d < 2; ++d)
+        bt->tilt_low[d][k] = low[d], bt->tilt_high[d][k] = high[d];
 }
 
 /* Lane k's targets, levers and warm-start impulses, its rows set up. */
