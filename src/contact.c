@@ -933,6 +933,64 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
     return impact;
 }
 
+/* Lane k's tilt axes, right handed with the normal: u_1 along a side of
+   entry e's touching points (two points: their segment; three: the
+   longest side; four: the longest pair but the two longest, which are
+   the diagonals of a rectangle or parallelogram), u_2 = n x u_1. Along
+   these axes the points' lever ranges bound the points' own rectangle,
+   where along axes at 45 degrees to a square's sides they would bound one
+   twice as wide across them, and a cube pushed over across a face would
+   stand twice the push it should. */
+static void tilt_axes(const tb__entry *e, tb__batch *bt, int k)
+{
+    const double *at[TB__MANIFOLD_POINTS];
+    double d2[TB__MANIFOLD_POINTS][TB__MANIFOLD_POINTS], side[3], along, length;
+    int n = 0, i, j, d, best_i = 0, best_j = 1, skip[2][2] = { { -1, -1 }, { -1, -1 } };
+    for (i = 0; i < e->count; ++i)
+        if (e->point[i].active)
+            at[n++] = e->point[i].point;
+    if (n < 2) {
+        memcpy(side, e->tangent[0], sizeof side);
+    } else {
+        for (i = 0; i < n; ++i)
+            for (j = i + 1; j < n; ++j)
+                d2[i][j] = (at[j][0] - at[i][0]) * (at[j][0] - at[i][0]) +
+                           (at[j][1] - at[i][1]) * (at[j][1] - at[i][1]) +
+                           (at[j][2] - at[i][2]) * (at[j][2] - at[i][2]);
+        if (n == 4) { /* the two longest pairs are left out */
+            int m;
+            for (m = 0; m < 2; ++m) {
+                double longest = -1;
+                for (i = 0; i < n; ++i)
+                    for (j = i + 1; j < n; ++j)
+                        if (d2[i][j] > longest && !(i == skip[0][0] && j == skip[0][1]))
+                            longest = d2[i][j], skip[m][0] = i, skip[m][1] = j;
+            }
+        }
+        {
+            double longest = -1;
+            for (i = 0; i < n; ++i)
+                for (j = i + 1; j < n; ++j)
+                    if (d2[i][j] > longest && !(i == skip[0][0] && j == skip[0][1]) &&
+                        !(i == skip[1][0] && j == skip[1][1]))
+                        longest = d2[i][j], best_i = i, best_j = j;
+        }
+        for (d = 0; d < 3; ++d)
+            side[d] = at[best_j][d] - at[best_i][d];
+    }
+    along = dot3(side, e->normal);
+    for (d = 0; d < 3; ++d)
+        side[d] -= along * e->normal[d];
+    length = norm3(side);
+    if (!(length > 0))
+        memcpy(side, e->tangent[0], sizeof side), length = 1;
+    for (d = 0; d < 3; ++d)
+        bt->tilt_axis[0][d][k] = side[d] / length;
+    bt->tilt_axis[1][0][k] = e->normal[1] * side[2] / length - e->normal[2] * side[1] / length;
+    bt->tilt_axis[1][1][k] = e->normal[2] * side[0] / length - e->normal[0] * side[2] / length;
+    bt->tilt_axis[1][2][k] = e->normal[0] * side[1] / length - e->normal[1] * side[0] / length;
+}
+
 /* Entry e's anchors as lane k: each touching point's r from both centres
    in its normal row's arms, and the friction patch's centre in the
    patch's row 0, for tb__set_up_rows; the patch's twist reach. */
@@ -962,17 +1020,22 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
         ca[d] *= 1.0 / n, cb[d] *= 1.0 / n, centre[d] *= 1.0 / n;
         bt->arm_a[0][d][k] = ca[d], bt->arm_b[0][d][k] = cb[d];
     }
+    tilt_axes(e, bt, k);
     /* From the points themselves (a static side's arms are all 0): their
        mean distance from the centre across the normal, and the range of
        their levers for each tilt: a unit normal force at a point turns b
-       about tangent d, from the centre, by (point - centre) x n . t_d =
-       (point - centre) . (n x t_d), where n x t_1 = t_2, n x t_2 = -t_1. */
+       about axis u_d, from the centre, by (point - centre) x n . u_d =
+       (point - centre) . (n x u_d), where n x u_1 = u_2, n x u_2 = -u_1. */
     for (i = 0; i < e->count; ++i)
         if (e->point[i].active) {
             double off[3], along, lever[2];
             for (d = 0; d < 3; ++d)
                 off[d] = e->point[i].point[d] - centre[d];
-            lever[0] = dot3(off, e->tangent[1]), lever[1] = -dot3(off, e->tangent[0]);
+            lever[0] = lever[1] = 0;
+            for (d = 0; d < 3; ++d) {
+                lever[0] += off[d] * bt->tilt_axis[1][d][k];
+                lever[1] -= off[d] * bt->tilt_axis[0][d][k];
+            }
             for (d = 0; d < 2; ++d) {
                 low[d] = lever[d] < low[d] ? lever[d] : low[d];
                 high[d] = lever[d] > high[d] ? lever[d] : high[d];
@@ -1012,7 +1075,10 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
     bt->impulse[TB__ROW_PRESS][k] = force;
     for (d = 0; d < 2; ++d) {
         bt->impulse[TB__ROW_TANGENT1 + d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]);
-        bt->impulse[TB__ROW_TILT1 + d][k] = impacts ? 0 : dot3(e->tilt_impulse, e->tangent[d]);
+        bt->impulse[TB__ROW_TILT1 + d][k] =
+            impacts ? 0
+                    : e->tilt_impulse[0] * bt->tilt_axis[d][0][k] + e->tilt_impulse[1] * bt->tilt_axis[d][1][k] +
+                          e->tilt_impulse[2] * bt->tilt_axis[d][2][k];
     }
     bt->impulse[TB__ROW_TWIST][k] = impacts ? 0 : e->twist_impulse;
 }
@@ -1118,8 +1184,8 @@ static void keep_impulses(tb__contacts *c)
             for (i = 0; i < 3; ++i) {
                 e->friction_impulse[i] = bt->impulse[TB__ROW_TANGENT1][k] * e->tangent[0][i] +
                                          bt->impulse[TB__ROW_TANGENT2][k] * e->tangent[1][i];
-                e->tilt_impulse[i] = bt->impulse[TB__ROW_TILT1][k] * e->tangent[0][i] +
-                                     bt->impulse[TB__ROW_TILT2][k] * e->tangent[1][i];
+                e->tilt_impulse[i] = bt->impulse[TB__ROW_TILT1][k] * bt->tilt_axis[0][i][k] +
+                                     bt->impulse[TB__ROW_TILT2][k] * bt->tilt_axis[1][i][k];
             }
             e->twist_impulse = bt->impulse[TB__ROW_TWIST][k];
             /* the press's force, shared by the points, so that the points
