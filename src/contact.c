@@ -934,61 +934,51 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
 }
 
 /* Lane k's tilt axes, right handed with the normal: u_1 along a side of
-   entry e's touching points (two points: their segment; three: the
-   longest side; four: the longest pair but the two longest, which are
-   the diagonals of a rectangle or parallelogram), u_2 = n x u_1. Along
-   these axes the points' lever ranges bound the points' own rectangle,
-   where along axes at 45 degrees to a square's sides they would bound one
-   twice as wide across them, and a cube pushed over across a face would
-   stand twice the push it should. */
+   entry e's touching points (two points: their segment; three or four:
+   from the first point to another, the longest of three but shorter of
+   four, where the longest from a corner of a rectangle is the diagonal),
+   u_2 = n x u_1. Along these axes the points' lever ranges bound their own
+   rectangle, where along axes at 45 degrees to a square's sides they would
+   bound one twice as wide across them, and a cube pushed over across a
+   face would stand twice the push it should. */
 static void tilt_axes(const tb__entry *e, tb__batch *bt, int k)
 {
     const double *at[TB__MANIFOLD_POINTS];
-    double d2[TB__MANIFOLD_POINTS][TB__MANIFOLD_POINTS], side[3], along, length;
-    int n = 0, i, j, d, best_i = 0, best_j = 1, skip[2][2] = { { -1, -1 }, { -1, -1 } };
+    double side[3], along, scale;
+    int n = 0, i, d;
     for (i = 0; i < e->count; ++i)
         if (e->point[i].active)
             at[n++] = e->point[i].point;
     if (n < 2) {
         memcpy(side, e->tangent[0], sizeof side);
     } else {
-        for (i = 0; i < n; ++i)
-            for (j = i + 1; j < n; ++j)
-                d2[i][j] = (at[j][0] - at[i][0]) * (at[j][0] - at[i][0]) +
-                           (at[j][1] - at[i][1]) * (at[j][1] - at[i][1]) +
-                           (at[j][2] - at[i][2]) * (at[j][2] - at[i][2]);
-        if (n == 4) { /* the two longest pairs are left out */
-            int m;
-            for (m = 0; m < 2; ++m) {
-                double longest = -1;
-                for (i = 0; i < n; ++i)
-                    for (j = i + 1; j < n; ++j)
-                        if (d2[i][j] > longest && !(i == skip[0][0] && j == skip[0][1]))
-                            longest = d2[i][j], skip[m][0] = i, skip[m][1] = j;
-            }
+        double d2[TB__MANIFOLD_POINTS - 1] = { 0 }, longest = -1, next = -1;
+        int to = 1, second = 1;
+        for (i = 1; i < n; ++i) {
+            for (d = 0; d < 3; ++d)
+                d2[i - 1] += (at[i][d] - at[0][d]) * (at[i][d] - at[0][d]);
+            if (d2[i - 1] > longest)
+                next = longest, second = to, longest = d2[i - 1], to = i;
+            else if (d2[i - 1] > next)
+                next = d2[i - 1], second = i;
         }
-        {
-            double longest = -1;
-            for (i = 0; i < n; ++i)
-                for (j = i + 1; j < n; ++j)
-                    if (d2[i][j] > longest && !(i == skip[0][0] && j == skip[0][1]) &&
-                        !(i == skip[1][0] && j == skip[1][1]))
-                        longest = d2[i][j], best_i = i, best_j = j;
-        }
+        if (n == 4)
+            to = second;
         for (d = 0; d < 3; ++d)
-            side[d] = at[best_j][d] - at[best_i][d];
+            side[d] = at[to][d] - at[0][d];
     }
     along = dot3(side, e->normal);
     for (d = 0; d < 3; ++d)
         side[d] -= along * e->normal[d];
-    length = norm3(side);
-    if (!(length > 0))
-        memcpy(side, e->tangent[0], sizeof side), length = 1;
+    scale = norm3(side);
+    if (!(scale > 0))
+        memcpy(side, e->tangent[0], sizeof side), scale = 1;
+    scale = 1 / scale;
     for (d = 0; d < 3; ++d)
-        bt->tilt_axis[0][d][k] = side[d] / length;
-    bt->tilt_axis[1][0][k] = e->normal[1] * side[2] / length - e->normal[2] * side[1] / length;
-    bt->tilt_axis[1][1][k] = e->normal[2] * side[0] / length - e->normal[0] * side[2] / length;
-    bt->tilt_axis[1][2][k] = e->normal[0] * side[1] / length - e->normal[1] * side[0] / length;
+        side[d] *= scale, bt->tilt_axis[0][d][k] = side[d];
+    bt->tilt_axis[1][0][k] = e->normal[1] * side[2] - e->normal[2] * side[1];
+    bt->tilt_axis[1][1][k] = e->normal[2] * side[0] - e->normal[0] * side[2];
+    bt->tilt_axis[1][2][k] = e->normal[0] * side[1] - e->normal[1] * side[0];
 }
 
 /* Entry e's anchors as lane k: each touching point's r from both centres
