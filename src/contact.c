@@ -160,6 +160,16 @@ static void start_velocity(const tb__contacts *c, int32_t i, const double r[3], 
     }
 }
 
+/* Point p of entry e's normal relative velocity at the start of the step
+   (< 0: approaching), for impacts and begin events only. */
+static double approach_of(const tb__contacts *c, const tb__entry *e, const tb__point *p)
+{
+    double va[3], vb[3];
+    start_velocity(c, e->body_a, p->ra, va);
+    start_velocity(c, e->body_b, p->rb, vb);
+    return (vb[0] - va[0]) * e->normal[0] + (vb[1] - va[1]) * e->normal[1] + (vb[2] - va[2]) * e->normal[2];
+}
+
 /* ---- finding contacts ------------------------------------------------------- */
 
 static uint64_t key_of(uint32_t key_a, uint32_t key_b)
@@ -299,7 +309,6 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
     for (k = 0; k < m->count; ++k) {
         tb__point *p = &e->point[k];
         const double *at = m->point[k].pos;
-        double va[3], vb[3];
         int j;
         p->normal_impulse = p->speed = p->predicted = 0;
         p->active = p->matched = 0;
@@ -308,11 +317,6 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
         memcpy(p->point, at, sizeof p->point);
         arm_of(c, e->body_a, at, p->ra);
         arm_of(c, e->body_b, at, p->rb);
-        start_velocity(c, e->body_a, p->ra, va);
-        start_velocity(c, e->body_b, p->rb, vb);
-        for (j = 0; j < 3; ++j)
-            vb[j] -= va[j];
-        p->approach = dot3(vb, m->normal);
         /* warm start from last step's point: the same pair of features, or
            failing that (a clipped polygon may renumber its corners) the
            nearest point within the slop */
@@ -910,7 +914,7 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
         /* a new contact: when in the step did the gap close? Its normal
            motion, s + u t + a t^2 / 2 with the free motion's acceleration
            a, reaches 0 at tau */
-        const double u = p->approach;
+        const double u = approach_of(c, e, p);
         const double a = (lane_rate(bt, lp, k, c->velocity) - u) / h;
         double tau, disc, vi;
         disc = u * u - 2 * a * p->separation;
@@ -1287,7 +1291,7 @@ static tb_status make_events(tb_world *w, tb__contacts *c)
                 const tb__point *p = &e->point[k];
                 if (!p->active)
                     continue;
-                ev->speed = fmax(ev->speed, p->speed > 0 ? p->speed : fmax(0, -p->approach));
+                ev->speed = fmax(ev->speed, p->speed > 0 ? p->speed : fmax(0, -approach_of(c, e, p)));
                 final_point(c, e, p, ev->point);
             }
         }

@@ -32,7 +32,6 @@ typedef struct tb__point {
     double ra[3], rb[3];       /* m: the point from each centre at the start of the
                                   step, world (0 on a static side) */
     double separation;         /* m, at the start of the step (< 0: overlap) */
-    double approach;           /* m/s: normal relative velocity at the start */
     double speed;              /* m/s: the approach speed of an impact, 0 otherwise */
     double predicted;          /* m: separation after the free motion */
     double local_a[3], local_b[3]; /* m: the point in each shape's frame, and */
