@@ -937,15 +937,16 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
     return impact;
 }
 
-/* Lane k's tilt axes, right handed with the normal: u_1 along a side of
-   entry e's touching points (two points: their segment; three or four:
-   from the first point to another, the longest of three but shorter of
-   four, where the longest from a corner of a rectangle is the diagonal),
-   u_2 = n x u_1. Along these axes the points' lever ranges bound their own
-   rectangle, where along axes at 45 degrees to a square's sides they would
-   bound one twice as wide across them, and a cube pushed over across a
-   face would stand twice the push it should. */
-static void tilt_axes(const tb__entry *e, tb__batch *bt, int k)
+/* Entry e's tangents along a side of its touching points (two points:
+   their segment; three or four: from the first point to another, the
+   longest of three but shorter of four, where the longest from a corner
+   of a rectangle is the diagonal), right handed with the normal: t_2 = n
+   x t_1. The patch's tilts turn about them, and along them the points'
+   lever ranges bound the points' own rectangle, where along tangents at
+   45 degrees to a square's sides they would bound one twice as wide
+   across them, and a cube pushed over across a face would stand twice
+   the push it should. (Friction is the same in any tangents.) */
+static void side_tangents(tb__entry *e)
 {
     const double *at[TB__MANIFOLD_POINTS];
     double side[3], along, scale;
@@ -953,9 +954,9 @@ static void tilt_axes(const tb__entry *e, tb__batch *bt, int k)
     for (i = 0; i < e->count; ++i)
         if (e->point[i].active)
             at[n++] = e->point[i].point;
-    if (n < 2) {
-        memcpy(side, e->tangent[0], sizeof side);
-    } else {
+    if (n < 2)
+        return;
+    {
         double d2[TB__MANIFOLD_POINTS - 1] = { 0 }, longest = -1, next = -1;
         int to = 1, second = 1;
         for (i = 1; i < n; ++i) {
@@ -976,13 +977,11 @@ static void tilt_axes(const tb__entry *e, tb__batch *bt, int k)
         side[d] -= along * e->normal[d];
     scale = norm3(side);
     if (!(scale > 0))
-        memcpy(side, e->tangent[0], sizeof side), scale = 1;
+        return;
     scale = 1 / scale;
     for (d = 0; d < 3; ++d)
-        side[d] *= scale, bt->tilt_axis[0][d][k] = side[d];
-    bt->tilt_axis[1][0][k] = e->normal[1] * side[2] - e->normal[2] * side[1];
-    bt->tilt_axis[1][1][k] = e->normal[2] * side[0] - e->normal[0] * side[2];
-    bt->tilt_axis[1][2][k] = e->normal[0] * side[1] - e->normal[1] * side[0];
+        e->tangent[0][d] = side[d] * scale;
+    cross(e->normal, e->tangent[0], e->tangent[1]);
 }
 
 /* Entry e's anchors as lane k: each touching point's r from both centres
@@ -996,6 +995,7 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
     bt->a[k] = e->body_a + 1, bt->b[k] = e->body_b + 1;
     bt->inv_world_a[k] = e->body_a >= 0 ? c->bodies[e->body_a].inv_world : no_inertia;
     bt->inv_world_b[k] = e->body_b >= 0 ? c->bodies[e->body_b].inv_world : no_inertia;
+    side_tangents(e);
     for (d = 0; d < 3; ++d) {
         const double *dir = d == 0 ? e->normal : e->tangent[d - 1];
         bt->dir[d][0][k] = dir[0], bt->dir[d][1][k] = dir[1], bt->dir[d][2][k] = dir[2];
@@ -1014,22 +1014,17 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
         ca[d] *= 1.0 / n, cb[d] *= 1.0 / n, centre[d] *= 1.0 / n;
         bt->arm_a[0][d][k] = ca[d], bt->arm_b[0][d][k] = cb[d];
     }
-    tilt_axes(e, bt, k);
     /* From the points themselves (a static side's arms are all 0): their
        mean distance from the centre across the normal, and the range of
        their levers for each tilt: a unit normal force at a point turns b
-       about axis u_d, from the centre, by (point - centre) x n . u_d =
-       (point - centre) . (n x u_d), where n x u_1 = u_2, n x u_2 = -u_1. */
+       about tangent d, from the centre, by (point - centre) x n . t_d =
+       (point - centre) . (n x t_d), where n x t_1 = t_2, n x t_2 = -t_1. */
     for (i = 0; i < e->count; ++i)
         if (e->point[i].active) {
             double off[3], along, lever[2];
             for (d = 0; d < 3; ++d)
                 off[d] = e->point[i].point[d] - centre[d];
-            lever[0] = lever[1] = 0;
-            for (d = 0; d < 3; ++d) {
-                lever[0] += off[d] * bt->tilt_axis[1][d][k];
-                lever[1] -= off[d] * bt->tilt_axis[0][d][k];
-            }
+            lever[0] = dot3(off, e->tangent[1]), lever[1] = -dot3(off, e->tangent[0]);
             for (d = 0; d < 2; ++d) {
                 low[d] = lever[d] < low[d] ? lever[d] : low[d];
                 high[d] = lever[d] > high[d] ? lever[d] : high[d];
@@ -1069,10 +1064,7 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
     bt->impulse[TB__ROW_PRESS][k] = force;
     for (d = 0; d < 2; ++d) {
         bt->impulse[TB__ROW_TANGENT1 + d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]);
-        bt->impulse[TB__ROW_TILT1 + d][k] =
-            impacts ? 0
-                    : e->tilt_impulse[0] * bt->tilt_axis[d][0][k] + e->tilt_impulse[1] * bt->tilt_axis[d][1][k] +
-                          e->tilt_impulse[2] * bt->tilt_axis[d][2][k];
+        bt->impulse[TB__ROW_TILT1 + d][k] = impacts ? 0 : dot3(e->tilt_impulse, e->tangent[d]);
     }
     bt->impulse[TB__ROW_TWIST][k] = impacts ? 0 : e->twist_impulse;
 }
@@ -1178,8 +1170,8 @@ static void keep_impulses(tb__contacts *c)
             for (i = 0; i < 3; ++i) {
                 e->friction_impulse[i] = bt->impulse[TB__ROW_TANGENT1][k] * e->tangent[0][i] +
                                          bt->impulse[TB__ROW_TANGENT2][k] * e->tangent[1][i];
-                e->tilt_impulse[i] = bt->impulse[TB__ROW_TILT1][k] * bt->tilt_axis[0][i][k] +
-                                     bt->impulse[TB__ROW_TILT2][k] * bt->tilt_axis[1][i][k];
+                e->tilt_impulse[i] = bt->impulse[TB__ROW_TILT1][k] * e->tangent[0][i] +
+                                     bt->impulse[TB__ROW_TILT2][k] * e->tangent[1][i];
             }
             e->twist_impulse = bt->impulse[TB__ROW_TWIST][k];
             /* the press's force, shared by the points, so that the points

@@ -46,10 +46,10 @@ typedef struct tb__point {
    (contact_lanes.c). A manifold is a lane, solved as one patch at the
    centre of its touching points, in six rows:
    - the normal: a force row at the centre (>= 0), and a tilt about each
-     of two axes in the contact plane, one along a side of the points,
-     within that force times the range of the points' levers about the
-     centre (the centre of pressure stays within the points' bounding
-     rectangle along those axes: their own rectangle for a box's face);
+     tangent (the first along a side of the points), within that force
+     times the range of the points' levers about the centre (the centre of
+     pressure stays within the points' bounding rectangle along the
+     tangents: their own rectangle for a box's face);
    - friction (as Bepu and PhysX's patch friction): two tangent rows within
      the circle mu times the normal force, and a twist about the normal
      within that times the points' mean distance from the centre.
@@ -95,11 +95,9 @@ typedef struct tb__batch {
     double mass[TB__PATCH_ROWS][TB__BATCH_LANES];
     double impulse[TB__PATCH_ROWS][TB__BATCH_LANES]; /* N s (twist, tilts: N m s), accumulated */
     double press_target[TB__BATCH_LANES];/* m/s: the normal velocity to reach at the centre */
-    double tilt_axis[2][3][TB__BATCH_LANES]; /* [tilt][axis][lane]: the tilts turn about a side
-                                           of the points and the normal x that (tilt_axes) */
     double tilt_low[2][TB__BATCH_LANES], tilt_high[2][TB__BATCH_LANES]; /* m: the range of the
                                            points' levers for each tilt (a unit normal force's
-                                           moment about tilt axis d, from the centre) */
+                                           moment about tangent d, from the centre) */
     double twist_reach[TB__BATCH_LANES];/* m: mean distance of the points from the centre */
     double lever[TB__BATCH_LANES];      /* s: how long the patch acts on positions */
     struct tb__entry *source[TB__BATCH_LANES]; /* NULL: an empty lane */

@@ -266,8 +266,8 @@ TB__LANE void press(tb__batch *restrict bt, sides *restrict s, int one)
     }
 }
 
-/* Every lane's tilts, about each of its tilt axes: no turn of one side on
-   the other, within the press row's force times the range of the points'
+/* Every lane's tilts, about each tangent: no turn of one side on the
+   other, within the press row's force times the range of the points'
    levers (a lane with one point, or points on a line, has no range
    across it and does not resist that tilt). */
 TB__LANE void tilt(tb__batch *restrict bt, sides *restrict s, int d, int one)
@@ -277,7 +277,7 @@ TB__LANE void tilt(tb__batch *restrict bt, sides *restrict s, int d, int one)
     for (k = 0; k < W; ++k) {
         const double high = bt->impulse[TB__ROW_PRESS][k] * bt->tilt_high[d][k];
         const double low = bt->impulse[TB__ROW_PRESS][k] * bt->tilt_low[d][k];
-        double turn = bt->impulse[r][k] - bt->mass[r][k] * ANGULAR(bt->tilt_axis[d], bt->tilt_axis[d], s, k, one);
+        double turn = bt->impulse[r][k] - bt->mass[r][k] * ANGULAR(bt->dir[1 + d], bt->dir[1 + d], s, k, one);
         double dt;
         turn = turn > high ? high : turn;
         turn = turn < low ? low : turn;
@@ -452,7 +452,7 @@ TB__LANE void rows_batches(tb__batch *batches, size_t n, const double *m)
                   moving_a, moving_b, bt->arm_a[2], bt->arm_b[2], bt->turn_a[2], bt->turn_b[2], bt->mass[2]);
         /* the tilts about the tangents, and the press at the centre */
         for (i = 0; i < 2; ++i)
-            lane_rows(NULL, NULL, (const double(*)[W])bt->tilt_axis[i], (const double(*)[W])ia,
+            lane_rows(NULL, NULL, (const double(*)[W])bt->dir[1 + i], (const double(*)[W])ia,
                       (const double(*)[W])ib, none, moving_a, moving_b, bt->arm_a[TB__ROW_TILT1 + i],
                       bt->arm_b[TB__ROW_TILT1 + i], bt->turn_a[TB__ROW_TILT1 + i], bt->turn_b[TB__ROW_TILT1 + i],
                       bt->mass[TB__ROW_TILT1 + i]);
