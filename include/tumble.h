@@ -471,8 +471,14 @@ typedef struct tb_contact_settings {
     double max_push;              /* m/s: the fastest it separates overlaps; default 3 */
     double restitution_threshold; /* m/s: slower impacts do not bounce; default 1 */
     double slop;                  /* m: overlap left alone, against jitter; default 0.005 */
-    int velocity_iterations;      /* default 20 (x4 in a step where contacts start
-                                     touching without last step's impulses) */
+    int velocity_iterations;      /* the most sweeps of the velocity pass; default 20 (a
+                                     step where many contacts start touching without last
+                                     step's impulses sweeps on, up to 16 times as many,
+                                     until their total normal impulse settles) */
+    double velocity_tolerance;    /* m/s (rad/s for turns): the velocity pass stops early,
+                                     after 4 sweeps or more, once a pair of sweeps changed
+                                     no velocity it enforces by more than this; default
+                                     1e-6; 0: always velocity_iterations sweeps */
     int position_iterations;      /* default 4 */
     double particle_radius;       /* m: particles collide with shapes as spheres of this
                                      radius (0: points); < 0 (default -1): they do not */

@@ -1007,11 +1007,13 @@ static int world_shape(lua_State *L)
 }
 
 /* world:contacts{ hertz, damping_ratio, max_push, restitution_threshold,
-   slop, velocity_iterations, position_iterations, particle_radius,
-   particle_friction, particle_restitution, sleep_speed, sleep_time }:
+   slop, velocity_iterations, velocity_tolerance, position_iterations,
+   particle_radius, particle_friction, particle_restitution, sleep_speed,
+   sleep_time }:
    change the contact settings (sleep_time = math.huge: never sleep) */
 static const char *const contact_options[] = { "hertz", "damping_ratio", "max_push", "restitution_threshold",
-                                               "slop", "velocity_iterations", "position_iterations",
+                                               "slop", "velocity_iterations", "velocity_tolerance",
+                                               "position_iterations",
                                                "particle_radius", "particle_friction", "particle_restitution",
                                                "sleep_speed", "sleep_time", NULL };
 
@@ -1027,6 +1029,7 @@ static int world_contacts(lua_State *L)
     opt_number(L, 2, "restitution_threshold", "world:contacts", &cs.restitution_threshold);
     opt_number(L, 2, "slop", "world:contacts", &cs.slop);
     opt_number(L, 2, "velocity_iterations", "world:contacts", &vi);
+    opt_number(L, 2, "velocity_tolerance", "world:contacts", &cs.velocity_tolerance);
     opt_number(L, 2, "position_iterations", "world:contacts", &pi);
     opt_number(L, 2, "particle_radius", "world:contacts", &cs.particle_radius);
     opt_number(L, 2, "particle_friction", "world:contacts", &cs.particle_friction);

@@ -846,7 +846,10 @@ static tb_status colour_entries(tb_world *w, tb__contacts *c)
     for (k = 0; k < TB__COLOURS; ++k) /* (+1: those against the static world apart) */
         batches += count[k] ? (count[k] + TB__BATCH_LANES - 1) / TB__BATCH_LANES + 1 : 0;
     batches += count[TB__COLOURS];
-    return tb__contacts_reserve(w, (void **)&c->batches, &c->batch_cap, batches + 1, sizeof *c->batches);
+    if ((st = tb__contacts_reserve(w, (void **)&c->batches, &c->batch_cap, batches + 1, sizeof *c->batches)) != TB_OK)
+        return st;
+    return tb__contacts_reserve(w, (void **)&c->settle, &c->settle_cap,
+                                c->batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES, sizeof *c->settle);
 }
 
 /* Lane k's relative velocity along point p's normal row, from the
@@ -1316,6 +1319,50 @@ static double total_press(const tb__contacts *c)
     return sum;
 }
 
+/* Whether a pair of sweeps left every row's impulse within tolerance
+   times its mass (the velocity it enforces within tolerance) of what
+   c->settle held before it. */
+static int settled(const tb__contacts *c, double tolerance)
+{
+    size_t b;
+    int i;
+    for (b = 0; b < c->batch_count; ++b) {
+        const double *now = &c->batches[b].impulse[0][0], *mass = &c->batches[b].mass[0][0];
+        const double *before = c->settle + b * TB__PATCH_ROWS * TB__BATCH_LANES;
+        int over = 0;
+        for (i = 0; i < TB__PATCH_ROWS * TB__BATCH_LANES; ++i)
+            over |= fabs(now[i] - before[i]) > tolerance * mass[i];
+        if (over)
+            return 0;
+    }
+    return 1;
+}
+
+/* The velocity sweeps, in pairs (a forward and a backward), up to most;
+   from the second pair on they stop once a pair changed no enforced
+   velocity by more than tolerance (0: never). A resting pyramid of 210
+   boxes then takes 7 or 8 sweeps a step, not 20, to the same motion (its
+   top box within 1.7 mm over 60 s either way; at 1e-5 m/s it crept 1 cm
+   in 10 s). Returns how many sweeps ran. */
+static int sweep_until_settled(tb__contacts *c, int most, double tolerance)
+{
+    const size_t per_batch = TB__PATCH_ROWS * TB__BATCH_LANES;
+    int it;
+    for (it = 0; it < most; it += 2) {
+        const int check = tolerance > 0 && it >= 2 && it + 2 <= most;
+        size_t b;
+        if (check)
+            for (b = 0; b < c->batch_count; ++b)
+                memcpy(c->settle + b * per_batch, c->batches[b].impulse, sizeof c->batches[b].impulse);
+        tb__sweep_velocities(c->batches, c->batch_count, c->velocity, it & 1, c->isa);
+        if (it + 1 < most)
+            tb__sweep_velocities(c->batches, c->batch_count, c->velocity, (it + 1) & 1, c->isa);
+        if (check && settled(c, tolerance))
+            return it + 2;
+    }
+    return most;
+}
+
 #define TB__COLD_TIMES 16
 #define TB__COLD_SETTLED 1e-3
 
@@ -1331,8 +1378,7 @@ void tb__contacts_solve(tb_world *w, double h)
     set_up_batches(c, h, &points, &cold);
     tb__push_impulses(c->batches, c->batch_count, c->velocity, TB__PUSH_VELOCITY, c->isa);
     iterations = c->settings.velocity_iterations;
-    for (it = 0; it < iterations; ++it)
-        tb__sweep_velocities(c->batches, c->batch_count, c->velocity, it & 1, c->isa);
+    it = sweep_until_settled(c, iterations, c->settings.velocity_tolerance);
     if (8 * cold > points) {
         /* contacts without last step's impulses to start from (a scene
            just built, a crowd landing) need more sweeps to reach them: a

@@ -212,6 +212,9 @@ struct tb__contacts {
 
     tb__batch *batches;        /* the touching manifolds of this step */
     size_t batch_count, batch_cap;
+    double *settle;            /* [batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES]: the batches'
+                                  impulses before a pair of sweeps */
+    size_t settle_cap;
     uint64_t *colours;         /* [body_cap]: the colours a solver body's manifolds took */
     size_t colours_cap;
     uint32_t *bucket;          /* [entry_cap]: entries by colour, then points */

@@ -508,6 +508,10 @@ static void bad_shapes_are_refused(void **state)
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
     cs = tb_default_contact_settings(), cs.velocity_iterations = 0;
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
+    cs = tb_default_contact_settings(), cs.velocity_tolerance = -1e-6;
+    assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
+    cs.velocity_tolerance = NAN;
+    assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
     /* a removed body takes its shapes with it; its id goes stale */
     assert_int_equal(tb_world_remove_body(w, body), TB_OK);
     assert_int_equal(tb_world_shape_count(w), shapes - 1);

@@ -348,13 +348,14 @@ static void shapes_and_events(void **state)
                  "assert(math.abs(begun.speed - math.sqrt(2 * 9.81)) < 1e-3 * math.sqrt(2 * 9.81), begun.speed)\n"
                  "assert(begun.a == plane:id() and begun.b == s:id())\n"
                  "assert(math.abs(begun.normal[3] - 1) < 1e-12)\n"
-                 "w:contacts{ velocity_iterations = 5, particle_radius = 0.01 }\n");
+                 "w:contacts{ velocity_iterations = 5, velocity_tolerance = 0, particle_radius = 0.01 }\n");
     expect_error(L, "w:shape{ type = 'box', half = {1, 0, 1} }", "half extents");
     expect_error(L, "w:shape{ type = 'plane', normal = {0, 0, 2} }", "unit");
     expect_error(L, "w:shape{ type = 'cone' }", "cone");
     expect_error(L, "w:shape{ type = 'sphere', radius = 1, colour = 'red' }", "colour");
     expect_error(L, "w:contacts{ hertz = -1 }", "hertz");
     expect_error(L, "w:contacts{ sleep_time = 0 }", "sleep_time");
+    expect_error(L, "w:contacts{ velocity_tolerance = -1 }", "velocity_tolerance");
     /* the ball rests after its bounces and falls asleep; a push wakes it */
     expect_ok(L, "for i = 1, 300 do w:step() end\n"
                  "assert(ball:asleep(), 'the resting ball should sleep')\n"
