@@ -1339,9 +1339,11 @@ static int settled(const tb__contacts *c, double tolerance)
 }
 
 /* The velocity sweeps, in pairs (a forward and a backward), up to most;
-   from the second pair on they stop once a pair changed no enforced
-   velocity by more than tolerance (0: never). A resting pyramid of 210
-   boxes then takes 7 or 8 sweeps a step, not 20, to the same motion (its
+   they stop once a pair changed no enforced velocity by more than
+   tolerance (0: never), looked at after sweeps 4, 8, 12 and so on (each
+   look copies every impulse first: where nothing settles, as in a falling
+   pile, a look after every pair cost 2% of a step). A resting pyramid of
+   210 boxes then takes 8 sweeps a step, not 20, to the same motion (its
    top box within 1.7 mm over 60 s either way; at 1e-5 m/s it crept 1 cm
    in 10 s). Returns how many sweeps ran. */
 static int sweep_until_settled(tb__contacts *c, int most, double tolerance)
@@ -1349,7 +1351,7 @@ static int sweep_until_settled(tb__contacts *c, int most, double tolerance)
     const size_t per_batch = TB__PATCH_ROWS * TB__BATCH_LANES;
     int it;
     for (it = 0; it < most; it += 2) {
-        const int check = tolerance > 0 && it >= 2 && it + 2 <= most;
+        const int check = tolerance > 0 && it % 4 == 2 && it + 2 <= most;
         size_t b;
         if (check)
             for (b = 0; b < c->batch_count; ++b)
