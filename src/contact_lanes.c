@@ -206,12 +206,13 @@ TB__LANE void scatter(const tb__batch *bt, double *m, const sides *s, int wide, 
    friction, so its impulses stay 0. */
 TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s, int one)
 {
+    enum { T1 = TB__ROW_TANGENT1, T2 = TB__ROW_TANGENT2, TW = TB__ROW_TWIST };
     double t0[W], t1[W], len2[W], limit[W], limit2[W];
     int k, outside = 0;
     for (k = 0; k < W; ++k) {
         limit[k] = bt->friction[k] * bt->impulse[TB__ROW_PRESS][k];
-        t0[k] = bt->impulse[0][k] - bt->mass[0][k] * RATE(bt->dir[1], bt->arm_a[0], bt->arm_b[0], s, k, one);
-        t1[k] = bt->impulse[1][k] - bt->mass[1][k] * RATE(bt->dir[2], bt->arm_a[1], bt->arm_b[1], s, k, one);
+        t0[k] = bt->impulse[T1][k] - bt->mass[T1][k] * RATE(bt->dir[1], bt->arm_a[T1], bt->arm_b[T1], s, k, one);
+        t1[k] = bt->impulse[T2][k] - bt->mass[T2][k] * RATE(bt->dir[2], bt->arm_a[T2], bt->arm_b[T2], s, k, one);
         len2[k] = t0[k] * t0[k] + t1[k] * t1[k];
         limit2[k] = limit[k] * limit[k];
     }
@@ -230,21 +231,21 @@ TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s, int one)
             t1[k] = len2[k] > limit2[k] ? t1[k] * scale : t1[k];
         }
     for (k = 0; k < W; ++k) {
-        const double d0 = t0[k] - bt->impulse[0][k], d1 = t1[k] - bt->impulse[1][k];
-        PUSH(bt->dir[1], bt->turn_a[0], bt->turn_b[0], s, k, d0, one);
-        PUSH(bt->dir[2], bt->turn_a[1], bt->turn_b[1], s, k, d1, one);
-        bt->impulse[0][k] = t0[k], bt->impulse[1][k] = t1[k];
+        const double d0 = t0[k] - bt->impulse[T1][k], d1 = t1[k] - bt->impulse[T2][k];
+        PUSH(bt->dir[1], bt->turn_a[T1], bt->turn_b[T1], s, k, d0, one);
+        PUSH(bt->dir[2], bt->turn_a[T2], bt->turn_b[T2], s, k, d1, one);
+        bt->impulse[T1][k] = t0[k], bt->impulse[T2][k] = t1[k];
     }
     /* a batch of one-point manifolds (its first lane has the most points)
        has no reach to twist with */
     if (bt->points > 1)
         for (k = 0; k < W; ++k) {
             const double reach = limit[k] * bt->twist_reach[k];
-            double twist = bt->impulse[2][k] - bt->mass[2][k] * ANGULAR(bt->dir[0], bt->dir[0], s, k, one), dt;
+            double twist = bt->impulse[TW][k] - bt->mass[TW][k] * ANGULAR(bt->dir[0], bt->dir[0], s, k, one), dt;
             twist = twist > reach ? reach : twist < -reach ? -reach : twist;
-            dt = twist - bt->impulse[2][k];
-            ANGULAR_PUSH(bt->turn_a[2], bt->turn_b[2], s, k, dt, one);
-            bt->impulse[2][k] = twist;
+            dt = twist - bt->impulse[TW][k];
+            ANGULAR_PUSH(bt->turn_a[TW], bt->turn_b[TW], s, k, dt, one);
+            bt->impulse[TW][k] = twist;
         }
 }
 
