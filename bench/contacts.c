@@ -65,7 +65,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define BENCH_RUNS 3
+#define BENCH_RUNS 5
 
 /* Box2D v3's published figure, for scale only: 2D, single precision, its
    soft step solver with substeps rather than iterations. */
