@@ -451,6 +451,11 @@ typedef struct tb_shape_def {
     double offset;            /* m, plane: points x with normal . x = offset */
     double friction;          /* Coulomb coefficient >= 0; default 0.6; a pair uses sqrt(mu_a mu_b) */
     double restitution;       /* 0 to 1; default 0; a pair uses the larger */
+    double rolling_resistance;/* m: how far ahead of a rolling contact its normal force
+                                 acts, so that rolling is resisted by a torque up to this
+                                 times the normal force (ODE's rho, a tyre's or a ball's
+                                 rolling resistance length); default 0 (a ball rolls on
+                                 for ever); >= 0; a pair uses the larger */
     uint32_t category;        /* bits this shape is; default 1 */
     uint32_t mask;            /* bits it collides with; default all. A pair collides
                                  when each one's category meets the other's mask */
@@ -459,7 +464,7 @@ typedef struct tb_shape_def {
 TB_API tb_shape_def tb_default_shape_def(void);
 /* Refused: sizes <= 0 or not finite, a plane normal that is not unit within
    1e-6, a plane on a body, a stale body, friction < 0, restitution outside
-   [0, 1], a non-unit orientation. */
+   [0, 1], rolling_resistance < 0 or not finite, a non-unit orientation. */
 TB_API tb_status tb_world_add_shape(tb_world *world, const tb_shape_def *def, tb_shape_id *id);
 TB_API tb_status tb_world_remove_shape(tb_world *world, tb_shape_id id);
 TB_API size_t tb_world_shape_count(const tb_world *world);

@@ -960,9 +960,10 @@ static int world_body(lua_State *L)
 
 /* world:shape{ type = "sphere" | "capsule" | "box" | "plane", body = b (none:
    static), pos, rot, radius, half_length, half = {x, y, z}, normal, offset,
-   friction, restitution, category, mask } */
+   friction, restitution, rolling_resistance, category, mask } */
 static const char *const shape_options[] = { "type", "body", "pos", "rot", "radius", "half_length", "half",
-                                             "normal", "offset", "friction", "restitution", "category",
+                                             "normal", "offset", "friction", "restitution",
+                                             "rolling_resistance", "category",
                                              "mask", NULL };
 
 static int world_shape(lua_State *L)
@@ -994,6 +995,7 @@ static int world_shape(lua_State *L)
     opt_number(L, 2, "offset", "world:shape", &def.offset);
     opt_number(L, 2, "friction", "world:shape", &def.friction);
     opt_number(L, 2, "restitution", "world:shape", &def.restitution);
+    opt_number(L, 2, "rolling_resistance", "world:shape", &def.rolling_resistance);
     bits = def.category;
     opt_number(L, 2, "category", "world:shape", &bits);
     def.category = (uint32_t)bits;

@@ -239,7 +239,7 @@ static void tangents(const double n[3], double t1[3], double t2[3])
 typedef struct side {
     uint32_t key;
     int32_t body;
-    double friction, restitution;
+    double friction, restitution, rolling;
 } side;
 
 static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
@@ -251,6 +251,7 @@ static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
         s->key |= TB__PARTICLE_KEY;
         s->friction = c->settings.particle_friction;
         s->restitution = c->settings.particle_restitution;
+        s->rolling = 0;
         return solver_body(w, c, TB__PARTICLES, slot, &s->body);
     } else {
         const tb__shape *sh = &c->shapes[proxy];
@@ -258,6 +259,7 @@ static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
         tb__ids_at(&c->ids, proxy, &s->key, &gen);
         s->friction = sh->friction;
         s->restitution = sh->restitution;
+        s->rolling = sh->rolling_resistance;
         s->body = -1;
         if (sh->body && tb__ids_lookup(&w->body_ids, sh->body, sh->body_generation, &slot) &&
             !w->body_island[slot]) /* (a sleeping body is ground to a slow particle) */
@@ -302,6 +304,7 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
     tangents(m->normal, e->tangent[0], e->tangent[1]);
     e->friction = sqrt(a.friction * b.friction);
     e->restitution = fmax(a.restitution, b.restitution);
+    e->rolling = fmax(a.rolling, b.rolling);
     e->count = m->count;
     e->touching = e->asleep = e->colour = e->cached = e->reused = 0;
     if (!found)
@@ -1040,8 +1043,12 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
     bt->source[k] = e;
     bt->friction[k] = e->friction;
     bt->twist_reach[k] = reach / n;
+    /* rolling resistance: the normal force may act that far beyond the
+       points too, so that it resists turning over them (a ball's single
+       point has no range of its own) */
     for (d = 0; d < 2; ++d)
-        bt->tilt_low[d][k] = low[d], bt->tilt_high[d][k] = high[d];
+        bt->tilt_low[d][k] = low[d] - e->rolling, bt->tilt_high[d][k] = high[d] + e->rolling;
+    bt->tilting |= n > 1 || e->rolling > 0;
 }
 
 /* Lane k's targets, levers and warm-start impulses, its rows set up. */
@@ -1146,6 +1153,7 @@ static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t *co
             }
             bt->points = e->touching;
             bt->one_sided = e->body_a < 0;
+            bt->tilting = 0;
             last = bucket_of(e) / CLASSES;
             lane = 0;
         }

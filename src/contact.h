@@ -20,6 +20,7 @@ typedef struct tb__shape {
     double normal[3];      /* plane */
     double offset;         /* m, plane */
     double friction, restitution;
+    double rolling_resistance; /* m */
     uint32_t category, mask;
     double reach;          /* m: how far the shape reaches from the body's centre */
 } tb__shape;
@@ -85,6 +86,8 @@ typedef struct tb__batch {
     int points;                         /* the most points of any lane */
     int one_sided;                      /* every lane's a is the static world: the sweeps
                                            skip side a (a plane's contacts) */
+    int tilting;                        /* some lane resists tilts: its points have a range
+                                           across a tangent, or it resists rolling */
     double dir[3][3][TB__BATCH_LANES];  /* [row][axis][lane]: the manifold's normal, tangents */
     double friction[TB__BATCH_LANES];
     /* the patch, TB__PATCH_ROWS rows: the tangent and press rows at the
@@ -97,7 +100,8 @@ typedef struct tb__batch {
     double press_target[TB__BATCH_LANES];/* m/s: the normal velocity to reach at the centre */
     double tilt_low[2][TB__BATCH_LANES], tilt_high[2][TB__BATCH_LANES]; /* m: the range of the
                                            points' levers for each tilt (a unit normal force's
-                                           moment about tangent d, from the centre) */
+                                           moment about tangent d, from the centre), widened by
+                                           the rolling resistance on both sides */
     double twist_reach[TB__BATCH_LANES];/* m: mean distance of the points from the centre */
     double lever[TB__BATCH_LANES];      /* s: how long the patch acts on positions */
     struct tb__entry *source[TB__BATCH_LANES]; /* NULL: an empty lane */
@@ -132,6 +136,7 @@ typedef struct tb__entry {
     int32_t body_a, body_b;    /* solver bodies, -1: static */
     double normal[3], tangent[2][3];
     double friction, restitution;
+    double rolling;            /* m: the pair's rolling resistance */
     double friction_impulse[3];/* N s, world: the patch's, kept from step to step */
     double twist_impulse;      /* N m s, about the normal */
     double tilt_impulse[3];    /* N m s, world, in the contact plane: the tilts', kept from

@@ -269,8 +269,9 @@ TB__LANE void press(tb__batch *restrict bt, sides *restrict s, int one)
 
 /* Every lane's tilts, about each tangent: no turn of one side on the
    other, within the press row's force times the range of the points'
-   levers (a lane with one point, or points on a line, has no range
-   across it and does not resist that tilt). */
+   levers, widened by the rolling resistance (a lane with one point, or
+   points on a line, has no range across it and without rolling
+   resistance does not resist that tilt). */
 TB__LANE void tilt(tb__batch *restrict bt, sides *restrict s, int d, int one)
 {
     const int r = TB__ROW_TILT1 + d;
@@ -290,7 +291,7 @@ TB__LANE void tilt(tb__batch *restrict bt, sides *restrict s, int d, int one)
 
 TB__LANE void tilts(tb__batch *restrict bt, sides *restrict s, int one)
 {
-    if (bt->points < 2) /* (its first lane has the most points) */
+    if (!bt->tilting)
         return;
     tilt(bt, s, 0, one);
     tilt(bt, s, 1, one);

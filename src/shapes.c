@@ -125,9 +125,12 @@ static tb_status check_shape(tb_world *w, const tb_shape_def *def)
     if (!tb__finite3(def->position) || !(fabs(qn - 1) <= 1e-6))
         return tb__fail(w, TB_ERR_ARGUMENT, "shape: position must be finite and orientation a unit quaternion");
     if (!(isfinite(def->friction) && def->friction >= 0) ||
-        !(def->restitution >= 0 && def->restitution <= 1))
-        return tb__fail(w, TB_ERR_ARGUMENT, "shape: friction must be >= 0 and restitution in [0, 1] (got %g, %g)",
-                        def->friction, def->restitution);
+        !(def->restitution >= 0 && def->restitution <= 1) ||
+        !(isfinite(def->rolling_resistance) && def->rolling_resistance >= 0))
+        return tb__fail(w, TB_ERR_ARGUMENT,
+                        "shape: friction and rolling_resistance must be finite and >= 0, restitution in [0, 1] "
+                        "(got %g, %g, %g)",
+                        def->friction, def->rolling_resistance, def->restitution);
     switch (def->type) {
     case TB_SHAPE_SPHERE:
         if (!positive(def->radius))
@@ -201,6 +204,7 @@ tb_status tb_world_add_shape(tb_world *w, const tb_shape_def *def, tb_shape_id *
     s->offset = def->offset;
     s->friction = def->friction;
     s->restitution = def->restitution;
+    s->rolling_resistance = def->rolling_resistance;
     s->category = def->category;
     s->mask = def->mask;
     s->reach = sqrt(s->pos[0] * s->pos[0] + s->pos[1] * s->pos[1] + s->pos[2] * s->pos[2]) +

@@ -552,6 +552,52 @@ static void sliding_ball_starts_rolling_at_five_sevenths(void **state)
 }
 
 
+/* A solid ball of radius r rolling at 2 m/s on a plane with rolling
+   resistance rho (the normal force acting rho ahead of the contact, a
+   torque rho m g about the centre): rolling without slipping, m a = -f
+   and (2/5) m r^2 a / r = f r - rho m g give a = -5 rho g / (7 r), so it
+   stops after v^2 / (2 |a|) = 2.854 m at rho = 1 cm, r = 0.1 m. Without
+   rolling resistance it rolls on (the test above). */
+static void rolling_ball_stops_at_its_rolling_resistance(void **state)
+{
+    const double r = 0.1, rho = 0.01, v0 = 2;
+    const double stop = v0 * v0 / (2 * 5 * rho * G / (7 * r));
+    tb_world_def def = tb_default_world_def();
+    tb_shape_def plane = tb_default_shape_def(), ball = tb_default_shape_def();
+    tb_body_def b = tb_default_body_def();
+    const double v[3] = { v0, 0, 0 }, spin[3] = { 0, v0 / r, 0 };
+    double x[3], speed[3];
+    tb_world *w;
+    tb_body_id id;
+    int i;
+    (void)state;
+    def.gravity[2] = -G;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    plane.type = TB_SHAPE_PLANE;
+    plane.rolling_resistance = rho;
+    assert_int_equal(tb_world_add_shape(w, &plane, NULL), TB_OK);
+    assert_int_equal(tb_mass_sphere(1000, r, &b.mass, NULL), TB_OK);
+    b.position[2] = r;
+    memcpy(b.velocity, v, sizeof v);
+    memcpy(b.angular_velocity, spin, sizeof spin);
+    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
+    ball.body = id, ball.radius = r;
+    assert_int_equal(tb_world_add_shape(w, &ball, NULL), TB_OK);
+    for (i = 0; i < 6 * 60; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_position(w, id, x);
+    tb_body_velocity(w, id, speed);
+    print_message("ball with rolling resistance 1 cm: stopped after %.6f m (v^2 / (2 |a|) = %.6f m), speed %.2e m/s\n",
+                  x[0], stop, speed[0]);
+    assert_rel(x[0], stop, 1e-4); /* measured 6e-6: where in its last step it stops */
+    assert_below(fabs(speed[0]), 1e-6);
+    ball.rolling_resistance = -0.01;
+    assert_int_equal(tb_world_add_shape(w, &ball, NULL), TB_ERR_ARGUMENT);
+    ball.rolling_resistance = INFINITY;
+    assert_int_equal(tb_world_add_shape(w, &ball, NULL), TB_ERR_ARGUMENT);
+    tb_world_destroy(w);
+}
+
 /* ---- sleep ------------------------------------------------------------------- */
 
 /* Steps until body id sleeps, at most `limit` steps; returns the steps taken. */
@@ -801,6 +847,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(islands_wake_together),
     cmocka_unit_test(sleep_settings),
     cmocka_unit_test(sliding_ball_starts_rolling_at_five_sevenths),
+    cmocka_unit_test(rolling_ball_stops_at_its_rolling_resistance),
     cmocka_unit_test(ball_bounces_to_e_squared),
     cmocka_unit_test(box_slides_to_v2_over_2_mu_g),
     cmocka_unit_test(spinning_box_stops_as_its_corners_rub),

@@ -337,7 +337,7 @@ static void shapes_and_events(void **state)
     expect_ok(L, "w = tumble.world{ dt = 1/60 }\n"
                  "plane = w:shape{ type = 'plane' }\n"
                  "ball = w:body{ sphere = 0.1, mass = 1, pos = {0, 0, 1.1} }\n"
-                 "s = w:shape{ type = 'sphere', body = ball, radius = 0.1, restitution = 0.5 }\n"
+                 "s = w:shape{ type = 'sphere', body = ball, radius = 0.1, restitution = 0.5, rolling_resistance = 0 }\n"
                  "local begun\n"
                  "for i = 1, 40 do w:step()\n"
                  "  for _, e in ipairs(w:events()) do\n"
@@ -353,6 +353,7 @@ static void shapes_and_events(void **state)
     expect_error(L, "w:shape{ type = 'plane', normal = {0, 0, 2} }", "unit");
     expect_error(L, "w:shape{ type = 'cone' }", "cone");
     expect_error(L, "w:shape{ type = 'sphere', radius = 1, colour = 'red' }", "colour");
+    expect_error(L, "w:shape{ type = 'sphere', radius = 1, rolling_resistance = -1 }", "rolling_resistance");
     expect_error(L, "w:contacts{ hertz = -1 }", "hertz");
     expect_error(L, "w:contacts{ sleep_time = 0 }", "sleep_time");
     expect_error(L, "w:contacts{ velocity_tolerance = -1 }", "velocity_tolerance");
