@@ -24,10 +24,11 @@
      means the timing is of a broken run.
    - every sweep: the velocity pass stops early once a pair of sweeps
      changes no enforced velocity by more than velocity_tolerance (1e-6
-     m/s by default), which a resting pyramid reaches in 7 or 8 sweeps. The
-     pyramid is run again with that off (velocity_tolerance 0: every one
-     of the velocity_iterations sweeps), at 20 and at 40 iterations: their
-     cost, and how close the top box stays with every sweep done.
+     m/s by default), which a resting pyramid reaches in 10 sweeps on
+     average. The pyramid is run again with that off (velocity_tolerance
+     0: every one of the velocity_iterations sweeps), at 20 and at 40
+     iterations: their cost, and how close the top box stays with every
+     sweep done.
    - ns per contact point per velocity iteration, from those two runs: the
      median step at 20 over (mean touching points x 20). This charges the
      whole step to the solver's sweeps, so it is an upper bound on the

@@ -1351,9 +1351,9 @@ static int settled(const tb__contacts *c, double tolerance)
    tolerance (0: never), looked at after sweeps 4, 8, 12 and so on (each
    look copies every impulse first: where nothing settles, as in a falling
    pile, a look after every pair cost 2% of a step). A resting pyramid of
-   210 boxes then takes 8 sweeps a step, not 20, to the same motion (its
-   top box within 1.7 mm over 60 s either way; at 1e-5 m/s it crept 1 cm
-   in 10 s). Returns how many sweeps ran. */
+   210 boxes then takes 10 sweeps a step on average, not 20, to the same
+   motion (its top box within 1.7 mm over 60 s either way; at 1e-5 m/s it
+   crept 1 cm in 10 s). Returns how many sweeps ran. */
 static int sweep_until_settled(tb__contacts *c, int most, double tolerance)
 {
     const size_t per_batch = TB__PATCH_ROWS * TB__BATCH_LANES;
