@@ -369,27 +369,13 @@ TB__LANE void drift(double *restrict x, const double *restrict P, const double *
 }
 
 /* A kick of gravity alone (as kick_gravity) and then a drift, in one pass
-   over the block: what a split method's sweep mostly does. */
+   over the block: what a split method's sweep mostly does; close: and then
+   the same kick again (verlet's closing kick, when nothing the drift
+   changes moves the forces: integrators.c). The operations of
+   kick_gravity, drift and kick_gravity one after the other, the same
+   bits, with P, the masses and the kick h m g gone through once. */
 TB__LANE void kick_drift(double *restrict x, double *restrict P, const double *restrict mass,
-                         const double *restrict inv_mass, double hk, double hd, const double *restrict g3)
-{
-    double m3[3 * TB__LANES], inv3[3 * TB__LANES];
-    int i;
-    spread3(mass, m3);
-    spread3(inv_mass, inv3);
-    for (i = 0; i < 3 * TB__LANES; ++i) {
-        const double p = P[i] + hk * (m3[i] * g3[i]);
-        P[i] = p;
-        x[i] += hd * p * inv3[i];
-    }
-}
-
-/* ... and then the same kick again (verlet's closing kick, when nothing
-   the drift changes moves the forces: integrators.c): the operations of
-   kick_drift and kick_gravity one after the other, the same bits, with
-   P, the masses and the kick h m g gone through once. */
-TB__LANE void kick_drift_kick(double *restrict x, double *restrict P, const double *restrict mass,
-                              const double *restrict inv_mass, double hk, double hd, const double *restrict g3)
+                         const double *restrict inv_mass, double hk, double hd, const double *restrict g3, int close)
 {
     double m3[3 * TB__LANES], inv3[3 * TB__LANES];
     int i;
@@ -398,7 +384,7 @@ TB__LANE void kick_drift_kick(double *restrict x, double *restrict P, const doub
     for (i = 0; i < 3 * TB__LANES; ++i) {
         const double kick = hk * (m3[i] * g3[i]), p = P[i] + kick;
         x[i] += hd * p * inv3[i];
-        P[i] = p + kick;
+        P[i] = close ? p + kick : p;
     }
 }
 
@@ -469,17 +455,13 @@ TB__LANE void sweep_blocks(tb_world *w, const tb__split_op *ops, int n, int only
     for (b = 0; b < w->body_count; b += TB__LANES) {
         const size_t m = w->body_count - b < TB__LANES ? w->body_count - b : TB__LANES;
         for (i = 0; i < n; ++i) {
-            if (only_gravity && m == TB__LANES && !ops[i].drift && i + 2 < n && ops[i + 1].drift && !ops[i + 2].drift
-                && ops[i + 2].h == ops[i].h) {
-                kick_drift_kick(x + 3 * b, P + 3 * b, w->body_mass + b, w->body_inv_mass + b, ops[i].h, ops[i + 1].h,
-                                g3);
-                turn(w, b, m, &ops[i + 1], isa);
-                i += 2;
-                continue;
-            }
             if (only_gravity && m == TB__LANES && !ops[i].drift && i + 1 < n && ops[i + 1].drift) {
-                kick_drift(x + 3 * b, P + 3 * b, w->body_mass + b, w->body_inv_mass + b, ops[i].h, ops[i + 1].h, g3);
-                turn(w, b, m, &ops[++i], isa);
+                /* (a kick of gravity leaves L alone: the turn may come after it) */
+                const int close = i + 2 < n && !ops[i + 2].drift && ops[i + 2].h == ops[i].h;
+                kick_drift(x + 3 * b, P + 3 * b, w->body_mass + b, w->body_inv_mass + b, ops[i].h, ops[i + 1].h, g3,
+                           close);
+                turn(w, b, m, &ops[i + 1], isa);
+                i += 1 + close;
                 continue;
             }
             if (!ops[i].drift) {

@@ -901,10 +901,13 @@ static int predict_points(tb__contacts *c, tb__entry *e)
 static const double no_inertia[9] = { 0 };
 
 /* Point p of entry e as point j of lane k, its row set up: impact timing
-   and targets. fraction: the share of an old overlap the position pass
-   takes back this step. Returns whether it is a new contact (an impact). */
+   and the position pass's target. fraction: the share of an old overlap
+   the position pass takes back this step. *target: the normal velocity
+   the point is to reach; *lever: how long its impulse acts on positions
+   (the patch takes their means). Returns whether it is a new contact (an
+   impact). */
 static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__batch *bt, int k, int j, double h,
-                        double fraction)
+                        double fraction, double *target, double *lever)
 {
     const tb_contact_settings *s = &c->settings;
     tb__lane_point *lp = &bt->point[j];
@@ -932,13 +935,13 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
             tau = u < 0 ? fmin(h, -p->separation / u) : h;
         vi = -(u + a * tau); /* approach speed at impact */
         p->speed = vi > 0 ? vi : 0;
-        lp->lever[k] = h - tau;
-        lp->target[k] = vi > s->restitution_threshold && e->restitution > 0 ? e->restitution * vi + a * (h - tau) : 0;
+        *lever = h - tau;
+        *target = vi > s->restitution_threshold && e->restitution > 0 ? e->restitution * vi + a * (h - tau) : 0;
         p->normal_impulse = 0;
         impact = 1;
     } else {
-        lp->lever[k] = h / 2; /* a contact force acting through the step */
-        lp->target[k] = 0;
+        *lever = h / 2; /* a contact force acting through the step */
+        *target = 0;
     }
     return impact;
 }
@@ -963,18 +966,17 @@ static void side_tangents(tb__entry *e)
     if (n < 2)
         return;
     {
-        double d2[TB__MANIFOLD_POINTS - 1] = { 0 }, longest = -1, next = -1;
-        int to = 1, second = 1;
+        double d2[TB__MANIFOLD_POINTS] = { 0 };
+        int to = 1;
         for (i = 1; i < n; ++i) {
             for (d = 0; d < 3; ++d)
-                d2[i - 1] += (at[i][d] - at[0][d]) * (at[i][d] - at[0][d]);
-            if (d2[i - 1] > longest)
-                next = longest, second = to, longest = d2[i - 1], to = i;
-            else if (d2[i - 1] > next)
-                next = d2[i - 1], second = i;
+                d2[i] += (at[i][d] - at[0][d]) * (at[i][d] - at[0][d]);
+            to = d2[i] > d2[to] ? i : to;
         }
-        if (n == 4)
-            to = second;
+        if (n == 4) { /* the longer of the other two */
+            const int one = to == 1 ? 2 : 1, other = to == 3 ? 2 : 3;
+            to = d2[one] >= d2[other] ? one : other;
+        }
         for (d = 0; d < 3; ++d)
             side[d] = at[to][d] - at[0][d];
     }
@@ -1058,11 +1060,12 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
     double lever = 0, target = 0, force = 0;
     int j, d, impacts = 0;
     for (j = 0; j < bt->points && bt->point[j].source[k]; ++j) {
-        const tb__point *p = bt->point[j].source[k];
+        tb__point *p = bt->point[j].source[k];
+        double point_target, point_lever;
         *cold += !p->matched;
-        impacts += set_up_point(c, e, bt->point[j].source[k], bt, k, j, h, fraction);
-        lever += bt->point[j].lever[k];
-        target += bt->point[j].target[k];
+        impacts += set_up_point(c, e, p, bt, k, j, h, fraction, &point_target, &point_lever);
+        lever += point_lever;
+        target += point_target;
         force += p->normal_impulse; /* (0 for a point that struck) */
     }
     /* the patch acts on positions for as long as its points touched,
@@ -1086,12 +1089,6 @@ static size_t bucket_of(const tb__entry *e)
     return ((size_t)e->colour * 2 + (e->body_a < 0)) * TB__MANIFOLD_POINTS + TB__MANIFOLD_POINTS - (size_t)e->touching;
 }
 
-/* The touching entries into batches: by colour, and within a colour those
-   against the static world apart (the sweeps skip their side a), and by
-   how many points touch, most first, so that a batch's lanes mostly have
-   as many points as its first; each lane's touching points packed. Then
-   their rows, in lanes, and their targets. Counts the touching points,
-   and those without last step's impulses (cold). */
 /* Whether the batch that starts at c->bucket[i] (of n) is full, with as
    many points in every lane: then the lanes set every field of it, and it
    needs no zeroing first (a batch is some 11 kB: zeroing every one of them
@@ -1110,6 +1107,12 @@ static int full_batch(const tb__contacts *c, size_t i, size_t n)
     return last->touching == first->touching;
 }
 
+/* The touching entries into batches: by colour, and within a colour those
+   against the static world apart (the sweeps skip their side a), and by
+   how many points touch, most first, so that a batch's lanes mostly have
+   as many points as its first; each lane's touching points packed. Then
+   their rows, in lanes, and their targets. Counts the touching points,
+   and those without last step's impulses (cold). */
 static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t *cold)
 {
     enum { CLASSES = TB__MANIFOLD_POINTS, BUCKETS = (TB__COLOURS + 1) * 2 * CLASSES };

@@ -73,11 +73,9 @@ typedef struct tb__lane_point {
     double arm_a[3][TB__BATCH_LANES], arm_b[3][TB__BATCH_LANES]; /* [axis][lane]: its normal row */
     double turn_a[3][TB__BATCH_LANES], turn_b[3][TB__BATCH_LANES];
     double mass[TB__BATCH_LANES];       /* 1 / (J M^-1 J^T) */
-    double target[TB__BATCH_LANES];     /* m/s: the normal velocity to reach */
     double predicted[TB__BATCH_LANES];  /* m: separation after the free motion */
     double push_target[TB__BATCH_LANES];/* m: the separation the position pass aims for */
     double position_impulse[TB__BATCH_LANES];
-    double lever[TB__BATCH_LANES];      /* s: how long its impulse acts on positions */
     struct tb__point *source[TB__BATCH_LANES]; /* where the impulse goes back to; NULL: none */
 } tb__lane_point;
 

@@ -731,6 +731,21 @@ static tb_status no_force(const tb_force_args *args, void *user)
     return TB_OK;
 }
 
+/* Body k's principal moments as a unit-mass box of random sides: isotropic
+   for k % 6 = 5, a symmetric top for k % 6 = 4. */
+static void random_box(unsigned long long *seed, int k, double inertia[3])
+{
+    double a[3];
+    int i;
+    for (i = 0; i < 3; ++i)
+        a[i] = k % 6 == 5 ? 1 : 0.25 + uniform(seed);
+    if (k % 6 == 4)
+        a[1] = a[0];
+    inertia[0] = (a[1] * a[1] + a[2] * a[2]) / 12;
+    inertia[1] = (a[0] * a[0] + a[2] * a[2]) / 12;
+    inertia[2] = (a[0] * a[0] + a[1] * a[1]) / 12;
+}
+
 /* Bodies of every kind, some with -0 in their velocities, some damped, in
    a world whose gravity has a -0 component; `callback` adds a force
    callback that adds nothing, which sends the world through the general
@@ -746,15 +761,9 @@ static tb_world *mixed_world(const char *integrator, int damped, int callback)
     assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
     for (k = 0; k < 2 * TB__LANES + 3; ++k) {
         tb_body_def b = tb_default_body_def();
-        double L[3], invI[3], a[3];
+        double L[3], invI[3];
         lane_body(&seed, k, b.orientation, L, invI);
-        for (i = 0; i < 3; ++i) /* a box: sides a, isotropic for k % 6 = 5, a top for 4 */
-            a[i] = k % 6 == 5 ? 1 : 0.25 + uniform(&seed);
-        if (k % 6 == 4)
-            a[1] = a[0];
-        b.mass.inertia[0] = (a[1] * a[1] + a[2] * a[2]) / 12;
-        b.mass.inertia[1] = (a[0] * a[0] + a[2] * a[2]) / 12;
-        b.mass.inertia[2] = (a[0] * a[0] + a[1] * a[1]) / 12;
+        random_box(&seed, k, b.mass.inertia);
         for (i = 0; i < 3; ++i) {
             b.position[i] = 10 * uniform(&seed);
             b.velocity[i] = k % 4 == 1 ? -0.0 : 4 * uniform(&seed) - 2;
@@ -833,16 +842,10 @@ static void world_turns_give_the_one_body_bits(void **state)
         assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
         for (k = 0; k < N; ++k) {
             tb_body_def b = tb_default_body_def();
-            double a[3], qk[4], lk[3], ik[3];
+            double qk[4], lk[3], ik[3];
             lane_body(&seed, k, qk, lk, ik);
             memcpy(b.orientation, qk, sizeof qk);
-            for (i = 0; i < 3; ++i) /* a box, isotropic for k % 6 = 5, a top for 4 */
-                a[i] = k % 6 == 5 ? 1 : 0.25 + uniform(&seed);
-            if (k % 6 == 4)
-                a[1] = a[0];
-            b.mass.inertia[0] = (a[1] * a[1] + a[2] * a[2]) / 12;
-            b.mass.inertia[1] = (a[0] * a[0] + a[2] * a[2]) / 12;
-            b.mass.inertia[2] = (a[0] * a[0] + a[1] * a[1]) / 12;
+            random_box(&seed, k, b.mass.inertia);
             for (i = 0; i < 3; ++i) {
                 b.angular_velocity[i] = lk[i] * (k % 11 == 5 ? 4 : 1); /* some beyond the polynomials */
                 invI[k][i] = 1 / b.mass.inertia[i];
