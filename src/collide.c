@@ -374,15 +374,32 @@ static void box_corner(const tb__geom *g, int i, double out[3])
     to_world(g, l, 1, out);
 }
 
-/* The deepest 4 corners: a box lying flat keeps its bottom face even when
-   it is thinner than the margin. */
+/* The corners of the face most against the plane that are within the
+   margin, deepest first. That face holds the deepest corner and spans the
+   box's widest support: a box lying flat keeps its bottom face even when
+   it is thinner than the margin, and a long thin box buried in the plane
+   (every corner below it) keeps both its ends. (The 4 deepest of all 8
+   corners were one end of such a box, top and bottom: the push at that
+   end only turned it, and a plate 4 m long with a heavy core sank through
+   the plane for good.) */
 static void box_plane(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
 {
-    tb__candidate c[8];
-    int i, j, n = 0;
+    tb__candidate c[4];
+    double along[3];
+    int i, j, k = 0, n = 0, side;
     scale(b->normal, -1, m->normal);
+    for (i = 0; i < 3; ++i) {
+        double ax[3];
+        axis(a->rot, i, ax);
+        along[i] = dot(b->normal, ax);
+        if (fabs(along[i]) > fabs(along[k]))
+            k = i;
+    }
+    side = along[k] < 0 ? 1 << k : 0; /* corner bit k set: the + face */
     for (i = 0; i < 8; ++i) {
         double p[3];
+        if ((i & (1 << k)) != side)
+            continue;
         box_corner(a, i, p);
         const double sep = dot(b->normal, p) - b->offset;
         if (!(sep < margin))

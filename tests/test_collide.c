@@ -572,6 +572,32 @@ static void box_lying_on_plane_gives_four_corners(void **state)
     assert_rel(m.point[0].depth, 0.02, 1e-9);
 }
 
+/* A plank 4 m long and 1.8 cm thick, buried in the plane with its length
+   5 degrees off level, every corner under the surface: the points are its
+   bottom face's, so they span both ends. The 4 deepest of all 8 corners
+   were the low end's, top and bottom, and the push there only turned the
+   plank: one with a heavy core sank through the plane for good. */
+static void buried_plank_keeps_both_ends(void **state)
+{
+    (void)state;
+    double R[9];
+    tb__manifold m;
+    rot_axis(0, 1, 0, 5 * PI / 180, R);
+    const tb__geom plank = box(0, 0, -0.5, R, 2.03, 0.27, 0.009), p = plane(0, 0, 1, 0);
+    int i, j, count = tb__collide(&plank, &p, 0, &m);
+    double corner[4][3], span = 0;
+    assert_int_equal(count, 4);
+    for (i = 0; i < count; ++i) { /* the point is halfway up from its corner */
+        const double at[3] = { m.point[i].pos[0], m.point[i].pos[1], m.point[i].pos[2] - 0.5 * m.point[i].depth };
+        local(&plank, at, corner[i]);
+        assert_true(fabs(corner[i][2] + 0.009) < 1e-12); /* the -z face */
+    }
+    for (i = 0; i < count; ++i)
+        for (j = 0; j < count; ++j)
+            span = fmax(span, fabs(corner[i][0] - corner[j][0]));
+    assert_true(fabs(span - 2 * 2.03) < 1e-12);
+}
+
 static void box_on_box_face_contact(void **state)
 {
     (void)state;
@@ -1055,6 +1081,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(degenerate_capsule_is_a_sphere),
     cmocka_unit_test(capsule_against_box),
     cmocka_unit_test(box_lying_on_plane_gives_four_corners),
+    cmocka_unit_test(buried_plank_keeps_both_ends),
     cmocka_unit_test(box_on_box_face_contact),
     cmocka_unit_test(box_on_box_turned_45_degrees),
     cmocka_unit_test(boxes_crossing_edge_to_edge),
