@@ -418,17 +418,23 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    (|f_t| <= mu times the pair's normal force, and a twist about the
    normal up to that times the points' mean distance from the centre: the
    sliding force of friction at every point, in fewer rows), and
-   moves positions as those impulses would have over the step: by h/2 for
-   resting and sliding contact (a force acting through the step), by the
-   time left after impact for a new contact (the impact is timed within the
-   step, so a ball bounces to e^2 of its height at any step size); the
+   moves positions as those impulses would have over the step: for resting
+   and sliding contact as the integrator moves positions under a constant
+   force (h/2 times the impulse for the methods exact on one: verlet, rk4,
+   dopri5; h for symplectic and implicit Euler, 0 for explicit Euler), so
+   that the free motion's fall and the push back cancel and a body at rest
+   stays put under any method; by the time left after impact for a new
+   contact (the impact is timed within the step, so a ball bounces to e^2
+   of its height at any step size); the
    sweeps alternate direction, so weight reaches the bottom of a stack
    within a pair of sweeps whatever order the points come in; (4) a
    position pass pushes overlaps apart without adding velocity: rigidly for
    gaps that closed, softly (contact_hertz, damping ratio) for overlaps
    that were already there. Momentum is exchanged by equal and opposite
    impulses, so it is conserved to rounding. Sleeping bodies (see "Sleep"
-   below) are left out of (1) to (4) and keep their pose.
+   below) are left out of (1) to (4) and keep their pose. A box against a
+   plane touches at the corners of its face most against it that are in
+   reach: a long thin box buried in the ground keeps both ends.
    Cost: a pair of shapes whose relative pose moved less than a tenth of
    the slop since they last collided keeps that manifold, its points
    carried on both shapes and their separations updated (a resting stack
@@ -490,7 +496,9 @@ typedef struct tb_contact_settings {
     double particle_friction;     /* default 0.6 */
     double particle_restitution;  /* default 0 */
     double sleep_speed;           /* m/s: a body slower than this (|v| + |w| times its
-                                     shapes' reach) is resting; default 0.05 */
+                                     shapes' reach), and that moved less than this times
+                                     the step in it (the position pass lifts a buried body
+                                     without giving it speed), is resting; default 0.05 */
     double sleep_time;            /* s: an island of touching bodies that all rest this
                                      long falls asleep; default 0.5, INFINITY: never */
 } tb_contact_settings;

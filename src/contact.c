@@ -940,7 +940,14 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
         p->normal_impulse = 0;
         impact = 1;
     } else {
-        *lever = h / 2; /* a contact force acting through the step */
+        /* a contact force acting through the step, which moves positions
+           as the method moves them under any constant force: then the
+           free motion's fall and the push back cancel, and a body at rest
+           stays put whatever the integrator (with h / 2 for all, symplectic
+           Euler's bodies sank g h^2 / 2 a step for the position pass to
+           take back, which it did not for a thin plate 4 m long: 4 cm
+           deep) */
+        *lever = c->rest_lever;
         *target = 0;
     }
     return impact;
@@ -1388,6 +1395,7 @@ void tb__contacts_solve(tb_world *w, double h)
         return;
     tb__sleep_restore(w, c);
     load_bodies(w, c);
+    c->rest_lever = tb__force_lever(w) * h;
     set_up_batches(c, h, &points, &cold);
     tb__push_impulses(c->batches, c->batch_count, c->velocity, TB__PUSH_VELOCITY, c->isa);
     iterations = c->settings.velocity_iterations;

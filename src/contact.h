@@ -223,6 +223,9 @@ struct tb__contacts {
     uint32_t *bucket;          /* [entry_cap]: entries by colour, then points */
     size_t bucket_cap;
     int isa;                   /* the sweeps' instruction set (tb__isa) */
+    double rest_lever;         /* s: how long a resting contact's impulse acts on positions
+                                  this step, as a constant force would under the world's
+                                  method (tb__force_lever times h) */
     double *velocity, *motion, *momenta; /* [TB__MOTION * motion_cap] each, one block: see
                                   TB__MOTION (momenta: P, L, then 1 or 0 for the static world) */
     double *motion_block;      /* the block as allocated: TB__MOTION_BYTES(motion_cap) */

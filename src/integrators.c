@@ -256,16 +256,25 @@ const char *tb_world_auto_choice(const tb_world *w, long *substeps)
    damp a decay for h k < 2; RK4's region reaches 2 sqrt 2 on the imaginary
    axis and 2.785 on the negative real axis. */
 static const tb__method methods[] = {
-    { "euler", 1, 0, 0, 1, euler, 0, 2, 0, NULL },
-    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, 2, 2, 0, NULL },
-    { "verlet", 2, 1, 1, 1, verlet, 2, 2, 0, NULL },
-    { "rk4", 4, 0, 0, 3, rk4, 2.8284271247461903, 2.785293563405282, 0, NULL },
-    { "verlet_exact", 2, 1, 1, 1, verlet_exact, 2, 2, 0, NULL },
-    { "implicit_euler", 1, 1, 0, 4, implicit_euler, INFINITY, INFINITY, 0, NULL },
-    { "dopri5", 5, 0, 0, 10, dopri5, INFINITY, INFINITY, 1, NULL },
-    { "auto", 0, 0, 1, 10, auto_step, INFINITY, INFINITY, 1, tb__auto_plan },
+    { "euler", 1, 0, 0, 1, euler, 0, 2, 0, NULL, 0 },
+    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, 2, 2, 0, NULL, 1 },
+    { "verlet", 2, 1, 1, 1, verlet, 2, 2, 0, NULL, 0.5 },
+    { "rk4", 4, 0, 0, 3, rk4, 2.8284271247461903, 2.785293563405282, 0, NULL, 0.5 },
+    { "verlet_exact", 2, 1, 1, 1, verlet_exact, 2, 2, 0, NULL, 0.5 },
+    { "implicit_euler", 1, 1, 0, 4, implicit_euler, INFINITY, INFINITY, 0, NULL, 1 },
+    { "dopri5", 5, 0, 0, 10, dopri5, INFINITY, INFINITY, 1, NULL, 0.5 },
+    { "auto", 0, 0, 1, 10, auto_step, INFINITY, INFINITY, 1, tb__auto_plan, 0.5 },
 };
 #define METHOD_COUNT ((int)(sizeof methods / sizeof methods[0]))
+
+/* n substeps of a method with share c move x by (h/n)^2 a c each and by
+   the velocity they add: h^2 a (c / n + (n - 1) / (2 n)) in all. */
+double tb__force_lever(const tb_world *w)
+{
+    if (w->method->plan && w->auto_method && w->auto_substeps > 0)
+        return 0.5 + (w->auto_method->force_lever - 0.5) / (double)w->auto_substeps;
+    return w->method->force_lever;
+}
 
 const tb__method *tb__method_find(const char *name)
 {

@@ -146,6 +146,24 @@ void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
         tb__body_velocity(w, (uint32_t)i, v, omega);
         w->body_rest[i] = norm3(v) + norm3(omega) * reach[i] < c->settings.sleep_speed ? w->body_rest[i] + h : 0;
     }
+    /* ... and that moved slower than that over the step: the position pass
+       moves a body out of an overlap without giving it speed (a plate
+       buried in the plane fell asleep 0.4 m deep, pushed up at 3 m/s) */
+    for (i = 0; i < c->body_count; ++i) {
+        const tb__solver_body *b = &c->bodies[i];
+        const double *x, *q;
+        double dx[3], turn[4];
+        const double q0c[4] = { b->q0[0], -b->q0[1], -b->q0[2], -b->q0[3] };
+        int k;
+        if (b->tier != TB__BODIES || w->body_island[b->slot] || w->body_rest[b->slot] == 0)
+            continue;
+        x = w->y + w->off[TB__BODY_POS] + 3 * b->slot, q = w->y + w->off[TB__BODY_ROT] + 4 * b->slot;
+        for (k = 0; k < 3; ++k)
+            dx[k] = x[k] - b->x0[k];
+        quat_mul(q, q0c, turn); /* (cos, sin n) of half the step's turn */
+        if (norm3(dx) + 2 * norm3(turn + 1) * reach[b->slot] >= c->settings.sleep_speed * h)
+            w->body_rest[b->slot] = 0;
+    }
     /* islands: bodies joined by touching contacts this step */
     for (i = 0; i < c->entry_count; ++i) {
         const tb__entry *e = &c->entries[i];

@@ -92,6 +92,14 @@ typedef struct tb__method {
     /* chooses another method and its substeps for a step h (auto.c), NULL
        for a method that steps by itself */
     tb_status (*plan)(tb_world *w, double h);
+    /* how far a constant force moves positions in one step, as a share s
+       of h: x gains s h (F h / m) beside the velocity's h v. 1/2 for the
+       methods exact on a constant force, 1 for symplectic (and implicit)
+       Euler, which drift with the kicked velocity, 0 for explicit Euler,
+       which drifts with the old one. The contact pass moves positions by
+       a resting contact's impulse this way, so a body at rest stays put
+       (contact.c) */
+    double force_lever;
 } tb__method;
 
 const tb__method *tb__method_find(const char *name);
@@ -287,6 +295,10 @@ void tb__split_extrapolate(const tb_world *w, double *saved);
 tb_status tb__stiffest_mode(tb_world *w, double *omega, tb_spring_id *culprit);
 /* The fastest drag or damping decay rate (1/s) of particles and bodies. */
 double tb__fastest_decay(const tb_world *w);
+/* The force_lever of the step just taken (auto: of the method it chose,
+   over its substeps). */
+double tb__force_lever(const tb_world *w);
+
 /* Choose w->auto_method and w->auto_substeps for steps of h. */
 tb_status tb__auto_plan(tb_world *w, double h);
 /* After a step from the state `before`: TB_OK, or TB_ERR_UNSTABLE with a
