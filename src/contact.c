@@ -1078,15 +1078,20 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
     /* the patch acts on positions for as long as its points touched,
        aims at their mean normal velocity, and starts from their warm
        starts; its friction and tilts start afresh when one of them struck
-       this step */
+       this step. One point has no twist, nor tilts without rolling
+       resistance: their rows may not be solved at all then (a batch of
+       one-point lanes skips them), and what they started from would be
+       pushed on every step unchanged. A capsule spun lying down and stood
+       on its end turned the other way ever faster, by 10 rad/s a step. */
     bt->lever[k] = lever / j;
     bt->press_target[k] = target / j;
     bt->impulse[TB__ROW_PRESS][k] = force;
     for (d = 0; d < 2; ++d) {
         bt->impulse[TB__ROW_TANGENT1 + d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]);
-        bt->impulse[TB__ROW_TILT1 + d][k] = impacts ? 0 : dot3(e->tilt_impulse, e->tangent[d]);
+        bt->impulse[TB__ROW_TILT1 + d][k] =
+            impacts || (j == 1 && !(e->rolling > 0)) ? 0 : dot3(e->tilt_impulse, e->tangent[d]);
     }
-    bt->impulse[TB__ROW_TWIST][k] = impacts ? 0 : e->twist_impulse;
+    bt->impulse[TB__ROW_TWIST][k] = impacts || j == 1 ? 0 : e->twist_impulse;
 }
 
 /* An entry's place among the batches: by colour, then against the static

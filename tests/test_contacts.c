@@ -600,6 +600,50 @@ static void rolling_ball_stops_at_its_rolling_resistance(void **state)
     tb_world_destroy(w);
 }
 
+/* A capsule (r 0.1 m, 1.2 m long) lying on the plane and spun about the
+   vertical at 5 rad/s: friction's twist over its two points brakes it.
+   Then it is stood on its end, spinning at 5 rad/s about its own axis,
+   now vertical. Its one point lies on that axis, where neither the normal
+   force nor friction (the point does not slip) has a lever about it: the
+   spin must stay 5 rad/s. A lane of one point has no twist row, and the
+   twist started from lying down was pushed unchanged on every step: the
+   capsule turned the other way ever faster, by 10 rad/s a step. */
+static void capsule_stood_on_end_keeps_its_spin(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    tb_body_def b = tb_default_body_def();
+    tb_shape_def s = tb_default_shape_def();
+    const double up[4] = { 1, 0, 0, 0 }, standing[3] = { 0, 0, 0.6 }, still[3] = { 0, 0, 0 }, spin[3] = { 0, 0, 5 };
+    double omega[3];
+    tb_body_id id;
+    int i;
+    (void)state;
+    awake(w);
+    assert_int_equal(tb_mass_capsule(1000, 0.1, 1, &b.mass, NULL), TB_OK);
+    b.orientation[0] = b.orientation[2] = sqrt(0.5); /* lying along x */
+    b.position[2] = 0.1;
+    b.angular_velocity[2] = 5;
+    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
+    s.type = TB_SHAPE_CAPSULE, s.body = id, s.radius = 0.1, s.half_length = 0.5;
+    assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
+    for (i = 0; i < 5; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_angular_velocity(w, id, omega);
+    assert_true(omega[2] < 4.5); /* braked: the twist held an impulse */
+    assert_int_equal(tb_body_set_orientation(w, id, up), TB_OK);
+    assert_int_equal(tb_body_set_position(w, id, standing), TB_OK);
+    assert_int_equal(tb_body_set_velocity(w, id, still), TB_OK);
+    assert_int_equal(tb_body_set_angular_velocity(w, id, spin), TB_OK);
+    for (i = 0; i < 60; ++i) {
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        tb_body_angular_velocity(w, id, omega);
+        if (!(fabs(omega[2] - 5) < 1e-9 && fabs(omega[0]) + fabs(omega[1]) < 1e-9))
+            fail_msg("step %d: spin %.6g %.6g %.6g rad/s", i, omega[0], omega[1], omega[2]);
+    }
+    assert_int_equal(tb_world_contact_count(w), 1);
+    tb_world_destroy(w);
+}
+
 /* ---- buried bodies and every integrator ---------------------------------- */
 
 /* A plank of wood 4.06 m long, 0.54 m wide and 1.8 cm thick (1000 kg/m^3,
@@ -971,6 +1015,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(fast_sphere_does_not_tunnel),
     cmocka_unit_test(collision_keeps_momentum),
     cmocka_unit_test(far_box_leaves_a_capsule_alone),
+    cmocka_unit_test(capsule_stood_on_end_keeps_its_spin),
     cmocka_unit_test(box_pushed_at_the_top_tips_at_half_its_weight),
     cmocka_unit_test(events_report_impacts),
     cmocka_unit_test(bad_shapes_are_refused),
