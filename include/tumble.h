@@ -430,7 +430,10 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    within a pair of sweeps whatever order the points come in; (4) a
    position pass pushes overlaps apart without adding velocity: rigidly for
    gaps that closed, softly (contact_hertz, damping ratio) for overlaps
-   that were already there. Momentum is exchanged by equal and opposite
+   that were already there; each pair first as a patch (its centre pushed
+   and turned to the plane that best levels what its points need, so a
+   long body comes out of an overlap whole instead of see-sawing end to
+   end), then point by point. Momentum is exchanged by equal and opposite
    impulses, so it is conserved to rounding. Sleeping bodies (see "Sleep"
    below) are left out of (1) to (4) and keep their pose. A box against a
    plane touches at the corners of its face most against it that are in
@@ -490,7 +493,8 @@ typedef struct tb_contact_settings {
                                      after 4 sweeps or more, once a pair of sweeps changed
                                      no velocity it enforces by more than this; default
                                      1e-6; 0: always velocity_iterations sweeps */
-    int position_iterations;      /* default 4 */
+    int position_iterations;      /* sweeps of the position pass (each pair as a patch,
+                                     then its points); default 3 */
     double particle_radius;       /* m: particles collide with shapes as spheres of this
                                      radius (0: points); < 0 (default -1): they do not */
     double particle_friction;     /* default 0.6 */

@@ -1060,6 +1060,51 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
     bt->tilting |= n > 1 || e->rolling > 0;
 }
 
+/* What the position pass's patch of lane k (n points) aims for: the
+   plane c0 + phi_1 l_1 + phi_2 l_2 nearest (least squares) to what each
+   point needs, target minus predicted separation, over the points'
+   levers l_d about the centre (place_lane): the centre's displacement c0
+   and the turns phi_d about the tangents. A box's face against a plane
+   or a face needs exactly such a plane. Points on a line (or one point)
+   leave the turn across it at 0. */
+static void patch_pushes(tb__batch *bt, int k, int n)
+{
+    const tb__entry *e = bt->source[k];
+    double centre[3] = { 0, 0, 0 }, need[TB__MANIFOLD_POINTS], lever[2][TB__MANIFOLD_POINTS];
+    double mean = 0, s00 = 0, s01 = 0, s11 = 0, b0 = 0, b1 = 0, det;
+    int j, d;
+    for (j = 0; j < n; ++j) {
+        const tb__lane_point *lp = &bt->point[j];
+        need[j] = lp->push_target[k] - lp->predicted[k];
+        mean += need[j];
+        for (d = 0; d < 3; ++d)
+            centre[d] += lp->source[k]->point[d];
+    }
+    mean /= n;
+    for (d = 0; d < 3; ++d)
+        centre[d] /= n;
+    for (j = 0; j < n; ++j) {
+        const double *at = bt->point[j].source[k]->point;
+        const double off[3] = { at[0] - centre[0], at[1] - centre[1], at[2] - centre[2] };
+        lever[0][j] = dot3(off, e->tangent[1]), lever[1][j] = -dot3(off, e->tangent[0]);
+        s00 += lever[0][j] * lever[0][j], s01 += lever[0][j] * lever[1][j], s11 += lever[1][j] * lever[1][j];
+        b0 += lever[0][j] * (need[j] - mean), b1 += lever[1][j] * (need[j] - mean);
+    }
+    bt->patch_push[0][k] = mean;
+    bt->patch_push[1][k] = bt->patch_push[2][k] = 0;
+    det = s00 * s11 - s01 * s01;
+    if (det > 1e-9 * s00 * s11 && det > 0) {
+        bt->patch_push[1][k] = (s11 * b0 - s01 * b1) / det;
+        bt->patch_push[2][k] = (s00 * b1 - s01 * b0) / det;
+    } else if (s00 >= s11 && s00 > 0) {
+        bt->patch_push[1][k] = b0 / s00;
+    } else if (s11 > 0) {
+        bt->patch_push[2][k] = b1 / s11;
+    }
+    for (d = 0; d < 3; ++d)
+        bt->patch_impulse[d][k] = 0;
+}
+
 /* Lane k's targets, levers and warm-start impulses, its rows set up. */
 static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double fraction, size_t *cold)
 {
@@ -1092,6 +1137,7 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
             impacts || (j == 1 && !(e->rolling > 0)) ? 0 : dot3(e->tilt_impulse, e->tangent[d]);
     }
     bt->impulse[TB__ROW_TWIST][k] = impacts || j == 1 ? 0 : e->twist_impulse;
+    patch_pushes(bt, k, j);
 }
 
 /* An entry's place among the batches: by colour, then against the static

@@ -57,8 +57,10 @@ typedef struct tb__point {
    Rows per point met the weight of a tall stack in turn, which left how
    it is shared between the points unconverged at 20 sweeps: a column of
    10 boxes wandered 4 cm in 10 s and one of 20 fell; the patch holds them
-   to 2 mm and 11 cm. The points keep normal rows of their own for the
-   position pass. A row holds r x d at each anchor and I^-1 (r x d).
+   to 2 mm and 11 cm. The position pass meets the patch too (the press
+   and tilts toward the plane that best levels what the points need), then
+   each point's own normal row for what is left. A row holds r x d at each
+   anchor and I^-1 (r x d).
    Bodies are indices into the velocity arrays, where 0 is the static
    world (no motion, no inverse mass), so the sweeps never branch on which
    side moves; an empty lane, or a lane without a given point, is all zeros
@@ -102,6 +104,11 @@ typedef struct tb__batch {
                                            the rolling resistance on both sides */
     double twist_reach[TB__BATCH_LANES];/* m: mean distance of the points from the centre */
     double lever[TB__BATCH_LANES];      /* s: how long the patch acts on positions */
+    /* the position pass's patch, met before the points' own rows: what the
+       centre's normal displacement must reach (m), then the turns about
+       the tangents (rad) of the least-squares plane through what each
+       point needs; and their accumulated position impulses */
+    double patch_push[3][TB__BATCH_LANES], patch_impulse[3][TB__BATCH_LANES];
     struct tb__entry *source[TB__BATCH_LANES]; /* NULL: an empty lane */
     const double *inv_world_a[TB__BATCH_LANES], *inv_world_b[TB__BATCH_LANES]; /* I^-1, 9 each */
     tb__lane_point point[TB__MANIFOLD_POINTS];

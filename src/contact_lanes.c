@@ -317,6 +317,48 @@ TB__LANE void position_point(const tb__batch *restrict bt, tb__lane_point *restr
     }
 }
 
+/* The position pass's patch of every lane: the press row at the centre
+   toward the mean of what the points need, then the tilts toward the
+   turns that level them, within what non-negative forces at the points
+   can give (the press impulse times the levers' range). Rows per point
+   alone met a long body's ends in turn: a push at one end turned it and
+   sank the other, and a plank 4 m long with a heavy core came out of the
+   ground by 1% of its depth a step. */
+TB__LANE void position_patch(tb__batch *restrict bt, sides *restrict s, int one)
+{
+    enum { P = TB__ROW_PRESS };
+    int k, d;
+    for (k = 0; k < W; ++k) {
+        const double now = RATE(bt->dir[0], bt->arm_a[P], bt->arm_b[P], s, k, one);
+        const double old = bt->patch_impulse[0][k];
+        double total = old - bt->mass[P][k] * (now - bt->patch_push[0][k]);
+        double dn;
+        total = total > 0 ? total : 0;
+        total = now >= bt->patch_push[0][k] && old == 0 ? 0 : total; /* idle */
+        dn = total - old;
+        PUSH(bt->dir[0], bt->turn_a[P], bt->turn_b[P], s, k, dn, one);
+        bt->patch_impulse[0][k] = total;
+    }
+    if (!bt->tilting)
+        return;
+    for (d = 0; d < 2; ++d) {
+        const int r = TB__ROW_TILT1 + d;
+        for (k = 0; k < W; ++k) {
+            const double high = bt->patch_impulse[0][k] * bt->tilt_high[d][k];
+            const double low = bt->patch_impulse[0][k] * bt->tilt_low[d][k];
+            const double old = bt->patch_impulse[1 + d][k];
+            double turn = old - bt->mass[r][k] * (ANGULAR(bt->dir[1 + d], bt->dir[1 + d], s, k, one) -
+                                                  bt->patch_push[1 + d][k]);
+            double dt;
+            turn = turn > high ? high : turn;
+            turn = turn < low ? low : turn;
+            dt = turn - old;
+            ANGULAR_PUSH(bt->turn_a[r], bt->turn_b[r], s, k, dt, one);
+            bt->patch_impulse[1 + d][k] = turn;
+        }
+    }
+}
+
 TB__LANE void velocity_batch(tb__batch *bt, double *m, int backwards, int wide, int one)
 {
     sides s;
@@ -360,6 +402,7 @@ TB__LANE void position_batch(tb__batch *bt, double *m, int backwards, int wide, 
     sides s;
     int j;
     gather(bt, m, &s, wide, one);
+    position_patch(bt, &s, one);
     for (j = 0; j < bt->points; ++j)
         position_point(bt, &bt->point[backwards ? bt->points - 1 - j : j], &s, one);
     scatter(bt, m, &s, wide, one);

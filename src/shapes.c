@@ -33,7 +33,7 @@ tb_contact_settings tb_default_contact_settings(void)
     s.slop = 0.005;
     s.velocity_iterations = 20;
     s.velocity_tolerance = 1e-6;
-    s.position_iterations = 4;
+    s.position_iterations = 3;
     s.particle_radius = -1;
     s.particle_friction = 0.6;
     s.sleep_speed = 0.05;
