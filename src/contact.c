@@ -935,7 +935,12 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
             tau = u < 0 ? fmin(h, -p->separation / u) : h;
         vi = -(u + a * tau); /* approach speed at impact */
         p->speed = vi > 0 ? vi : 0;
-        *lever = h - tau;
+        /* a velocity change at tau moves positions over the rest of the
+           step, as far as the method lets velocity changes within a step
+           act (explicit Euler's positions move with the start velocity:
+           not at all; its ball rolling down a slope, pushed h^2 g cos a
+           up on its first step, ran on 1.6 mm above the slope) */
+        *lever = (h - tau) * fmin(1, 2 * c->rest_lever / h);
         *target = vi > s->restitution_threshold && e->restitution > 0 ? e->restitution * vi + a * (h - tau) : 0;
         p->normal_impulse = 0;
         impact = 1;

@@ -866,6 +866,90 @@ static void random_heaps_never_gain_energy(void **state)
         }
 }
 
+/* ---- an incline ------------------------------------------------------------ */
+
+/* How far a body starting at rest moves in n steps of h under a constant
+   acceleration a, as the named method integrates it: a h^2 (c n + n (n -
+   1) / 2), where c is the share of a step's kick its positions see (1/2:
+   exact, 1/2 a t^2; symplectic and implicit Euler drift with the kicked
+   velocity, 1; explicit Euler with the old one, 0). */
+static double steps_under(const char *method, double a, double h, int n)
+{
+    const double c = strcmp(method, "euler") == 0                                                  ? 0
+                     : strcmp(method, "symplectic_euler") == 0 || strcmp(method, "implicit_euler") == 0 ? 1
+                                                                                                   : 0.5;
+    return a * h * h * (c * n + 0.5 * n * (n - 1.0));
+}
+
+/* A body set on a plane tilted 20 degrees, at rest, 2 s at 60 Hz, down
+   the slope from where it started, under every integrator:
+   - a unit cube with mu 0.2 (below tan 20 = 0.364) slides with
+     g (sin - mu cos), friction a constant force: to rounding (1e-9) of
+     what the method gives under that acceleration;
+   - with mu 0.5 (above it) friction holds it: under 10 um (it settles by
+     1.4 um into the plane);
+   - a ball (r 0.1 m) with mu 0.6 rolls without slipping at 5/7 g sin:
+     within 1e-4 (measured 3e-5: the contact stays under the centre by
+     first order within a step).
+   The tangents of a tilted normal are the general case of the contact's
+   basis. */
+static double down_the_slope(const char *method, double friction, int ball)
+{
+    const double slope = 20 * 3.14159265358979323846 / 180, r = ball ? 0.1 : 0.5;
+    tb_world_def def = tb_default_world_def();
+    tb_shape_def plane = tb_default_shape_def(), s = tb_default_shape_def();
+    tb_body_def b = tb_default_body_def();
+    tb_world *w;
+    double x0[3], x[3];
+    int i;
+    def.gravity[2] = -G;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    assert_int_equal(tb_world_set_integrator(w, method), TB_OK);
+    awake(w);
+    plane.type = TB_SHAPE_PLANE;
+    plane.normal[0] = -sin(slope), plane.normal[2] = cos(slope);
+    plane.friction = friction;
+    assert_int_equal(tb_world_add_shape(w, &plane, NULL), TB_OK);
+    if (ball) {
+        assert_int_equal(tb_mass_sphere(1000, r, &b.mass, NULL), TB_OK);
+        s.type = TB_SHAPE_SPHERE, s.radius = r;
+    } else {
+        const double size[3] = { 1, 1, 1 };
+        assert_int_equal(tb_mass_box(1000, size, &b.mass, NULL), TB_OK);
+        s.type = TB_SHAPE_BOX, s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = 0.5;
+        b.orientation[0] = cos(slope / 2), b.orientation[2] = -sin(slope / 2); /* face on the slope */
+    }
+    b.position[0] = r * plane.normal[0], b.position[2] = r * plane.normal[2];
+    assert_int_equal(tb_world_add_body(w, &b, &s.body), TB_OK);
+    s.friction = friction;
+    assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
+    tb_body_position(w, s.body, x0);
+    for (i = 0; i < 120; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_position(w, s.body, x);
+    tb_world_destroy(w);
+    return -((x[0] - x0[0]) * cos(slope) + (x[2] - x0[2]) * sin(slope));
+}
+
+static void incline_slides_holds_and_rolls_to_closed_forms(void **state)
+{
+    const double slope = 20 * 3.14159265358979323846 / 180;
+    int m;
+    (void)state;
+    for (m = 0; m < tb_integrator_count(); ++m) {
+        const char *name = tb_integrator_name(m);
+        const double slide = steps_under(name, G * (sin(slope) - 0.2 * cos(slope)), 1.0 / 60, 120);
+        const double roll = steps_under(name, 5.0 / 7 * G * sin(slope), 1.0 / 60, 120);
+        const double slid = down_the_slope(name, 0.2, 0), held = down_the_slope(name, 0.5, 0);
+        const double rolled = down_the_slope(name, 0.6, 1);
+        print_message("%-16s slid %.9f m (%.9f), held %.2e m, rolled %.6f m (%.6f)\n", name, slid, slide, held,
+                      rolled, roll);
+        if (!(fabs(slid / slide - 1) < 1e-9 && fabs(held) < 1e-5 && fabs(rolled / roll - 1) < 1e-4))
+            fail_msg("%s: slid %.12g m for %.12g, held %.3g m, rolled %.9g m for %.9g", name, slid, slide, held,
+                     rolled, roll);
+    }
+}
+
 /* ---- sleep ------------------------------------------------------------------- */
 
 /* Steps until body id sleeps, at most `limit` steps; returns the steps taken. */
@@ -1120,6 +1204,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(box_slides_to_v2_over_2_mu_g),
     cmocka_unit_test(spinning_box_stops_as_its_corners_rub),
     cmocka_unit_test(box_rests_without_drift),
+    cmocka_unit_test(incline_slides_holds_and_rolls_to_closed_forms),
     cmocka_unit_test(buried_plank_comes_out_before_it_sleeps),
     cmocka_unit_test(heavy_plank_comes_out_whole),
     cmocka_unit_test(every_integrator_keeps_a_resting_box_still),
