@@ -425,7 +425,8 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    that the free motion's fall and the push back cancel and a body at rest
    stays put under any method; by the time left after impact for a new
    contact (the impact is timed within the step, so a ball bounces to e^2
-   of its height at any step size); the
+   of its height at any step size; not at all under explicit Euler, whose
+   positions move with the velocity the step started with); the
    sweeps alternate direction, so weight reaches the bottom of a stack
    within a pair of sweeps whatever order the points come in; (4) a
    position pass pushes overlaps apart without adding velocity: rigidly for
