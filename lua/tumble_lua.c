@@ -864,6 +864,10 @@ static void read_mass(lua_State *L, int idx, tb_mass *m)
         has_mass = 0;
     } else {
         lua_getfield(L, idx, shapes[found]);
+        /* (lua_rawgeti and lua_rawlen read no further than they are told:
+           a string here would be read as a table) */
+        if (found >= 2 && found <= 4 && !lua_istable(L, -1))
+            luaL_error(L, "%s: '%s' must be a table (got %s)", fname, shapes[found], luaL_typename(L, -1));
         if (found == 0) {
             st = tb_mass_sphere(density, luaL_checknumber(L, -1), m, message);
         } else if (found == 1) {

@@ -298,6 +298,10 @@ static void bodies_from_lua(void **state)
     expect_error(L, "w:body{ points = {{0, 0, 0, 1}, {1, 0, 0, 1}} }", "points");
     expect_error(L, "w:body{ mesh = { vertices = {0,0,0, 1,0,0, 0,1,0}, triangles = {1,2,3} } }", "mesh");
     expect_error(L, "w:body{ shape = 'box' }", "unknown option 'shape'");
+    /* a string where a table goes was read as a table (a crash) */
+    expect_error(L, "w:body{ cylinder = 'long' }", "'cylinder' must be a table");
+    expect_error(L, "w:body{ capsule = 2 }", "'capsule' must be a table");
+    expect_error(L, "w:body{ points = 'x' }", "'points' must be a table");
     expect_error(L, "b:set_rot{1, 1, 0, 0}", "unit quaternion");
     expect_error(L, "b:set_omega(0/0, 0, 0)", "finite");
     expect_error(L, "b:push({0, 1/0, 0}, {0, 0, 0})", "finite");
