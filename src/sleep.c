@@ -70,8 +70,10 @@ tb_status tb__sleep_prepare(tb_world *w, tb__contacts *c)
 {
     size_t i, n = 0;
     tb_status st;
-    if (!c->sleeping)
+    if (!c->sleeping) { /* (all woken since the last step: no pose to put back) */
+        c->pose_count = 0;
         return TB_OK;
+    }
     /* wake what moving things reach: their bounds already hold the step's
        motion */
     for (i = 0; i < c->pair_count; ++i) {

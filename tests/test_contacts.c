@@ -1057,6 +1057,52 @@ static void islands_wake_together(void **state)
 
 /* Sleep is off with sleep_time = INFINITY and in worlds with a force
    callback; bad sleep settings are refused and the old ones kept. */
+/* Everything asleep, then woken all at once: a box asleep on a static box
+   (a plane 5 m lower) must fall when the static box is removed, and a box
+   asleep on the plane must slide when gravity turns 8 m/s^2 sideways
+   (friction 0.6 holds up to 5.9). The sleeping poses, put back after each
+   step's free motion, were kept from the step before the wake when nothing
+   was left asleep: both hung where they slept, for good. */
+static void woken_world_moves_again(void **state)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_shape_def floor = tb_default_shape_def(), plane = tb_default_shape_def();
+    const double at[3] = { 0, 0, 0.5 }, sideways[3] = { 8, 0, -G };
+    tb_shape_id under;
+    tb_world *w;
+    tb_body_id box;
+    double x[3];
+    int i;
+    (void)state;
+    def.gravity[2] = -G;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    plane.type = TB_SHAPE_PLANE, plane.offset = -5;
+    assert_int_equal(tb_world_add_shape(w, &plane, NULL), TB_OK);
+    floor.type = TB_SHAPE_BOX, floor.half_extents[0] = floor.half_extents[1] = floor.half_extents[2] = 1;
+    floor.position[2] = -1;
+    assert_int_equal(tb_world_add_shape(w, &floor, &under), TB_OK);
+    box = add_box(w, at, 1, 0.6);
+    assert_int_equal(steps_to_sleep(w, box, 120) < 120, 1);
+    for (i = 0; i < 10; ++i) /* asleep a while */
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    assert_int_equal(tb_world_remove_shape(w, under), TB_OK);
+    for (i = 0; i < 120; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_position(w, box, x);
+    assert_below(fabs(x[2] + 4.5), 1e-3); /* on the plane */
+    assert_int_equal(steps_to_sleep(w, box, 120) < 120, 1);
+    for (i = 0; i < 10; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    assert_int_equal(tb_world_set_gravity(w, sideways), TB_OK);
+    for (i = 0; i < 60; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_position(w, box, x);
+    /* 1 s of 8 - 0.6 g = 2.114 m/s^2 from rest: 1.057 m */
+    print_message("woken box: fell to %.4f m, slid %.6f m in 1 s (%.6f)\n", x[2], x[0], 0.5 * (8 - 0.6 * G));
+    assert_rel(x[0], 0.5 * (8 - 0.6 * G), 1e-3);
+    tb_world_destroy(w);
+}
+
 static tb_status no_force(const tb_force_args *args, void *user)
 {
     (void)args, (void)user;
@@ -1197,6 +1243,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(resting_box_falls_asleep_and_stays_put),
     cmocka_unit_test(sleeping_box_wakes_when_a_ball_lands),
     cmocka_unit_test(islands_wake_together),
+    cmocka_unit_test(woken_world_moves_again),
     cmocka_unit_test(sleep_settings),
     cmocka_unit_test(sliding_ball_starts_rolling_at_five_sevenths),
     cmocka_unit_test(rolling_ball_stops_at_its_rolling_resistance),
