@@ -1114,6 +1114,11 @@ static void patch_pushes(tb__batch *bt, int k, int n)
 static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double fraction, size_t *cold)
 {
     tb__entry *e = bt->source[k];
+    /* last step's impulses were a force times its step: the same force
+       over this one (a step of a third kept last step's impulses, three
+       times the force, and a column of 10 boxes stepped alternately at
+       0.1 and 0.033 s fell 0.3 m) */
+    const double scale = c->kept_h > 0 ? h / c->kept_h : 1;
     double lever = 0, target = 0, force = 0;
     int j, d, impacts = 0;
     for (j = 0; j < bt->points && bt->point[j].source[k]; ++j) {
@@ -1135,13 +1140,13 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
        on its end turned the other way ever faster, by 10 rad/s a step. */
     bt->lever[k] = lever / j;
     bt->press_target[k] = target / j;
-    bt->impulse[TB__ROW_PRESS][k] = force;
+    bt->impulse[TB__ROW_PRESS][k] = force * scale;
     for (d = 0; d < 2; ++d) {
-        bt->impulse[TB__ROW_TANGENT1 + d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]);
+        bt->impulse[TB__ROW_TANGENT1 + d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]) * scale;
         bt->impulse[TB__ROW_TILT1 + d][k] =
-            impacts || (j == 1 && !(e->rolling > 0)) ? 0 : dot3(e->tilt_impulse, e->tangent[d]);
+            impacts || (j == 1 && !(e->rolling > 0)) ? 0 : dot3(e->tilt_impulse, e->tangent[d]) * scale;
     }
-    bt->impulse[TB__ROW_TWIST][k] = impacts || j == 1 ? 0 : e->twist_impulse;
+    bt->impulse[TB__ROW_TWIST][k] = impacts || j == 1 ? 0 : e->twist_impulse * scale;
     patch_pushes(bt, k, j);
 }
 
@@ -1482,6 +1487,7 @@ void tb__contacts_solve(tb_world *w, double h)
     tb__push_impulses(c->batches, c->batch_count, c->momenta, TB__PUSH_MOMENTA, c->isa);
     tb__push_impulses(c->batches, c->batch_count, c->motion, TB__PUSH_MOTION, c->isa);
     keep_impulses(c);
+    c->kept_h = h;
     for (it = 0; it < c->settings.position_iterations; ++it)
         tb__sweep_positions(c->batches, c->batch_count, c->motion, it & 1, c->isa);
     store_bodies(w, c);

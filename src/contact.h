@@ -230,6 +230,7 @@ struct tb__contacts {
     uint32_t *bucket;          /* [entry_cap]: entries by colour, then points */
     size_t bucket_cap;
     int isa;                   /* the sweeps' instruction set (tb__isa) */
+    double kept_h;             /* s: the step the kept impulses were solved for (0: none) */
     double rest_lever;         /* s: how long a resting contact's impulse acts on positions
                                   this step, as a constant force would under the world's
                                   method (tb__force_lever times h) */
