@@ -409,7 +409,8 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    speculative points for gaps the step may close (fast objects do not pass
    through thin ones); (2) the integrator moves everything as if nothing
    touched (any method); (3) a velocity pass of sequential impulses, warm
-   started from the last step, solves each pair of shapes as one patch at
+   started from the last step (its impulses scaled to this step's length,
+   so steps may change from frame to frame), solves each pair of shapes as one patch at
    the centre of its touching points: v_n >= 0 there (or the restitution
    rebound), no tilt of one shape on the other while the centre of
    pressure can stay among the points (the weight a tall stack carries is
