@@ -446,6 +446,19 @@ static void from_shape(const tb__geom *g, const double l[3], double out[3])
         out[i] = g->pos[i] + g->rot[3 * i] * l[0] + g->rot[3 * i + 1] * l[1] + g->rot[3 * i + 2] * l[2];
 }
 
+/* For a round shape (sphere, capsule), how far its core lies from the
+   midway point of a contact of separation sep, along the normal (away from
+   the other shape): r + sep / 2; 0 for others. A manifold kept from step to
+   step carries the core point on a round shape, not a material point of
+   its surface: a rolling ball's contact stays under its centre (a carried
+   surface point rolled up its side, up to the 0.5 mm the reuse allows, and
+   the press then turned the ball: a ball rolling down a slope took 2% too
+   little friction in such a step). */
+static double round_reach(const tb__geom *g, double sep)
+{
+    return g->kind == TB__SHAPE_SPHERE || g->kind == TB__SHAPE_CAPSULE ? g->radius + 0.5 * sep : 0;
+}
+
 /* Last step's manifold old between shapes a and b (b: proxy pb), moved to
    their poses now into m, if they moved little enough since it was found;
    returns whether it was. */
@@ -453,6 +466,7 @@ static int reuse(const tb__contacts *c, const tb__geom *a, const tb__geom *b, ui
                  tb__manifold *m)
 {
     const double near = TB__REUSE_SLOP_FRACTION * c->settings.slop;
+    const int round_a = round_reach(a, 0) > 0, round_b = round_reach(b, 0) > 0;
     double rot[9], pos[3], moved = 0, trace = 0, turn;
     int i, k;
     relative_pose(a, b, rot, pos);
@@ -474,10 +488,21 @@ static int reuse(const tb__contacts *c, const tb__geom *a, const tb__geom *b, ui
         double on_a[3], on_b[3], gap = 0;
         from_shape(a, o->local_a, on_a);
         from_shape(b, o->local_b, on_b);
+        /* a round side keeps its core point (collide_pair): its surface is
+           r from it along the normal now, wherever it rolled */
         for (i = 0; i < 3; ++i) {
-            gap += (on_b[i] - on_a[i]) * m->normal[i];
-            m->point[k].pos[i] = 0.5 * (on_a[i] + on_b[i]);
+            on_a[i] += round_reach(a, o->separation0) * m->normal[i];
+            on_b[i] -= round_reach(b, o->separation0) * m->normal[i];
         }
+        for (i = 0; i < 3; ++i)
+            gap += (on_b[i] - on_a[i]) * m->normal[i];
+        /* midway, across the normal where a round side says: a point
+           carried on the other side stays where it touched while the round
+           one rolls or slides on */
+        for (i = 0; i < 3; ++i)
+            m->point[k].pos[i] = round_b && !round_a   ? on_b[i] - 0.5 * gap * m->normal[i]
+                                 : round_a && !round_b ? on_a[i] + 0.5 * gap * m->normal[i]
+                                                       : 0.5 * (on_a[i] + on_b[i]);
         m->point[k].depth = -(o->separation0 + gap);
         m->point[k].feature = o->feature;
     }
@@ -496,7 +521,7 @@ static tb_status collide_pair(tb_world *w, tb__contacts *c, const tb__geom *a, c
     tb__manifold m;
     tb__entry *e;
     tb_status st;
-    int k, kept = 0;
+    int i, k, kept = 0;
     if (shapes) {
         uint32_t key_a, key_b, gen;
         tb__ids_at(&c->ids, pa, &key_a, &gen);
@@ -528,9 +553,15 @@ static tb_status collide_pair(tb_world *w, tb__contacts *c, const tb__geom *a, c
     for (k = 0; k < 3; ++k)
         e->cache_normal[k] = a->rot[k] * m.normal[0] + a->rot[3 + k] * m.normal[1] + a->rot[6 + k] * m.normal[2];
     for (k = 0; k < m.count; ++k) {
-        to_shape(a, m.point[k].pos, e->point[k].local_a);
-        to_shape(b, m.point[k].pos, e->point[k].local_b);
-        e->point[k].separation0 = -m.point[k].depth;
+        double core_a[3], core_b[3];
+        const double sep = -m.point[k].depth;
+        for (i = 0; i < 3; ++i) {
+            core_a[i] = m.point[k].pos[i] - round_reach(a, sep) * m.normal[i];
+            core_b[i] = m.point[k].pos[i] + round_reach(b, sep) * m.normal[i];
+        }
+        to_shape(a, core_a, e->point[k].local_a);
+        to_shape(b, core_b, e->point[k].local_b);
+        e->point[k].separation0 = sep;
     }
     return TB_OK;
 }
@@ -935,13 +966,28 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
             tau = u < 0 ? fmin(h, -p->separation / u) : h;
         vi = -(u + a * tau); /* approach speed at impact */
         p->speed = vi > 0 ? vi : 0;
+        const double rest = h - tau, share = c->rest_lever / h;
         /* a velocity change at tau moves positions over the rest of the
            step, as far as the method lets velocity changes within a step
            act (explicit Euler's positions move with the start velocity:
            not at all; its ball rolling down a slope, pushed h^2 g cos a
-           up on its first step, ran on 1.6 mm above the slope) */
-        *lever = (h - tau) * fmin(1, 2 * c->rest_lever / h);
-        *target = vi > s->restitution_threshold && e->restitution > 0 ? e->restitution * vi + a * (h - tau) : 0;
+           up on its first step, ran on 1.6 mm above the slope). A bounce
+           is that change alone ((1 + e) vi: the target is its rebound
+           carried on by the free motion's acceleration); a landing also
+           holds the body up for the rest of the step, which is a force
+           acting through it (share c of the time, as at rest). With the
+           whole landing impulse over h - tau, a body set down at rest
+           (tau 0) rose g h^2 / 2, 1.4 mm at 60 Hz, and rested on that gap
+           (a rolling capsule then slipped 0.2%). */
+        *lever = rest * fmin(1, 2 * share);
+        if (vi > s->restitution_threshold && e->restitution > 0) {
+            *target = e->restitution * vi + a * rest;
+        } else {
+            const double jump = vi > 0 ? vi : 0, held = a < 0 ? -a * rest : 0;
+            if (jump + held > 0)
+                *lever = (jump * *lever + held * share * rest) / (jump + held);
+            *target = 0;
+        }
         p->normal_impulse = 0;
         impact = 1;
     } else {
