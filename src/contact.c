@@ -586,6 +586,41 @@ static tb_status index_keys(tb_world *w, tb__contacts *c)
     return TB_OK;
 }
 
+/* Planes against every proxy whose box reaches them. (Before the pairs:
+   planes are usually the first shapes, so the entries then come out in
+   key order and need no sort.) */
+static tb_status collide_planes(tb_world *w, tb__contacts *c)
+{
+    size_t i, k;
+    tb_status st;
+    for (i = 0; i < c->shape_count; ++i) {
+        const tb__shape *s = &c->shapes[i];
+        tb__geom plane;
+        if (s->kind != TB__SHAPE_PLANE)
+            continue;
+        place(s, NULL, NULL, &plane);
+        for (k = 0; k < c->proxy_count; ++k) {
+            const double *lo = c->lo + 3 * k, *hi = c->hi + 3 * k;
+            double nearest = 0;
+            int j;
+            if (!(s->category & c->mask[k]) || !(c->category[k] & s->mask) || c->group[k] == 0xFFFFFFFFu)
+                continue;
+            for (j = 0; j < 3; ++j) /* the box corner deepest along -n */
+                nearest += s->normal[j] * (s->normal[j] > 0 ? lo[j] : hi[j]);
+            if (nearest > s->offset)
+                continue;
+            if (inert(w, c, k)) {
+                if ((st = carry_over(w, c, (uint32_t)i, c->proxy[k])) != TB_OK)
+                    return st;
+                continue;
+            }
+            if ((st = collide_pair(w, c, &plane, &c->geoms[k], (uint32_t)i, c->proxy[k], c->margin[k])) != TB_OK)
+                return st;
+        }
+    }
+    return TB_OK;
+}
+
 tb_status tb__contacts_prepare(tb_world *w, double h)
 {
     tb__contacts *c = w->contacts;
@@ -678,7 +713,7 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
     if ((st = tb__sap_pairs(w, &c->sap, c->proxy_count, c->lo, c->hi, c->category, c->mask, c->group, &c->pairs,
                             &c->pair_count, &c->pair_cap)) != TB_OK)
         return st;
-    if ((st = tb__sleep_prepare(w, c)) != TB_OK)
+    if ((st = tb__sleep_prepare(w, c)) != TB_OK || (st = collide_planes(w, c)) != TB_OK)
         return st;
     for (i = 0; i < c->pair_count; ++i) {
         const uint32_t a = c->pairs[i].a, b = c->pairs[i].b;
@@ -693,32 +728,6 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
                                c->margin[a] + c->margin[b])) != TB_OK)
             return st;
     }
-    /* planes against every proxy whose box reaches them */
-    for (i = 0; i < c->shape_count; ++i) {
-        const tb__shape *s = &c->shapes[i];
-        tb__geom plane;
-        if (s->kind != TB__SHAPE_PLANE)
-            continue;
-        place(s, NULL, NULL, &plane);
-        for (k = 0; k < c->proxy_count; ++k) {
-            const double *lo = c->lo + 3 * k, *hi = c->hi + 3 * k;
-            double nearest = 0;
-            int j;
-            if (!(s->category & c->mask[k]) || !(c->category[k] & s->mask) || c->group[k] == 0xFFFFFFFFu)
-                continue;
-            for (j = 0; j < 3; ++j) /* the box corner deepest along -n */
-                nearest += s->normal[j] * (s->normal[j] > 0 ? lo[j] : hi[j]);
-            if (nearest > s->offset)
-                continue;
-            if (inert(w, c, k)) {
-                if ((st = carry_over(w, c, (uint32_t)i, c->proxy[k])) != TB_OK)
-                    return st;
-                continue;
-            }
-            if ((st = collide_pair(w, c, &plane, &c->geoms[k], (uint32_t)i, c->proxy[k], c->margin[k])) != TB_OK)
-                return st;
-        }
-    }
     /* the entries in key order: for finding them next step, for events, and
        for a sweep order that does not depend on how the broadphase found them */
     if ((st = tb__contacts_reserve(w, (void **)&c->order, &c->order_cap, c->entry_count + 1, sizeof *c->order)) !=
@@ -726,11 +735,13 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
         (st = tb__contacts_reserve(w, (void **)&c->order_scratch, &c->order_scratch_cap, c->entry_count + 1,
                                    sizeof *c->order_scratch)) != TB_OK)
         return st;
-    for (i = 0; i < c->entry_count; ++i) {
+    for (i = 0, k = 0; i < c->entry_count; ++i) {
         c->order[i].key = key_of(c->entries[i].key_a, c->entries[i].key_b);
         c->order[i].index = (uint32_t)i;
+        k += i > 0 && c->order[i].key < c->order[i - 1].key;
     }
-    sort_keys(c->order, c->order_scratch, c->entry_count);
+    if (k) /* (out of order: shapes were removed and their ids reused, or a plane came late) */
+        sort_keys(c->order, c->order_scratch, c->entry_count);
     if ((st = index_keys(w, c)) != TB_OK)
         return st;
     /* the solver's room: batches for the entries, motion for every body */
