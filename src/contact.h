@@ -103,7 +103,9 @@ typedef struct tb__batch {
                                            moment about tangent d, from the centre), widened by
                                            the rolling resistance on both sides */
     double twist_reach[TB__BATCH_LANES];/* m: mean distance of the points from the centre */
-    double lever[TB__BATCH_LANES];      /* s: how long the patch acts on positions */
+    double lever[TB__BATCH_LANES];      /* s: how long the patch's normal rows (press, tilts) act
+                                           on positions */
+    double side_lever[TB__BATCH_LANES]; /* s: ... and its friction rows (tangents, twist) */
     /* the position pass's patch, met before the points' own rows: what the
        centre's normal displacement must reach (m), then the turns about
        the tangents (rad) of the least-squares plane through what each

@@ -522,7 +522,9 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, in
         gather(bt, m, &s, wide, one);
         for (d = 0; d < TB__PATCH_ROWS; ++d)
             for (k = 0; k < W; ++k)
-                l[d][k] = motion ? bt->lever[k] * bt->impulse[d][k] : bt->impulse[d][k];
+                l[d][k] = !motion ? bt->impulse[d][k]
+                          : d < TB__ROW_TILT1 ? bt->side_lever[k] * bt->impulse[d][k]
+                                              : bt->lever[k] * bt->impulse[d][k];
         for (k = 0; k < W; ++k) {
             PUSH(bt->dir[1], ta[TB__ROW_TANGENT1], tb[TB__ROW_TANGENT1], &s, k, l[TB__ROW_TANGENT1][k], one);
             PUSH(bt->dir[2], ta[TB__ROW_TANGENT2], tb[TB__ROW_TANGENT2], &s, k, l[TB__ROW_TANGENT2][k], one);
