@@ -945,9 +945,9 @@ static const double no_inertia[9] = { 0 };
 /* Point p of entry e as point j of lane k, its row set up: impact timing
    and the position pass's target. fraction: the share of an old overlap
    the position pass takes back this step. *target: the normal velocity
-   the point is to reach; *lever: how long its impulse acts on positions
-   (the patch takes their means). Returns whether it is a new contact (an
-   impact). */
+   the point is to reach; *lever, *side_lever: how long its normal and its
+   friction impulses act on positions (the patch takes their means).
+   Returns whether it is a new contact (an impact). */
 static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__batch *bt, int k, int j, double h,
                         double fraction, double *target, double *lever, double *side_lever)
 {
@@ -962,21 +962,21 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
        step settles at a small fixed overlap instead of adding up */
     lp->push_target[k] = p->separation >= 0 ? 0 : p->separation + fmin(fraction * -p->separation, h * s->max_push);
     if (p->separation > 0 && (e->body_a < 0 || !p->matched || p->separation > 0.2 * s->slop)) {
-        /* a gap, which closes within the step (or the point would not be
-           active): when? A point on static ground that touched last step
-           and is within a fifth of the slop of it is landing again, not
-           striking: it keeps its warm start, and its friction holds as at
-           rest. (Held at target 0 from the start of the step, such a point
-           rested on its gap: a dropped box could stay 0.3 mm above the
-           plane. Between two moving bodies this timing, which sees their
-           free motion alone, let a pyramid of 210 boxes sway 10 cm.) */
+        /* a gap that closes within the step (or the point would not be
+           active): when? Its normal motion, s + u t + a t^2 / 2 with the
+           free motion's acceleration a, reaches 0 at tau. A point on
+           static ground that touched last step and is within a fifth of
+           the slop of it is landing again, not striking: it keeps its warm
+           start, and its friction holds as at rest. (Held at target 0 from
+           the start of the step, such a point rested on its gap: a dropped
+           box could stay 0.3 mm above the plane. Between two moving bodies
+           this timing, which sees their free motion alone, let a pyramid
+           of 210 boxes sway 10 cm.) */
         const int strikes = !p->matched || p->separation > 0.2 * s->slop;
-        /* a new contact: when in the step did the gap close? Its normal
-           motion, s + u t + a t^2 / 2 with the free motion's acceleration
-           a, reaches 0 at tau */
         const double u = approach_of(c, e, p);
         const double a = (lane_rate(bt, lp, k, c->velocity) - u) / h;
-        double tau, disc, vi;
+        const double share = c->rest_lever / h;
+        double tau, disc, vi, rest;
         disc = u * u - 2 * a * p->separation;
         if (a != 0 && disc >= 0)
             tau = (-u - sqrt(disc)) / a;
@@ -986,7 +986,7 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
             tau = u < 0 ? fmin(h, -p->separation / u) : h;
         vi = -(u + a * tau); /* approach speed at impact */
         p->speed = strikes && vi > 0 ? vi : 0;
-        const double rest = h - tau, share = c->rest_lever / h;
+        rest = h - tau;
         /* a velocity change at tau moves positions over the rest of the
            step, as far as the method lets velocity changes within a step
            act (explicit Euler's positions move with the start velocity:
