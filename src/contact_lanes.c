@@ -520,7 +520,7 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, in
         sides s;
         int k, d;
         gather(bt, m, &s, wide, one);
-        for (d = 0; d < TB__PATCH_ROWS; ++d)
+        for (d = 0; d < TB__PATCH_ROWS; ++d) /* (the friction rows come before the tilts) */
             for (k = 0; k < W; ++k)
                 l[d][k] = !motion ? bt->impulse[d][k]
                           : d < TB__ROW_TILT1 ? bt->side_lever[k] * bt->impulse[d][k]
