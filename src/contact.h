@@ -103,6 +103,9 @@ typedef struct tb__batch {
                                            moment about tangent d, from the centre), widened by
                                            the rolling resistance on both sides */
     double twist_reach[TB__BATCH_LANES];/* m: mean distance of the points from the centre */
+    double shift[2][TB__BATCH_LANES];   /* m: where the press acts, as levers from the centre
+                                           (the tilts' ranges are then from there): last
+                                           step's centre of pressure */
     double lever[TB__BATCH_LANES];      /* s: how long the patch's normal rows (press, tilts) act
                                            on positions */
     double side_lever[TB__BATCH_LANES]; /* s: ... and its friction rows (tangents, twist) */

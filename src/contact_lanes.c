@@ -501,6 +501,13 @@ TB__LANE void rows_batches(tb__batch *batches, size_t n, const double *m)
                       (const double(*)[W])ib, none, moving_a, moving_b, bt->arm_a[TB__ROW_TILT1 + i],
                       bt->arm_b[TB__ROW_TILT1 + i], bt->turn_a[TB__ROW_TILT1 + i], bt->turn_b[TB__ROW_TILT1 + i],
                       bt->mass[TB__ROW_TILT1 + i]);
+        /* the press where last step's force was centred: shift_1 along
+           t_2 and -shift_2 along t_1 (a lever is (point - centre) . (n x t)) */
+        for (i = 0; i < 3; ++i)
+            for (k = 0; k < W; ++k) {
+                const double along = bt->shift[0][k] * bt->dir[2][i][k] - bt->shift[1][k] * bt->dir[1][i][k];
+                ca[i][k] += along, cb[i][k] += along;
+            }
         lane_rows((const double(*)[W])ca, (const double(*)[W])cb, (const double(*)[W])bt->dir[0],
                   (const double(*)[W])ia, (const double(*)[W])ib, sum, none, none, bt->arm_a[TB__ROW_PRESS],
                   bt->arm_b[TB__ROW_PRESS], bt->turn_a[TB__ROW_PRESS], bt->turn_b[TB__ROW_PRESS],

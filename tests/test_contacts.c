@@ -366,6 +366,47 @@ static void column_stands_under_changing_steps(void **state)
     assert_true(changing <= steady);
 }
 
+/* A staircase of 5 boxes (0.6 x 0.6 x 0.4 m), each 10 cm along x from the
+   one under it, sleep off, 10 s: statically it stands (what rests on each
+   box has its centre of mass over that box's top face, by 5 cm at the
+   least), so it must not fall; every box within 10 cm of where it was put.
+   The press at the points' centre made the tilts carry each box's weight
+   times its offset anew through every sweep, and 20 sweeps did not: the
+   staircase rocked and fell (2.7 m). With the press where last step's
+   force was centred it stands, but still rocks: measured 3.8 cm. A
+   staircase of 8 at 5 cm still falls: not yet the truth, which is still. */
+static void staircase_of_five_stands(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    tb_body_id ids[5];
+    double worst = 0;
+    int i;
+    (void)state;
+    awake(w);
+    for (i = 0; i < 5; ++i) {
+        tb_body_def b = tb_default_body_def();
+        tb_shape_def s = tb_default_shape_def();
+        const double size[3] = { 0.6, 0.6, 0.4 };
+        assert_int_equal(tb_mass_box(500, size, &b.mass, NULL), TB_OK);
+        b.position[0] = 0.1 * i, b.position[2] = 0.2 + 0.4 * i;
+        assert_int_equal(tb_world_add_body(w, &b, &ids[i]), TB_OK);
+        s.type = TB_SHAPE_BOX, s.body = ids[i];
+        s.half_extents[0] = s.half_extents[1] = 0.3, s.half_extents[2] = 0.2;
+        assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
+    }
+    for (i = 0; i < 600; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    for (i = 0; i < 5; ++i) {
+        double x[3];
+        tb_body_position(w, ids[i], x);
+        worst = fmax(worst, sqrt((x[0] - 0.1 * i) * (x[0] - 0.1 * i) + x[1] * x[1] +
+                                 (x[2] - 0.2 - 0.4 * i) * (x[2] - 0.2 - 0.4 * i)));
+    }
+    print_message("staircase of 5 after 10 s: worst box %.3e m from where it was put\n", worst);
+    assert_below(worst, 0.1);
+    tb_world_destroy(w);
+}
+
 static tb_body_id drop_capsule(tb_world *w)
 {
     tb_body_def b = tb_default_body_def();
@@ -1450,6 +1491,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(heavy_plank_comes_out_whole),
     cmocka_unit_test(every_integrator_keeps_a_resting_box_still),
     cmocka_unit_test(stack_of_ten_stands),
+    cmocka_unit_test(staircase_of_five_stands),
     cmocka_unit_test(column_stands_under_changing_steps),
     cmocka_unit_test(fast_sphere_does_not_tunnel),
     cmocka_unit_test(collision_keeps_momentum),
