@@ -410,12 +410,14 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    through thin ones); (2) the integrator moves everything as if nothing
    touched (any method); (3) a velocity pass of sequential impulses, warm
    started from the last step (its impulses scaled to this step's length,
-   so steps may change from frame to frame), solves each pair of shapes as one patch at
-   the centre of its touching points: v_n >= 0 there (or the restitution
-   rebound), no tilt of one shape on the other while the centre of
-   pressure can stay among the points (the weight a tall stack carries is
-   shared between them in one step, not point by point over many sweeps:
-   a column of 10 boxes stands still, of 20 stands), Coulomb friction
+   so steps may change from frame to frame), solves each pair of shapes as one patch
+   over its touching points: v_n >= 0 where last step's normal force was
+   centred (or the restitution rebound), no tilt of one shape on the other
+   while the centre of pressure can stay among the points (the weight a
+   tall stack carries is shared between them in one step, not point by
+   point over many sweeps: a column of 10 boxes stands still, of 20
+   stands; a staircase of 5 boxes 10 cm apart stands but rocks, by 4 cm,
+   and one of 8 at 5 cm falls: offset stacks are not yet still), Coulomb friction
    (|f_t| <= mu times the pair's normal force, and a twist about the
    normal up to that times the points' mean distance from the centre: the
    sliding force of friction at every point, in fewer rows), and
