@@ -1073,6 +1073,19 @@ static void side_tangents(tb__entry *e)
     cross(e->normal, e->tangent[0], e->tangent[1]);
 }
 
+/* Point at's levers about centre for the tilts about e's tangents: a
+   unit normal force there turns b about tangent d by (at - centre) x n .
+   t_d = (at - centre) . (n x t_d), where n x t_1 = t_2, n x t_2 = -t_1.
+   off: at - centre. */
+static void levers_of(const tb__entry *e, const double at[3], const double centre[3], double off[3],
+                      double lever[2])
+{
+    int d;
+    for (d = 0; d < 3; ++d)
+        off[d] = at[d] - centre[d];
+    lever[0] = dot3(off, e->tangent[1]), lever[1] = -dot3(off, e->tangent[0]);
+}
+
 /* Entry e's anchors as lane k: each touching point's r from both centres
    in its normal row's arms, and the friction patch's centre in the
    patch's row 0, for tb__set_up_rows; the patch's twist reach. */
@@ -1105,15 +1118,11 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
     }
     /* From the points themselves (a static side's arms are all 0): their
        mean distance from the centre across the normal, and the range of
-       their levers for each tilt: a unit normal force at a point turns b
-       about tangent d, from the centre, by (point - centre) x n . t_d =
-       (point - centre) . (n x t_d), where n x t_1 = t_2, n x t_2 = -t_1. */
+       their levers for each tilt. */
     for (i = 0; i < e->count; ++i)
         if (e->point[i].active) {
             double off[3], along, lever[2];
-            for (d = 0; d < 3; ++d)
-                off[d] = e->point[i].point[d] - centre[d];
-            lever[0] = dot3(off, e->tangent[1]), lever[1] = -dot3(off, e->tangent[0]);
+            levers_of(e, e->point[i].point, centre, off, lever);
             for (d = 0; d < 2; ++d) {
                 low[d] = lever[d] < low[d] ? lever[d] : low[d];
                 high[d] = lever[d] > high[d] ? lever[d] : high[d];
@@ -1152,7 +1161,7 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
 /* What the position pass's patch of lane k (n points) aims for: the
    plane c0 + phi_1 l_1 + phi_2 l_2 nearest (least squares) to what each
    point needs, target minus predicted separation, over the points'
-   levers l_d about the centre (place_lane): the centre's displacement c0
+   levers l_d about the centre (levers_of): the centre's displacement c0
    and the turns phi_d about the tangents. A box's face against a plane
    or a face needs exactly such a plane. Points on a line (or one point)
    leave the turn across it at 0. */
@@ -1173,9 +1182,9 @@ static void patch_pushes(tb__batch *bt, int k, int n)
     for (d = 0; d < 3; ++d)
         centre[d] /= n;
     for (j = 0; j < n; ++j) {
-        const double *at = bt->point[j].source[k]->point;
-        const double off[3] = { at[0] - centre[0], at[1] - centre[1], at[2] - centre[2] };
-        lever[0][j] = dot3(off, e->tangent[1]), lever[1][j] = -dot3(off, e->tangent[0]);
+        double off[3], l[2];
+        levers_of(e, bt->point[j].source[k]->point, centre, off, l);
+        lever[0][j] = l[0], lever[1][j] = l[1];
         s00 += lever[0][j] * lever[0][j], s01 += lever[0][j] * lever[1][j], s11 += lever[1][j] * lever[1][j];
         b0 += lever[0][j] * (need[j] - mean), b1 += lever[1][j] * (need[j] - mean);
     }

@@ -57,6 +57,24 @@ static tb_body_id add_ball(tb_world *w, const double centre[3], double radius, d
     return id;
 }
 
+/* The lowest and highest corner of box body id (half extents half, its
+   shape at the body's centre) above the plane z = 0. */
+static void corner_heights(tb_world *w, tb_body_id id, const double half[3], double *low, double *high)
+{
+    double x[3], q[4];
+    int i;
+    tb_body_position(w, id, x);
+    tb_body_orientation(w, id, q);
+    *low = INFINITY, *high = -INFINITY;
+    for (i = 0; i < 8; ++i) {
+        const double l[3] = { i & 1 ? half[0] : -half[0], i & 2 ? half[1] : -half[1], i & 4 ? half[2] : -half[2] };
+        /* z of R(q) l */
+        const double z = 2 * (q[1] * q[3] - q[0] * q[2]) * l[0] + 2 * (q[2] * q[3] + q[0] * q[1]) * l[1] +
+                         (1 - 2 * (q[1] * q[1] + q[2] * q[2])) * l[2] + x[2];
+        *low = fmin(*low, z), *high = fmax(*high, z);
+    }
+}
+
 /* Sleep off: tests of the solver's own resting behaviour. */
 static void awake(tb_world *w)
 {
@@ -84,8 +102,8 @@ static void dropped_boxes_lie_on_the_plane(void **state)
         tb_body_def b = tb_default_body_def();
         tb_shape_def s = tb_default_shape_def();
         const double size[3] = { 1, 1, 1 }, turn = 0.02 * k;
-        double x[3], q[4], low = INFINITY;
-        int i, t;
+        double low, high;
+        int t;
         awake(w);
         assert_int_equal(tb_mass_box(1000, size, &b.mass, NULL), TB_OK);
         b.position[2] = 0.5 + 0.013 * k;
@@ -96,13 +114,7 @@ static void dropped_boxes_lie_on_the_plane(void **state)
         assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
         for (t = 0; t < 300; ++t)
             assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
-        tb_body_position(w, s.body, x);
-        tb_body_orientation(w, s.body, q);
-        for (i = 0; i < 8; ++i) { /* z of the corner R(q) l + x */
-            const double l[3] = { i & 1 ? 0.5 : -0.5, i & 2 ? 0.5 : -0.5, i & 4 ? 0.5 : -0.5 };
-            low = fmin(low, 2 * (q[1] * q[3] - q[0] * q[2]) * l[0] + 2 * (q[2] * q[3] + q[0] * q[1]) * l[1] +
-                                (1 - 2 * (q[1] * q[1] + q[2] * q[2])) * l[2] + x[2]);
-        }
+        corner_heights(w, s.body, s.half_extents, &low, &high);
         worst = fmax(worst, fabs(low));
         tb_world_destroy(w);
     }
@@ -801,18 +813,8 @@ static tb_body_id add_plank(tb_world *w, double depth, double tilt, int heavy)
 /* The lowest and highest of a plank's corners above the plane z = 0. */
 static void plank_heights(tb_world *w, tb_body_id id, double *low, double *high)
 {
-    double x[3], q[4];
-    int i;
-    tb_body_position(w, id, x);
-    tb_body_orientation(w, id, q);
-    *low = INFINITY, *high = -INFINITY;
-    for (i = 0; i < 8; ++i) {
-        const double l[3] = { i & 1 ? 2.03 : -2.03, i & 2 ? 0.27 : -0.27, i & 4 ? 0.009 : -0.009 };
-        /* z of R(q) l */
-        const double z = 2 * (q[1] * q[3] - q[0] * q[2]) * l[0] + 2 * (q[2] * q[3] + q[0] * q[1]) * l[1] +
-                         (1 - 2 * (q[1] * q[1] + q[2] * q[2])) * l[2] + x[2];
-        *low = fmin(*low, z), *high = fmax(*high, z);
-    }
+    const double half[3] = { 2.03, 0.27, 0.009 };
+    corner_heights(w, id, half, low, high);
 }
 
 /* The plank buried half a metre deep and 5 degrees off level, every
