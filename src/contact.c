@@ -1248,6 +1248,16 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
     patch_pushes(bt, k, j);
 }
 
+/* A placed batch's rows, then its lanes' targets and warm starts. */
+static void finish_batch(tb__contacts *c, tb__batch *bt, double h, double fraction, size_t *cold)
+{
+    int k;
+    tb__set_up_rows(bt, 1, c->velocity, c->isa);
+    for (k = 0; k < TB__BATCH_LANES; ++k)
+        if (bt->source[k])
+            set_up_lane(c, bt, k, h, fraction, cold);
+}
+
 /* An entry's place among the batches: by colour, then against the static
    world (side a) or not, then by how many points touch, most first. */
 static size_t bucket_of(const tb__entry *e)
@@ -1313,7 +1323,12 @@ static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t *co
         tb__entry *e = &c->entries[c->bucket[i]];
         if (lane == TB__BATCH_LANES || bucket_of(e) / CLASSES != last || e->colour == TB__COLOURS) {
             /* a new batch: its first lane has the most points; empty lanes
-               are on the static world */
+               are on the static world. The last one is finished first,
+               while its entries are still in cache (finished after every
+               batch was placed, they had to be fetched again: 11% of the
+               set-up's time went to that one load) */
+            if (bt)
+                finish_batch(c, bt, h, fraction, cold);
             bt = &c->batches[c->batch_count++];
             if (!full_batch(c, i, n)) {
                 memset(bt, 0, offsetof(tb__batch, point) + (size_t)e->touching * sizeof(tb__lane_point));
@@ -1328,11 +1343,8 @@ static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t *co
         }
         place_lane(c, e, bt, lane++);
     }
-    tb__set_up_rows(c->batches, c->batch_count, c->velocity, c->isa);
-    for (i = 0; i < c->batch_count; ++i)
-        for (k = 0; k < TB__BATCH_LANES; ++k)
-            if (c->batches[i].source[k])
-                set_up_lane(c, &c->batches[i], k, h, fraction, cold);
+    if (bt)
+        finish_batch(c, bt, h, fraction, cold);
 }
 
 /* The impulse totals back to the points and entries, for the next step's
