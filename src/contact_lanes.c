@@ -515,23 +515,25 @@ TB__LANE void rows_batches(tb__batch *batches, size_t n, const double *m)
     }
 }
 
-/* One batch's impulse totals into m (tb__push_impulses). */
-TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, int wide)
+/* Every batch's impulse totals into m (tb__push_impulses), or the
+   impulses given (rows: [batch][row][lane], pushed on the velocities). */
+TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, const double *rows, int wide)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
         tb__batch *bt = &batches[i];
         const int momenta = what == TB__PUSH_MOMENTA, motion = what == TB__PUSH_MOTION, one = 0;
         double(*ta)[3][W] = momenta ? bt->arm_a : bt->turn_a, (*tb)[3][W] = momenta ? bt->arm_b : bt->turn_b;
+        const double *given = rows ? rows + i * TB__PATCH_ROWS * W : &bt->impulse[0][0];
         double l[TB__PATCH_ROWS][W];
         sides s;
         int k, d;
         gather(bt, m, &s, wide, one);
         for (d = 0; d < TB__PATCH_ROWS; ++d) /* (the friction rows come before the tilts) */
             for (k = 0; k < W; ++k)
-                l[d][k] = !motion ? bt->impulse[d][k]
-                          : d < TB__ROW_TILT1 ? bt->side_lever[k] * bt->impulse[d][k]
-                                              : bt->lever[k] * bt->impulse[d][k];
+                l[d][k] = !motion ? given[d * W + k]
+                          : d < TB__ROW_TILT1 ? bt->side_lever[k] * given[d * W + k]
+                                              : bt->lever[k] * given[d * W + k];
         for (k = 0; k < W; ++k) {
             PUSH(bt->dir[1], ta[TB__ROW_TANGENT1], tb[TB__ROW_TANGENT1], &s, k, l[TB__ROW_TANGENT1][k], one);
             PUSH(bt->dir[2], ta[TB__ROW_TANGENT2], tb[TB__ROW_TANGENT2], &s, k, l[TB__ROW_TANGENT2][k], one);
@@ -544,6 +546,28 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, in
     }
 }
 
+/* Every row's rate (the relative velocity it holds) on m, into out
+   ([batch][row][lane]), as the sweeps see it. */
+TB__LANE void rates_batches(const tb__batch *batches, size_t n, const double *m, double *out, int wide)
+{
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        const tb__batch *bt = &batches[i];
+        double(*rate)[W] = (double(*)[W])(out + i * TB__PATCH_ROWS * W);
+        sides s;
+        int k, d;
+        gather(bt, m, &s, wide, 0);
+        for (k = 0; k < W; ++k) {
+            rate[TB__ROW_TANGENT1][k] = RATE(bt->dir[1], bt->arm_a[TB__ROW_TANGENT1], bt->arm_b[TB__ROW_TANGENT1], &s, k, 0);
+            rate[TB__ROW_TANGENT2][k] = RATE(bt->dir[2], bt->arm_a[TB__ROW_TANGENT2], bt->arm_b[TB__ROW_TANGENT2], &s, k, 0);
+            rate[TB__ROW_TWIST][k] = ANGULAR(bt->dir[0], bt->dir[0], &s, k, 0);
+            for (d = 0; d < 2; ++d)
+                rate[TB__ROW_TILT1 + d][k] = ANGULAR(bt->dir[1 + d], bt->dir[1 + d], &s, k, 0);
+            rate[TB__ROW_PRESS][k] = RATE(bt->dir[0], bt->arm_a[TB__ROW_PRESS], bt->arm_b[TB__ROW_PRESS], &s, k, 0);
+        }
+    }
+}
+
 #define TB__SWEEPS(isa, attr, wide)                                                                      \
     attr static void velocity_##isa(tb__batch *batches, size_t n, double *m, int backwards)        \
     {                                                                                              \
@@ -553,9 +577,13 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, in
     {                                                                                              \
         position_batches(batches, n, m, backwards, wide);                                         \
     }                                                                                              \
-    attr static void push_##isa(tb__batch *batches, size_t n, double *m, int what)                 \
+    attr static void push_##isa(tb__batch *batches, size_t n, double *m, int what, const double *rows) \
     {                                                                                              \
-        push_batches(batches, n, m, what, wide);                                                  \
+        push_batches(batches, n, m, what, rows, wide);                                            \
+    }                                                                                              \
+    attr static void rates_##isa(const tb__batch *batches, size_t n, const double *m, double *out) \
+    {                                                                                              \
+        rates_batches(batches, n, m, out, wide);                                                  \
     }                                                                                              \
     attr static void rows_##isa(tb__batch *batches, size_t n, const double *m)                     \
     {                                                                                              \
@@ -595,7 +623,17 @@ void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards,
 
 void tb__push_impulses(tb__batch *batches, size_t n, double *m, int what, int isa)
 {
-    TB__DISPATCH(isa, push, (batches, n, m, what));
+    TB__DISPATCH(isa, push, (batches, n, m, what, NULL));
+}
+
+void tb__push_rows(tb__batch *batches, size_t n, double *m, const double *rows, int isa)
+{
+    TB__DISPATCH(isa, push, (batches, n, m, TB__PUSH_VELOCITY, rows));
+}
+
+void tb__row_rates(const tb__batch *batches, size_t n, const double *m, double *out, int isa)
+{
+    TB__DISPATCH(isa, rates, (batches, n, m, out));
 }
 
 void tb__set_up_rows(tb__batch *batches, size_t n, const double *m, int isa)

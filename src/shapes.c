@@ -98,6 +98,7 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->previous_starts, c->previous_starts_cap * sizeof *c->previous_starts, 0);
     tb__alloc(w, c->batches, c->batch_cap * sizeof *c->batches, 0);
     tb__alloc(w, c->settle, c->settle_cap * sizeof *c->settle, 0);
+    tb__alloc(w, c->cold_rows, c->cold_rows_cap * sizeof *c->cold_rows, 0);
     tb__alloc(w, c->colours, c->colours_cap * sizeof *c->colours, 0);
     tb__alloc(w, c->bucket, c->bucket_cap * sizeof *c->bucket, 0);
     tb__alloc(w, c->owner, c->proxy_cap * sizeof(uint32_t), 0);
