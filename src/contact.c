@@ -897,7 +897,7 @@ static tb_status colour_entries(tb_world *w, tb__contacts *c)
                                    c->batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES, sizeof *c->settle)) != TB_OK)
         return st;
     return tb__contacts_reserve(w, (void **)&c->cold_rows, &c->cold_rows_cap,
-                                6 * c->batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES, sizeof *c->cold_rows);
+                                7 * c->batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES, sizeof *c->cold_rows);
 }
 
 /* Lane k's relative velocity along point p's normal row, from the

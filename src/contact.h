@@ -244,7 +244,7 @@ struct tb__contacts {
     double *settle;            /* [batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES]: the batches'
                                   impulses before a pair of sweeps */
     size_t settle_cap;
-    double *cold_rows;         /* [6 * batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES]: the cold
+    double *cold_rows;         /* [7 * batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES]: the cold
                                   start's vectors (cold_start.c) */
     size_t cold_rows_cap;
     uint64_t *colours;         /* [body_cap]: the colours a solver body's manifolds took */
