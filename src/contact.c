@@ -897,7 +897,7 @@ static tb_status colour_entries(tb_world *w, tb__contacts *c)
                                    c->batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES, sizeof *c->settle)) != TB_OK)
         return st;
     return tb__contacts_reserve(w, (void **)&c->cold_rows, &c->cold_rows_cap,
-                                7 * c->batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES, sizeof *c->cold_rows);
+                                6 * c->batch_cap * TB__NORMAL_ROWS * TB__BATCH_LANES, sizeof *c->cold_rows);
 }
 
 /* Lane k's relative velocity along point p's normal row, from the
@@ -1595,6 +1595,8 @@ void tb__contacts_solve(tb_world *w, double h)
        steps are at rest, and this would take 127 iterations a step) */
     if (8 * cold[1] > points)
         tb__cold_start(c, TB__COLD_TIMES * iterations, c->settings.velocity_tolerance);
+    else if (c->settings.stack_iterations > 0)
+        tb__cold_start(c, c->settings.stack_iterations, c->settings.velocity_tolerance);
     it = sweep_until_settled(c, iterations, c->settings.velocity_tolerance);
     if (8 * cold[0] > points) {
         /* contacts without last step's impulses to start from (a scene

@@ -140,18 +140,20 @@ void tb__set_up_rows(tb__batch *batches, size_t n, const double *m, int isa);
 enum { TB__PUSH_VELOCITY, TB__PUSH_MOTION, TB__PUSH_MOMENTA };
 void tb__push_impulses(tb__batch *batches, size_t n, double *m, int what, int isa);
 
-/* For the cold start's conjugate gradients (cold_start.c), rows as
-   [batch][row][lane] arrays of TB__PATCH_ROWS * TB__BATCH_LANES doubles a
-   batch: the impulses given pushed on the velocities m, as
-   TB__PUSH_VELOCITY pushes the batches' own; and every row's rate on m
-   (the relative velocity the sweeps hold it to), into out. */
-void tb__push_rows(tb__batch *batches, size_t n, double *m, const double *rows, int isa);
-void tb__row_rates(const tb__batch *batches, size_t n, const double *m, double *out, int isa);
+/* For the cold start's conjugate gradients (cold_start.c), the normal
+   rows of every batch (its press, then its two tilts) as [batch][row][lane]
+   arrays of TB__NORMAL_ROWS * TB__BATCH_LANES doubles: the impulses given
+   pushed on the velocities m, as TB__PUSH_VELOCITY pushes the batches'
+   own; and each row's rate on m (the relative velocity the sweeps hold it
+   to), into out. */
+#define TB__NORMAL_ROWS 3
+void tb__push_normal_rows(const tb__batch *batches, size_t n, double *m, const double *rows, int isa);
+void tb__normal_rates(const tb__batch *batches, size_t n, const double *m, double *out, int isa);
 
 /* cold_start.c: the normal rows solved as equalities by conjugate
-   gradients, up to most iterations or until every row is within
-   tolerance of its target, clamped, and pushed on c->velocity, before
-   the sweeps of a cold step. Returns the iterations taken. */
+   gradients from the warm starts, up to most iterations or until every
+   row is within tolerance of its target, clamped, and pushed on
+   c->velocity, before the sweeps. Returns the iterations taken. */
 int tb__cold_start(tb__contacts *c, int most, double tolerance);
 
 /* The points between two shapes (or a shape and a particle). */
@@ -244,7 +246,7 @@ struct tb__contacts {
     double *settle;            /* [batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES]: the batches'
                                   impulses before a pair of sweeps */
     size_t settle_cap;
-    double *cold_rows;         /* [7 * batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES]: the cold
+    double *cold_rows;         /* [6 * batch_cap * TB__NORMAL_ROWS * TB__BATCH_LANES]: the cold
                                   start's vectors (cold_start.c) */
     size_t cold_rows_cap;
     uint64_t *colours;         /* [body_cap]: the colours a solver body's manifolds took */

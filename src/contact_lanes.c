@@ -515,25 +515,23 @@ TB__LANE void rows_batches(tb__batch *batches, size_t n, const double *m)
     }
 }
 
-/* Every batch's impulse totals into m (tb__push_impulses), or the
-   impulses given (rows: [batch][row][lane], pushed on the velocities). */
-TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, const double *rows, int wide)
+/* Every batch's impulse totals into m (tb__push_impulses). */
+TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, int wide)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
         tb__batch *bt = &batches[i];
         const int momenta = what == TB__PUSH_MOMENTA, motion = what == TB__PUSH_MOTION, one = 0;
         double(*ta)[3][W] = momenta ? bt->arm_a : bt->turn_a, (*tb)[3][W] = momenta ? bt->arm_b : bt->turn_b;
-        const double *given = rows ? rows + i * TB__PATCH_ROWS * W : &bt->impulse[0][0];
         double l[TB__PATCH_ROWS][W];
         sides s;
         int k, d;
         gather(bt, m, &s, wide, one);
         for (d = 0; d < TB__PATCH_ROWS; ++d) /* (the friction rows come before the tilts) */
             for (k = 0; k < W; ++k)
-                l[d][k] = !motion ? given[d * W + k]
-                          : d < TB__ROW_TILT1 ? bt->side_lever[k] * given[d * W + k]
-                                              : bt->lever[k] * given[d * W + k];
+                l[d][k] = !motion ? bt->impulse[d][k]
+                          : d < TB__ROW_TILT1 ? bt->side_lever[k] * bt->impulse[d][k]
+                                              : bt->lever[k] * bt->impulse[d][k];
         for (k = 0; k < W; ++k) {
             PUSH(bt->dir[1], ta[TB__ROW_TANGENT1], tb[TB__ROW_TANGENT1], &s, k, l[TB__ROW_TANGENT1][k], one);
             PUSH(bt->dir[2], ta[TB__ROW_TANGENT2], tb[TB__ROW_TANGENT2], &s, k, l[TB__ROW_TANGENT2][k], one);
@@ -546,24 +544,41 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, co
     }
 }
 
-/* Every row's rate (the relative velocity it holds) on m, into out
-   ([batch][row][lane]), as the sweeps see it. */
-TB__LANE void rates_batches(const tb__batch *batches, size_t n, const double *m, double *out, int wide)
+/* The normal rows (press, then the tilts) of every batch, as
+   [batch][TB__NORMAL_ROWS][lane] arrays: impulses given pushed on the
+   velocities m, and each row's rate (the relative velocity it holds) on
+   m into out, as the sweeps see them. */
+TB__LANE void push_normal_batches(const tb__batch *batches, size_t n, double *m, const double *rows, int wide)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
         const tb__batch *bt = &batches[i];
-        double(*rate)[W] = (double(*)[W])(out + i * TB__PATCH_ROWS * W);
+        const double(*l)[W] = (const double(*)[W])(rows + i * TB__NORMAL_ROWS * W);
         sides s;
-        int k, d;
+        int k;
         gather(bt, m, &s, wide, 0);
         for (k = 0; k < W; ++k) {
-            rate[TB__ROW_TANGENT1][k] = RATE(bt->dir[1], bt->arm_a[TB__ROW_TANGENT1], bt->arm_b[TB__ROW_TANGENT1], &s, k, 0);
-            rate[TB__ROW_TANGENT2][k] = RATE(bt->dir[2], bt->arm_a[TB__ROW_TANGENT2], bt->arm_b[TB__ROW_TANGENT2], &s, k, 0);
-            rate[TB__ROW_TWIST][k] = ANGULAR(bt->dir[0], bt->dir[0], &s, k, 0);
-            for (d = 0; d < 2; ++d)
-                rate[TB__ROW_TILT1 + d][k] = ANGULAR(bt->dir[1 + d], bt->dir[1 + d], &s, k, 0);
-            rate[TB__ROW_PRESS][k] = RATE(bt->dir[0], bt->arm_a[TB__ROW_PRESS], bt->arm_b[TB__ROW_PRESS], &s, k, 0);
+            ANGULAR_PUSH(bt->turn_a[TB__ROW_TILT1], bt->turn_b[TB__ROW_TILT1], &s, k, l[1][k], 0);
+            ANGULAR_PUSH(bt->turn_a[TB__ROW_TILT2], bt->turn_b[TB__ROW_TILT2], &s, k, l[2][k], 0);
+            PUSH(bt->dir[0], bt->turn_a[TB__ROW_PRESS], bt->turn_b[TB__ROW_PRESS], &s, k, l[0][k], 0);
+        }
+        scatter(bt, m, &s, wide, 0);
+    }
+}
+
+TB__LANE void normal_rates_batches(const tb__batch *batches, size_t n, const double *m, double *out, int wide)
+{
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        const tb__batch *bt = &batches[i];
+        double(*rate)[W] = (double(*)[W])(out + i * TB__NORMAL_ROWS * W);
+        sides s;
+        int k;
+        gather(bt, m, &s, wide, 0);
+        for (k = 0; k < W; ++k) {
+            rate[0][k] = RATE(bt->dir[0], bt->arm_a[TB__ROW_PRESS], bt->arm_b[TB__ROW_PRESS], &s, k, 0);
+            rate[1][k] = ANGULAR(bt->dir[1], bt->dir[1], &s, k, 0);
+            rate[2][k] = ANGULAR(bt->dir[2], bt->dir[2], &s, k, 0);
         }
     }
 }
@@ -577,13 +592,17 @@ TB__LANE void rates_batches(const tb__batch *batches, size_t n, const double *m,
     {                                                                                              \
         position_batches(batches, n, m, backwards, wide);                                         \
     }                                                                                              \
-    attr static void push_##isa(tb__batch *batches, size_t n, double *m, int what, const double *rows) \
+    attr static void push_##isa(tb__batch *batches, size_t n, double *m, int what)                 \
     {                                                                                              \
-        push_batches(batches, n, m, what, rows, wide);                                            \
+        push_batches(batches, n, m, what, wide);                                                  \
     }                                                                                              \
-    attr static void rates_##isa(const tb__batch *batches, size_t n, const double *m, double *out) \
+    attr static void push_normal_##isa(const tb__batch *batches, size_t n, double *m, const double *rows) \
     {                                                                                              \
-        rates_batches(batches, n, m, out, wide);                                                  \
+        push_normal_batches(batches, n, m, rows, wide);                                           \
+    }                                                                                              \
+    attr static void normal_rates_##isa(const tb__batch *batches, size_t n, const double *m, double *out) \
+    {                                                                                              \
+        normal_rates_batches(batches, n, m, out, wide);                                           \
     }                                                                                              \
     attr static void rows_##isa(tb__batch *batches, size_t n, const double *m)                     \
     {                                                                                              \
@@ -623,17 +642,17 @@ void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards,
 
 void tb__push_impulses(tb__batch *batches, size_t n, double *m, int what, int isa)
 {
-    TB__DISPATCH(isa, push, (batches, n, m, what, NULL));
+    TB__DISPATCH(isa, push, (batches, n, m, what));
 }
 
-void tb__push_rows(tb__batch *batches, size_t n, double *m, const double *rows, int isa)
+void tb__push_normal_rows(const tb__batch *batches, size_t n, double *m, const double *rows, int isa)
 {
-    TB__DISPATCH(isa, push, (batches, n, m, TB__PUSH_VELOCITY, rows));
+    TB__DISPATCH(isa, push_normal, (batches, n, m, rows));
 }
 
-void tb__row_rates(const tb__batch *batches, size_t n, const double *m, double *out, int isa)
+void tb__normal_rates(const tb__batch *batches, size_t n, const double *m, double *out, int isa)
 {
-    TB__DISPATCH(isa, rates, (batches, n, m, out));
+    TB__DISPATCH(isa, normal_rates, (batches, n, m, out));
 }
 
 void tb__set_up_rows(tb__batch *batches, size_t n, const double *m, int isa)
