@@ -897,7 +897,7 @@ static tb_status colour_entries(tb_world *w, tb__contacts *c)
                                    c->batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES, sizeof *c->settle)) != TB_OK)
         return st;
     return tb__contacts_reserve(w, (void **)&c->cold_rows, &c->cold_rows_cap,
-                                6 * c->batch_cap * TB__NORMAL_ROWS * TB__BATCH_LANES, sizeof *c->cold_rows);
+                                7 * c->batch_cap * TB__NORMAL_ROWS * TB__BATCH_LANES, sizeof *c->cold_rows);
 }
 
 /* Lane k's relative velocity along point p's normal row, from the
@@ -953,7 +953,9 @@ static const double no_inertia[9] = { 0 };
    the position pass takes back this step. *target: the normal velocity
    the point is to reach; *lever, *side_lever: how long its normal and its
    friction impulses act on positions (the patch takes their means).
-   Returns whether it is a new contact (an impact). */
+   Returns TB__STRUCK if it is a new contact (an impact), TB__TIMED if
+   its impulse was timed within the step (a landing too). */
+enum { TB__STRUCK = 1, TB__TIMED = 2 };
 static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__batch *bt, int k, int j, double h,
                         double fraction, double *target, double *lever, double *side_lever)
 {
@@ -1018,9 +1020,10 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
             *target = 0;
         }
         *side_lever = strikes ? *lever : c->rest_lever;
+        impact = TB__TIMED;
         if (strikes) {
             p->normal_impulse = 0;
-            impact = 1;
+            impact |= TB__STRUCK;
         }
     } else {
         /* a contact force acting through the step, which moves positions
@@ -1038,9 +1041,10 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
         *lever = *side_lever = c->rest_lever;
         /* A gap between two moving bodies held this way (touching last
            step, within a fifth of the slop) closes by about half each step:
-           held at 0 it was rested on, and a ball landed on a box hovered
-           0.85 mm above it for good. (Closing it all at once overshoots:
-           the speed it takes carries into the next step.) */
+           held at 0 it was rested on wherever the sweeps met their rows
+           (a ball landed on a box, every sweep done, hovered 0.82 mm above
+           it for good). (Closing it all at once overshoots: the speed it
+           takes carries into the next step.) */
         *target = p->separation > 0 && e->body_a >= 0 ? -0.5 * p->separation / h : 0;
     }
     return impact;
@@ -1237,10 +1241,10 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
     for (j = 0; j < bt->points && bt->point[j].source[k]; ++j) {
         tb__point *p = bt->point[j].source[k];
         double point_target, point_lever, point_side_lever;
-        const int impact = set_up_point(c, e, p, bt, k, j, h, fraction, &point_target, &point_lever, &point_side_lever);
+        const int how = set_up_point(c, e, p, bt, k, j, h, fraction, &point_target, &point_lever, &point_side_lever);
         cold[0] += !p->matched;
-        cold[1] += !p->matched && !impact;
-        impacts += impact;
+        cold[1] += !p->matched && !(how & TB__STRUCK);
+        impacts += how & TB__STRUCK;
         lever += point_lever;
         side_lever += point_side_lever;
         target += point_target;
@@ -1254,6 +1258,7 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
        one-point lanes skips them), and what they started from would be
        pushed on every step unchanged. A capsule spun lying down and stood
        on its end turned the other way ever faster, by 10 rad/s a step. */
+    bt->resting[k] = !impacts;
     bt->lever[k] = lever / j;
     bt->side_lever[k] = side_lever / j;
     bt->press_target[k] = target / j;
@@ -1600,8 +1605,6 @@ void tb__contacts_solve(tb_world *w, double h)
        steps are at rest, and this would take 127 iterations a step) */
     if (8 * cold[1] > points)
         tb__cold_start(c, TB__COLD_TIMES * iterations, c->settings.velocity_tolerance);
-    else if (c->settings.stack_iterations > 0)
-        tb__cold_start(c, c->settings.stack_iterations, c->settings.velocity_tolerance);
     it = sweep_until_settled(c, iterations, c->settings.velocity_tolerance);
     if (8 * cold[0] > points) {
         /* contacts without last step's impulses to start from (a scene

@@ -109,6 +109,8 @@ typedef struct tb__batch {
     double lever[TB__BATCH_LANES];      /* s: how long the patch's normal rows (press, tilts) act
                                            on positions */
     double side_lever[TB__BATCH_LANES]; /* s: ... and its friction rows (tangents, twist) */
+    int resting[TB__BATCH_LANES];       /* no point of the lane was timed this step (struck or
+                                           landed): it acts through the whole step */
     /* the position pass's patch, met before the points' own rows: what the
        centre's normal displacement must reach (m), then the turns about
        the tangents (rad) of the least-squares plane through what each
@@ -150,10 +152,12 @@ void tb__push_impulses(tb__batch *batches, size_t n, double *m, int what, int is
 void tb__push_normal_rows(const tb__batch *batches, size_t n, double *m, const double *rows, int isa);
 void tb__normal_rates(const tb__batch *batches, size_t n, const double *m, double *out, int isa);
 
-/* cold_start.c: the normal rows solved as equalities by conjugate
-   gradients from the warm starts, up to most iterations or until every
-   row is within tolerance of its target, clamped, and pushed on
-   c->velocity, before the sweeps. Returns the iterations taken. */
+/* cold_start.c: the normal rows of the lanes at rest solved as
+   equalities by conjugate gradients from the warm starts, up to most
+   iterations or until every row is within tolerance of stopping, and
+   where that met them, clamped and pushed on c->velocity, before the
+   sweeps. Returns the iterations taken (negated: the guess was not
+   taken). */
 int tb__cold_start(tb__contacts *c, int most, double tolerance);
 
 /* The points between two shapes (or a shape and a particle). */
@@ -246,7 +250,7 @@ struct tb__contacts {
     double *settle;            /* [batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES]: the batches'
                                   impulses before a pair of sweeps */
     size_t settle_cap;
-    double *cold_rows;         /* [6 * batch_cap * TB__NORMAL_ROWS * TB__BATCH_LANES]: the cold
+    double *cold_rows;         /* [7 * batch_cap * TB__NORMAL_ROWS * TB__BATCH_LANES]: the cold
                                   start's vectors (cold_start.c) */
     size_t cold_rows_cap;
     uint64_t *colours;         /* [body_cap]: the colours a solver body's manifolds took */

@@ -519,75 +519,6 @@ static void random_offset_stacks_stand(void **state)
     assert_below(worst, 1e-3);
 }
 
-/* 40 random stacks of 8 (random_stack) kept awake (sleep off) for 30 s:
-   every box within 1 mm of where it was put (measured 1.1e-4 m). With
-   the sweeps alone (stack_iterations 0) 3 of the 40 start to lean after
-   10 s or so, by 1% more each step, and fall: 20 sweeps a step do not
-   hold the slow lean of a whole offset stack, which two conjugate-
-   gradient iterations over the normal rows do. */
-static void awake_offset_stacks_stay_up(void **state)
-{
-    uint64_t seed = 777;
-    double worst = 0;
-    int stack;
-    (void)state;
-    for (stack = 0; stack < 40; ++stack) {
-        double half[STACK_MOST][3], at[STACK_MOST][2], margin;
-        random_stack(&seed, half, at);
-        worst = fmax(worst, offset_stack(STACK_MOST, (const double(*)[3])half, (const double(*)[2])at, 0, 0, 1800,
-                                         &margin));
-        assert_true(margin > 0);
-    }
-    print_message("40 random offset stacks of 8 awake for 30 s: worst box %.3e m\n", worst);
-    assert_below(worst, 1e-3);
-}
-
-/* A heavy box (1 m cube, 10^3 and 10^4 times the mass of the one under
-   it) dropped 5 cm onto a light one on the plane, sleep off, 10 s: it
-   rests on it, within the slop (5 mm) of the light box's top face
-   (measured 0.4 and 1.5 mm). With the sweeps alone (stack_iterations 0)
-   20 sweeps a step could not carry the heavy box's weight through the
-   light one, and it went through to the ground (1 m down). */
-static void heavy_box_rests_on_a_light_one(void **state)
-{
-    int k;
-    (void)state;
-    for (k = 0; k < 2; ++k) {
-        const double ratio = k ? 1e4 : 1e3;
-        tb_world *w = world_on_plane(0.6, 0);
-        const double low[3] = { 0, 0, 0.5 }, high[3] = { 0, 0, 1.55 };
-        tb_body_id light, heavy;
-        double x[3], lowest = INFINITY;
-        int i;
-        awake(w);
-        light = add_box(w, low, 1, 0.6);
-        {
-            tb_body_def b = tb_default_body_def();
-            tb_shape_def s = tb_default_shape_def();
-            const double size[3] = { 1, 1, 1 };
-            assert_int_equal(tb_mass_box(ratio, size, &b.mass, NULL), TB_OK); /* ratio kg */
-            memcpy(b.position, high, sizeof b.position);
-            assert_int_equal(tb_world_add_body(w, &b, &heavy), TB_OK);
-            s.type = TB_SHAPE_BOX, s.body = heavy;
-            s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = 0.5;
-            assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
-        }
-        for (i = 0; i < 600; ++i) {
-            assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
-            tb_body_position(w, heavy, x);
-            if (i >= 60)
-                lowest = fmin(lowest, x[2]);
-        }
-        print_message("box %g times heavier dropped on a light one: lowest after landing %.4f m (resting: 1.5)\n",
-                      ratio, lowest);
-        assert_true(fabs(lowest - 1.5) < 0.005);
-        assert_true(fabs(x[2] - 1.5) < 0.005);
-        tb_body_position(w, light, x);
-        assert_true(fabs(x[2] - 0.5) < 0.005);
-        tb_world_destroy(w);
-    }
-}
-
 /* 60 random spheres, capsules and boxes (0.1 to 0.6 m, 50 to 5000
    kg/m^3) built at rest overlapping one another and the ground in a
    1.5 m cube, with the default sweeps and with every sweep done
@@ -881,9 +812,6 @@ static void bad_shapes_are_refused(void **state)
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
     cs = tb_default_contact_settings(), cs.velocity_iterations = 0;
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
-    cs = tb_default_contact_settings(), cs.stack_iterations = -1;
-    assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
-    assert_non_null(strstr(tb_world_message(w), "stack iterations"));
     cs = tb_default_contact_settings(), cs.velocity_tolerance = -1e-6;
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
     cs.velocity_tolerance = NAN;
@@ -1464,8 +1392,10 @@ static void resting_box_falls_asleep_and_stays_put(void **state)
 /* A ball dropped on a sleeping box wakes it when its bounds reach the box,
    and lands on it: it must come to rest on the top face (z = 1 + r within
    the 5 mm slop), never inside the box; and rest on it, not on a gap:
-   within 0.1 mm (measured 1e-6 m; held at the gap the landing left, it
-   hovered 0.85 mm above it for good). Then both sleep again. */
+   within 0.1 mm (measured 2.7e-5 m). Then both sleep again. The same
+   with sleep off and the sweeps run to the end (velocity_tolerance 0,
+   100 of them): within 0.1 mm (measured 1e-15 m); a gap between two
+   moving bodies held at 0 was rested on, 0.82 mm above the box. */
 static void sleeping_box_wakes_when_a_ball_lands(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -1492,6 +1422,21 @@ static void sleeping_box_wakes_when_a_ball_lands(void **state)
     steps_to_sleep(w, ball, 120);
     assert_int_equal(tb_world_sleeping_count(w), 2);
     tb_world_destroy(w);
+    {
+        tb_contact_settings cs;
+        w = world_on_plane(0.6, 0);
+        cs = tb_world_contact_settings(w);
+        cs.sleep_time = INFINITY, cs.velocity_tolerance = 0, cs.velocity_iterations = 100;
+        assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
+        add_box(w, at, 1, 0.6);
+        ball = add_ball(w, drop, 0.1, 0);
+        for (i = 0; i < 300; ++i)
+            assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        tb_body_position(w, ball, x);
+        print_message("ball on an awake box, every sweep: last %.7f m\n", x[2]);
+        assert_true(fabs(x[2] - 1.1) < 1e-4);
+        tb_world_destroy(w);
+    }
 }
 
 /* Two boxes stacked sleep as one island. Setting the lower one's velocity
@@ -1738,8 +1683,6 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(stack_of_ten_stands),
     cmocka_unit_test(staircases_stand_still),
     cmocka_unit_test(random_offset_stacks_stand),
-    cmocka_unit_test(awake_offset_stacks_stay_up),
-    cmocka_unit_test(heavy_box_rests_on_a_light_one),
     cmocka_unit_test(crowds_built_overlapping_stay_calm),
     cmocka_unit_test(column_stands_under_changing_steps),
     cmocka_unit_test(fast_sphere_does_not_tunnel),
