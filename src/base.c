@@ -78,6 +78,15 @@ tb_status tb__fail(tb_world *w, tb_status status, const char *fmt, ...)
     return status;
 }
 
+double tb__dot(const double *a, const double *b, size_t n)
+{
+    double sum = 0;
+    size_t i;
+    for (i = 0; i < n; ++i)
+        sum += a[i] * b[i];
+    return sum;
+}
+
 int tb__finite3(const double v[3])
 {
     return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);

@@ -71,15 +71,6 @@ static void apply_rows(tb__contacts *c, const double *p, double *q)
         memset(c->motion + TB__MOTION * i, 0, 6 * sizeof *c->motion);
 }
 
-static double dot(const double *a, const double *b, size_t n)
-{
-    double sum = 0;
-    size_t i;
-    for (i = 0; i < n; ++i)
-        sum += a[i] * b[i];
-    return sum;
-}
-
 /* The most any solved row's velocity misses its target by. */
 static double worst(const double *r, const double *mass, size_t n)
 {
@@ -194,7 +185,7 @@ int tb__cold_start(tb__contacts *c, int most, double tolerance)
         x[i] = 0;
         p[i] = z[i] = mass[i] * r[i];
     }
-    rz = dot(r, z, n);
+    rz = tb__dot(r, z, n);
     /* past rounding's reach the directions lose their meaning and the
        steps grow without bound (with tolerance 0, 320 iterations threw a
        pyramid 1e12 m): no further than 1e-13 of where the misses began.
@@ -210,7 +201,7 @@ int tb__cold_start(tb__contacts *c, int most, double tolerance)
     tolerance = fmax(tolerance, 1e-13 * miss);
     for (it = 0; it < most && miss > tolerance && it - found <= 20 && miss <= 1e3 * start; ++it) {
         apply_rows(c, p, q);
-        pq = dot(p, q, n);
+        pq = tb__dot(p, q, n);
         if (!(pq > 0))
             break;
         alpha = rz / pq;
@@ -236,7 +227,7 @@ int tb__cold_start(tb__contacts *c, int most, double tolerance)
        thousandth of the miss it began from at the least: rows that could
        not all be met, as in heaps of bodies built overlapping, are left
        to the sweeps.) */
-    if (it == 0 || !isfinite(dot(x, x, n)) || !(miss <= fmax(tolerance, 1e-3 * start)))
+    if (it == 0 || !isfinite(tb__dot(x, x, n)) || !(miss <= fmax(tolerance, 1e-3 * start)))
         return -it;
     /* Met, each row's speed changes by what it missed. Clamped, a row the
        solve had pull instead of push changes by less, and a body may then

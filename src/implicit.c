@@ -95,15 +95,6 @@ static void diagonal(const system *s, double *d)
     }
 }
 
-static double dot(const double *a, const double *b, size_t n)
-{
-    double sum = 0;
-    size_t i;
-    for (i = 0; i < n; ++i)
-        sum += a[i] * b[i];
-    return sum;
-}
-
 tb_status tb__implicit_particles(tb_world *w, double h)
 {
     const size_t n = 3 * w->particle_count;
@@ -144,27 +135,27 @@ tb_status tb__implicit_particles(tb_world *w, double h)
     for (i = 0; i < n; ++i)
         z[i] = pinned(w, i) ? 0 : r[i] / d[i];
     memcpy(p, z, n * sizeof(double));
-    rz = dot(r, z, n);
-    bb = dot(b, b, n);
-    for (it = 0; it < max_it && dot(r, r, n) > CG_TOLERANCE * CG_TOLERANCE * bb; ++it) {
+    rz = tb__dot(r, z, n);
+    bb = tb__dot(b, b, n);
+    for (it = 0; it < max_it && tb__dot(r, r, n) > CG_TOLERANCE * CG_TOLERANCE * bb; ++it) {
         double alpha, rz_next;
         apply(&s, p, q);
-        alpha = rz / dot(p, q, n);
+        alpha = rz / tb__dot(p, q, n);
         for (i = 0; i < n; ++i) {
             dv[i] += alpha * p[i];
             r[i] -= alpha * q[i];
         }
         for (i = 0; i < n; ++i)
             z[i] = pinned(w, i) ? 0 : r[i] / d[i];
-        rz_next = dot(r, z, n);
+        rz_next = tb__dot(r, z, n);
         for (i = 0; i < n; ++i)
             p[i] = z[i] + rz_next / rz * p[i];
         rz = rz_next;
     }
-    if (!(dot(r, r, n) <= CG_TOLERANCE * CG_TOLERANCE * bb) || !isfinite(rz))
+    if (!(tb__dot(r, r, n) <= CG_TOLERANCE * CG_TOLERANCE * bb) || !isfinite(rz))
         return tb__fail(w, TB_ERR_ARGUMENT,
                         "implicit_euler: conjugate gradients did not converge in %d iterations "
-                        "(relative residual %.3g)", it, bb > 0 ? sqrt(dot(r, r, n) / bb) : 0.0);
+                        "(relative residual %.3g)", it, bb > 0 ? sqrt(tb__dot(r, r, n) / bb) : 0.0);
     for (i = 0; i < n; ++i) {
         v[i] += dv[i];
         x[i] += h * v[i];

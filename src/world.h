@@ -213,6 +213,8 @@ void tb__free_arrays(tb_world *w, void **arrays[], const size_t elem_size[], int
 /* Record a message and return status (for `return tb__fail(...)`). */
 tb_status tb__fail(tb_world *w, tb_status status, const char *fmt, ...);
 int tb__finite3(const double v[3]);
+/* sum a_i b_i over n, in order */
+double tb__dot(const double *a, const double *b, size_t n);
 tb_status tb__check_busy(tb_world *w, const char *what);
 
 /* ---- ids.c ------------------------------------------------------------ */

@@ -82,6 +82,32 @@ static double uniform(uint64_t *state)
     return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
 }
 
+/* A sphere, capsule or box at random into s: radius 0.05 m plus up to
+   radius_spread, half length 0.05 plus up to length_spread, half extents
+   0.05 to 0.3 m. */
+static void random_shape(uint64_t *rng, double radius_spread, double length_spread, tb_shape_def *s)
+{
+    int k;
+    s->type = (tb_shape_type)(int)(3 * uniform(rng));
+    s->radius = 0.05 + radius_spread * uniform(rng);
+    s->half_length = 0.05 + length_spread * uniform(rng);
+    for (k = 0; k < 3; ++k)
+        s->half_extents[k] = 0.05 + 0.25 * uniform(rng);
+}
+
+/* The mass of shape s (sphere, capsule or box) at density rho. */
+static void mass_of_shape(double rho, const tb_shape_def *s, tb_mass *mass)
+{
+    if (s->type == TB_SHAPE_SPHERE) {
+        assert_int_equal(tb_mass_sphere(rho, s->radius, mass, NULL), TB_OK);
+    } else if (s->type == TB_SHAPE_CAPSULE) {
+        assert_int_equal(tb_mass_capsule(rho, s->radius, 2 * s->half_length, mass, NULL), TB_OK);
+    } else {
+        const double size[3] = { 2 * s->half_extents[0], 2 * s->half_extents[1], 2 * s->half_extents[2] };
+        assert_int_equal(tb_mass_box(rho, size, mass, NULL), TB_OK);
+    }
+}
+
 /* Sleep off: tests of the solver's own resting behaviour. */
 static void awake(tb_world *w)
 {
@@ -548,19 +574,8 @@ static void crowds_built_overlapping_stay_calm(void **state)
             tb_shape_def s = tb_default_shape_def();
             const double density = 50 * pow(100, uniform(&rng));
             int k;
-            s.type = (tb_shape_type)(int)(3 * uniform(&rng));
-            s.radius = 0.05 + 0.25 * uniform(&rng);
-            s.half_length = 0.05 + 0.25 * uniform(&rng);
-            for (k = 0; k < 3; ++k)
-                s.half_extents[k] = 0.05 + 0.25 * uniform(&rng);
-            if (s.type == TB_SHAPE_SPHERE) {
-                assert_int_equal(tb_mass_sphere(density, s.radius, &b.mass, NULL), TB_OK);
-            } else if (s.type == TB_SHAPE_CAPSULE) {
-                assert_int_equal(tb_mass_capsule(density, s.radius, 2 * s.half_length, &b.mass, NULL), TB_OK);
-            } else {
-                const double size[3] = { 2 * s.half_extents[0], 2 * s.half_extents[1], 2 * s.half_extents[2] };
-                assert_int_equal(tb_mass_box(density, size, &b.mass, NULL), TB_OK);
-            }
+            random_shape(&rng, 0.25, 0.25, &s);
+            mass_of_shape(density, &s, &b.mass);
             for (k = 0; k < 3; ++k)
                 b.position[k] = 1.5 * uniform(&rng) - (k < 2 ? 0.75 : 0.1);
             assert_int_equal(tb_world_add_body(w, &b, &ids[i]), TB_OK);
@@ -1106,21 +1121,10 @@ static void random_heaps_never_gain_energy(void **state)
                 tb_shape_def s = tb_default_shape_def();
                 double u, a, c, t1, t2;
                 int k;
-                s.type = (tb_shape_type)(int)(3 * uniform(&rng));
-                s.radius = 0.05 + 0.15 * uniform(&rng);
-                s.half_length = 0.05 + 0.35 * uniform(&rng);
-                for (k = 0; k < 3; ++k)
-                    s.half_extents[k] = 0.05 + 0.25 * uniform(&rng);
+                random_shape(&rng, 0.15, 0.35, &s);
                 s.friction = uniform(&rng);
                 s.restitution = 0.5 * uniform(&rng);
-                if (s.type == TB_SHAPE_SPHERE) {
-                    assert_int_equal(tb_mass_sphere(500, s.radius, &b.mass, NULL), TB_OK);
-                } else if (s.type == TB_SHAPE_CAPSULE) {
-                    assert_int_equal(tb_mass_capsule(500, s.radius, 2 * s.half_length, &b.mass, NULL), TB_OK);
-                } else {
-                    const double size[3] = { 2 * s.half_extents[0], 2 * s.half_extents[1], 2 * s.half_extents[2] };
-                    assert_int_equal(tb_mass_box(500, size, &b.mass, NULL), TB_OK);
-                }
+                mass_of_shape(500, &s, &b.mass);
                 b.position[0] = 1.2 * (i % 3) - 1.2, b.position[1] = 1.2 * (i / 3 % 3) - 1.2;
                 b.position[2] = 0.7 + 1.2 * (i / 9);
                 u = uniform(&rng), a = sqrt(1 - u), c = sqrt(u); /* Shoemake's uniform rotation */
