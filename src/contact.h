@@ -258,6 +258,7 @@ struct tb__contacts {
     uint32_t *bucket;          /* [entry_cap]: entries by colour, then points */
     size_t bucket_cap;
     int isa;                   /* the sweeps' instruction set (tb__isa) */
+    int sweeps;                /* velocity sweeps the last step took (for tests) */
     double kept_h;             /* s: the step the kept impulses were solved for (0: none) */
     double rest_lever;         /* s: how long a resting contact's impulse acts on positions
                                   this step, as a constant force would under the world's
