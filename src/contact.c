@@ -162,6 +162,17 @@ static void start_velocity(const tb__contacts *c, int32_t i, const double r[3], 
 
 /* Point p of entry e's normal relative velocity at the start of the step
    (< 0: approaching), for impacts and begin events only. */
+/* How fast the two sides of point p move against each other at the start
+   of the step, in any direction. */
+static double slip_of(const tb__contacts *c, const tb__entry *e, const tb__point *p)
+{
+    double va[3], vb[3];
+    start_velocity(c, e->body_a, p->ra, va);
+    start_velocity(c, e->body_b, p->rb, vb);
+    return sqrt((vb[0] - va[0]) * (vb[0] - va[0]) + (vb[1] - va[1]) * (vb[1] - va[1]) +
+                (vb[2] - va[2]) * (vb[2] - va[2]));
+}
+
 static double approach_of(const tb__contacts *c, const tb__entry *e, const tb__point *p)
 {
     double va[3], vb[3];
@@ -944,9 +955,6 @@ static int predict_points(tb__contacts *c, tb__entry *e)
 
 /* A gap up to this times the slop is touching: rounding, not a gap. */
 #define TB__TOUCHING 1e-6
-/* A resting gap between two moving bodies up to this times the slop is
-   left open (set_up_point). */
-#define TB__GAP_LEFT 0.01
 
 /* No inverse inertia: the static world's, for the rows' set-up. */
 static const double no_inertia[9] = { 0 };
@@ -1042,15 +1050,13 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
            step. (A real gap that does not close is still timed: resting
            on it, a ball set down on a box hovered 0.7 mm above it.) */
         *lever = *side_lever = c->rest_lever;
-        /* A gap between two moving bodies held this way (touching last
-           step, within a fifth of the slop) closes by about half each step
-           down to a hundredth of the slop: held at 0 it was rested on
-           wherever the sweeps met their rows (a ball landed on a box,
-           every sweep done, hovered 0.82 mm above it for good). (Closing
-           it all at once overshoots: the speed it takes carries into the
-           next step. Closing the pyramid's gaps of a few um kept its rows
-           changing, and its sweeps ran all 20 a step instead of 6.6.) */
-        *target = p->separation > TB__GAP_LEFT * s->slop && e->body_a >= 0 ? -0.5 * p->separation / h : 0;
+        /* (A gap between two moving bodies held this way, touching last
+           step and within a fifth of the slop, is rested on where the
+           sweeps meet their rows: a ball landed on a box, every sweep
+           done, rests 0.82 mm above it. Closed by half each step instead,
+           a body of a random heap was pushed 57 m through the plane in one
+           step by the position pass.) */
+        *target = 0;
     }
     return impact;
 }
@@ -1242,13 +1248,19 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
        0.1 and 0.033 s fell 0.3 m) */
     const double scale = c->kept_h > 0 ? h / c->kept_h : 1;
     double lever = 0, side_lever = 0, target = 0, force = 0;
-    int j, d, impacts = 0;
+    int j, d, impacts = 0, moving = 0;
     for (j = 0; j < bt->points && bt->point[j].source[k]; ++j) {
         tb__point *p = bt->point[j].source[k];
         double point_target, point_lever, point_side_lever;
         const int how = set_up_point(c, e, p, bt, k, j, h, fraction, &point_target, &point_lever, &point_side_lever);
         cold[0] += !p->matched;
-        cold[1] += !p->matched && !(how & TB__STRUCK);
+        /* at rest: not struck, not deeper than the slop, and (a new point)
+           its two sides moving against each other slower than the sleep
+           speed; a warm point's rest is in its warm start already */
+        const int still = !(how & TB__STRUCK) && !(p->separation < -c->settings.slop) &&
+                          (p->matched || slip_of(c, e, p) <= c->settings.sleep_speed);
+        cold[1] += !p->matched && still;
+        moving += !still;
         impacts += how & TB__STRUCK;
         lever += point_lever;
         side_lever += point_side_lever;
@@ -1263,7 +1275,7 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
        one-point lanes skips them), and what they started from would be
        pushed on every step unchanged. A capsule spun lying down and stood
        on its end turned the other way ever faster, by 10 rad/s a step. */
-    bt->resting[k] = !impacts;
+    bt->resting[k] = !moving;
     bt->lever[k] = lever / j;
     bt->side_lever[k] = side_lever / j;
     bt->press_target[k] = target / j;

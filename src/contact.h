@@ -109,8 +109,9 @@ typedef struct tb__batch {
     double lever[TB__BATCH_LANES];      /* s: how long the patch's normal rows (press, tilts) act
                                            on positions */
     double side_lever[TB__BATCH_LANES]; /* s: ... and its friction rows (tangents, twist) */
-    int resting[TB__BATCH_LANES];       /* no point of the lane was timed this step (struck or
-                                           landed): it acts through the whole step */
+    int resting[TB__BATCH_LANES];       /* every point at rest: none struck this step or is
+                                           deeper than the slop, and the new ones' sides move
+                                           slower than the sleep speed (cold_start.c) */
     /* the position pass's patch, met before the points' own rows: what the
        centre's normal displacement must reach (m), then the turns about
        the tangents (rad) of the least-squares plane through what each
