@@ -1192,6 +1192,30 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
     bt->tilting |= n > 1 || e->rolling > 0;
 }
 
+void tb__level_turns(double s00, double s01, double s11, double b0, double b1, double turn[2])
+{
+    /* S's eigenvalues, largest first, and the unit eigenvector u of the
+       largest (the other is u turned a quarter) */
+    const double half = 0.5 * (s00 + s11), gap = sqrt(0.25 * (s00 - s11) * (s00 - s11) + s01 * s01);
+    const double big = half + gap, small = half - gap;
+    double u[2], length, along;
+    turn[0] = turn[1] = 0;
+    if (!(big > 0))
+        return;
+    if (s01 != 0)
+        u[0] = big - s11, u[1] = s01;
+    else
+        u[0] = s00 >= s11 ? 1 : 0, u[1] = s00 >= s11 ? 0 : 1;
+    length = sqrt(u[0] * u[0] + u[1] * u[1]);
+    u[0] /= length, u[1] /= length;
+    along = (u[0] * b0 + u[1] * b1) / big;
+    turn[0] = along * u[0], turn[1] = along * u[1];
+    if (small > 1e-9 * big) {
+        const double across = (u[0] * b1 - u[1] * b0) / small;
+        turn[0] -= across * u[1], turn[1] += across * u[0];
+    }
+}
+
 /* What the position pass's patch of lane k (n points) aims for: the
    plane c0 + phi_1 l_1 + phi_2 l_2 nearest (least squares) to what each
    point needs, target minus predicted separation, over the points'
@@ -1203,7 +1227,7 @@ static void patch_pushes(tb__batch *bt, int k, int n)
 {
     const tb__entry *e = bt->source[k];
     double centre[3] = { 0, 0, 0 }, need[TB__MANIFOLD_POINTS], lever[2][TB__MANIFOLD_POINTS];
-    double mean = 0, s00 = 0, s01 = 0, s11 = 0, b0 = 0, b1 = 0, det;
+    double mean = 0, s00 = 0, s01 = 0, s11 = 0, b0 = 0, b1 = 0, turn[2];
     int j, d;
     for (j = 0; j < n; ++j) {
         const tb__lane_point *lp = &bt->point[j];
@@ -1222,16 +1246,8 @@ static void patch_pushes(tb__batch *bt, int k, int n)
         s00 += lever[0][j] * lever[0][j], s01 += lever[0][j] * lever[1][j], s11 += lever[1][j] * lever[1][j];
         b0 += lever[0][j] * (need[j] - mean), b1 += lever[1][j] * (need[j] - mean);
     }
-    bt->patch_push[1][k] = bt->patch_push[2][k] = 0;
-    det = s00 * s11 - s01 * s01;
-    if (det > 1e-9 * s00 * s11 && det > 0) {
-        bt->patch_push[1][k] = (s11 * b0 - s01 * b1) / det;
-        bt->patch_push[2][k] = (s00 * b1 - s01 * b0) / det;
-    } else if (s00 >= s11 && s00 > 0) {
-        bt->patch_push[1][k] = b0 / s00;
-    } else if (s11 > 0) {
-        bt->patch_push[2][k] = b1 / s11;
-    }
+    tb__level_turns(s00, s01, s11, b0, b1, turn);
+    bt->patch_push[1][k] = turn[0], bt->patch_push[2][k] = turn[1];
     /* (the press acts at the shifted point: what is needed there) */
     bt->patch_push[0][k] = mean + bt->patch_push[1][k] * bt->shift[0][k] + bt->patch_push[2][k] * bt->shift[1][k];
     for (d = 0; d < 3; ++d)

@@ -270,11 +270,33 @@ static void resting_pyramid_sweeps_stop_early(void **state)
     tb_world_destroy(w);
 }
 
+/* tb__level_turns, the position patch's least-squares turns: the exact
+   solution of a well-posed S phi = b; for points on a line at 45 degrees
+   to the tangents (S singular), the smallest turns that level them, half
+   about each; for points all but on a line (levers across it of a
+   rounding's size), the line's own turn and nothing across it, where a
+   determinant test against s00 s11 turned them by 5e14 rad. */
+static void patch_turns_are_least_squares(void **state)
+{
+    double turn[2];
+    (void)state;
+    tb__level_turns(2, 1, 3, 1, 2, turn); /* S^-1 b = (1/5, 3/5) */
+    assert_true(fabs(turn[0] - 0.2) < 1e-15 && fabs(turn[1] - 0.6) < 1e-15);
+    tb__level_turns(2, 2, 2, 2, 2, turn); /* phi_1 + phi_2 = 1, smallest: (1/2, 1/2) */
+    assert_true(fabs(turn[0] - 0.5) < 1e-15 && fabs(turn[1] - 0.5) < 1e-15);
+    tb__level_turns(1e-30, 9.9e-17, 1e-2, 0, 1e-3, turn); /* b_1 / s11 = 0.1 */
+    print_message("turns for points all but on a line: %.3g, %.3g rad\n", turn[0], turn[1]);
+    assert_true(fabs(turn[0]) < 1e-12 && fabs(turn[1] - 0.1) < 1e-12);
+    tb__level_turns(0, 0, 0, 0, 0, turn); /* one point: no turn */
+    assert_true(turn[0] == 0 && turn[1] == 0);
+}
+
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(every_instruction_set_gives_the_same_bits),
     cmocka_unit_test(reused_manifolds_match_fresh_ones),
     cmocka_unit_test(moving_pairs_are_collided_afresh),
     cmocka_unit_test(resting_pyramid_sweeps_stop_early),
+    cmocka_unit_test(patch_turns_are_least_squares),
 };
 
 TB_TEST_MAIN(tests)
