@@ -1014,12 +1014,12 @@ static int world_shape(lua_State *L)
 
 /* world:contacts{ hertz, damping_ratio, max_push, restitution_threshold,
    slop, velocity_iterations, velocity_tolerance, position_iterations,
-   particle_radius, particle_friction, particle_restitution, sleep_speed,
-   sleep_time }:
+   stack_iterations, particle_radius, particle_friction,
+   particle_restitution, sleep_speed, sleep_time }:
    change the contact settings (sleep_time = math.huge: never sleep) */
 static const char *const contact_options[] = { "hertz", "damping_ratio", "max_push", "restitution_threshold",
                                                "slop", "velocity_iterations", "velocity_tolerance",
-                                               "position_iterations",
+                                               "position_iterations", "stack_iterations",
                                                "particle_radius", "particle_friction", "particle_restitution",
                                                "sleep_speed", "sleep_time", NULL };
 
@@ -1027,7 +1027,7 @@ static int world_contacts(lua_State *L)
 {
     lua_world *lw = to_world(L, 1);
     tb_contact_settings cs = tb_world_contact_settings(lw->world);
-    double vi = cs.velocity_iterations, pi = cs.position_iterations;
+    double vi = cs.velocity_iterations, pi = cs.position_iterations, si = cs.stack_iterations;
     check_options(L, 2, "world:contacts", contact_options);
     opt_number(L, 2, "hertz", "world:contacts", &cs.hertz);
     opt_number(L, 2, "damping_ratio", "world:contacts", &cs.damping_ratio);
@@ -1037,6 +1037,7 @@ static int world_contacts(lua_State *L)
     opt_number(L, 2, "velocity_iterations", "world:contacts", &vi);
     opt_number(L, 2, "velocity_tolerance", "world:contacts", &cs.velocity_tolerance);
     opt_number(L, 2, "position_iterations", "world:contacts", &pi);
+    opt_number(L, 2, "stack_iterations", "world:contacts", &si);
     opt_number(L, 2, "particle_radius", "world:contacts", &cs.particle_radius);
     opt_number(L, 2, "particle_friction", "world:contacts", &cs.particle_friction);
     opt_number(L, 2, "particle_restitution", "world:contacts", &cs.particle_restitution);
@@ -1044,6 +1045,7 @@ static int world_contacts(lua_State *L)
     opt_number(L, 2, "sleep_time", "world:contacts", &cs.sleep_time);
     cs.velocity_iterations = vi >= 0 && vi < 1e6 ? (int)vi : 0;
     cs.position_iterations = pi >= 0 && pi < 1e6 ? (int)pi : -1;
+    cs.stack_iterations = si >= 0 && si < 1e6 ? (int)si : -1;
     if (tb_world_set_contact_settings(lw->world, &cs) != TB_OK)
         return fail(L, lw, "world:contacts");
     return 0;

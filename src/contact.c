@@ -1637,7 +1637,9 @@ void tb__contacts_solve(tb_world *w, double h)
        the next step starts warm (in the pile's fall, 2 of its 80 cold
        steps are at rest, and this would take 127 iterations a step) */
     if (8 * cold[1] > points)
-        tb__cold_start(c, TB__COLD_TIMES * iterations, c->settings.velocity_tolerance);
+        tb__cold_start(c, TB__COLD_TIMES * iterations, c->settings.velocity_tolerance, 1);
+    else if (c->settings.stack_iterations > 0)
+        tb__cold_start(c, c->settings.stack_iterations, c->settings.velocity_tolerance, 0);
     it = sweep_until_settled(c, iterations, c->settings.velocity_tolerance);
     if (8 * cold[0] > points) {
         /* contacts without last step's impulses to start from (a scene

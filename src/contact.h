@@ -165,11 +165,12 @@ void tb__level_turns(double s00, double s01, double s11, double b0, double b1, d
 
 /* cold_start.c: the normal rows of the lanes at rest solved as
    equalities by conjugate gradients from the warm starts, up to most
-   iterations or until every row is within tolerance of stopping, and
-   where that met them, clamped and pushed on c->velocity, before the
-   sweeps. Returns the iterations taken (negated: the guess was not
-   taken). */
-int tb__cold_start(tb__contacts *c, int most, double tolerance);
+   iterations or until every row is within tolerance of stopping, clamped
+   and pushed on c->velocity, before the sweeps: where the result leaves
+   no row much further from what it may do than the warm starts did, and
+   (whole) where it met them. Returns the iterations taken (negated: the
+   guess was not taken). */
+int tb__cold_start(tb__contacts *c, int most, double tolerance, int whole);
 
 /* The points between two shapes (or a shape and a particle). */
 typedef struct tb__entry {

@@ -279,14 +279,15 @@ tb_status tb_world_set_contact_settings(tb_world *w, const tb_contact_settings *
     if (!s || !positive(s->hertz) || !(isfinite(s->damping_ratio) && s->damping_ratio >= 0) ||
         !positive(s->max_push) || !(isfinite(s->restitution_threshold) && s->restitution_threshold >= 0) ||
         !(isfinite(s->slop) && s->slop >= 0) || s->velocity_iterations < 1 || s->position_iterations < 0 ||
+        s->stack_iterations < 0 ||
         !(isfinite(s->velocity_tolerance) && s->velocity_tolerance >= 0) ||
         !isfinite(s->particle_radius) || !(isfinite(s->particle_friction) && s->particle_friction >= 0) ||
         !(s->particle_restitution >= 0 && s->particle_restitution <= 1) ||
         !(isfinite(s->sleep_speed) && s->sleep_speed >= 0) || !(s->sleep_time > 0))
         return tb__fail(w, TB_ERR_ARGUMENT,
                         "contact settings: hertz and max_push must be > 0, damping_ratio, threshold, slop and "
-                        "particle friction >= 0, at least 1 velocity iteration, velocity_tolerance finite and "
-                        ">= 0, restitution in [0, 1], "
+                        "particle friction >= 0, at least 1 velocity iteration, position and stack iterations "
+                        ">= 0, velocity_tolerance finite and >= 0, restitution in [0, 1], "
                         "sleep_speed finite and >= 0, sleep_time > 0 (INFINITY: never sleep)");
     if ((st = contacts_of(w, &c)) != TB_OK)
         return st;
