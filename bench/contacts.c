@@ -24,7 +24,7 @@
      means the timing is of a broken run.
    - every sweep: the velocity pass stops early once a pair of sweeps
      changes no enforced velocity by more than velocity_tolerance (1e-6
-     m/s by default), which a resting pyramid reaches in 10 sweeps on
+     m/s by default), which a resting pyramid reaches in 6.6 sweeps on
      average. The pyramid is run again with that off (velocity_tolerance
      0: every one of the velocity_iterations sweeps), at 20 and at 40
      iterations: their cost, and how close the top box stays with every

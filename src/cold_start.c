@@ -149,20 +149,19 @@ static double violation(const tb__contacts *c, const double *rate, const double 
     return most;
 }
 
-/* Changes x added to the batches' normal impulses, unclamped. */
-static void add_into(tb__contacts *c, const double *x)
+/* The batches' normal impulses (press, tilts) into rows, or (back) the
+   rows into them. */
+static void copy_normal(tb__contacts *c, double *rows, int back)
 {
+    const size_t size = TB__BATCH_LANES * sizeof *rows;
     size_t b;
-    int k, d;
-    for (b = 0; b < c->batch_count; ++b) {
-        tb__batch *bt = &c->batches[b];
-        const double *dx = x + b * ROWS;
-        for (k = 0; k < TB__BATCH_LANES; ++k) {
-            bt->impulse[TB__ROW_PRESS][k] += dx[k];
-            for (d = 0; d < 2; ++d)
-                bt->impulse[TB__ROW_TILT1 + d][k] += dx[(1 + d) * TB__BATCH_LANES + k];
+    int d;
+    for (b = 0; b < c->batch_count; ++b)
+        for (d = 0; d < TB__NORMAL_ROWS; ++d) {
+            double *mine = c->batches[b].impulse[d ? TB__ROW_TILT1 + d - 1 : TB__ROW_PRESS];
+            double *row = rows + (b * TB__NORMAL_ROWS + d) * TB__BATCH_LANES;
+            memcpy(back ? mine : row, back ? row : mine, size);
         }
-    }
 }
 
 int tb__cold_start(tb__contacts *c, int most, double tolerance, int whole)
@@ -246,14 +245,13 @@ int tb__cold_start(tb__contacts *c, int most, double tolerance, int whole)
        210-box pyramid's clamped guess, 1.2 times, leaves its top box
        within 0.06 mm over 10 s where the sweeps alone let it move 0.9 mm. */
     was = violation(c, rate, mass);
+    copy_normal(c, z, 0);
     clamp_into(c, x);
     apply_rows(c, x, q);
     for (i = 0; i < n; ++i)
         q[i] += rate[i];
     if (!(violation(c, q, mass) <= 2 * was)) {
-        for (i = 0; i < n; ++i)
-            x[i] = -x[i];
-        add_into(c, x);
+        copy_normal(c, z, 1); /* (as they were, to the bit) */
         return -it;
     }
     tb__push_normal_rows(c->batches, c->batch_count, c->velocity, x, c->isa);

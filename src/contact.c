@@ -160,25 +160,33 @@ static void start_velocity(const tb__contacts *c, int32_t i, const double r[3], 
     }
 }
 
-/* Point p of entry e's normal relative velocity at the start of the step
-   (< 0: approaching), for impacts and begin events only. */
-/* How fast the two sides of point p move against each other at the start
-   of the step, in any direction. */
-static double slip_of(const tb__contacts *c, const tb__entry *e, const tb__point *p)
+/* How point p of entry e's side b moves against its side a at the start
+   of the step. */
+static void slip_velocity(const tb__contacts *c, const tb__entry *e, const tb__point *p, double slip[3])
 {
-    double va[3], vb[3];
+    double va[3];
+    int i;
     start_velocity(c, e->body_a, p->ra, va);
-    start_velocity(c, e->body_b, p->rb, vb);
-    return sqrt((vb[0] - va[0]) * (vb[0] - va[0]) + (vb[1] - va[1]) * (vb[1] - va[1]) +
-                (vb[2] - va[2]) * (vb[2] - va[2]));
+    start_velocity(c, e->body_b, p->rb, slip);
+    for (i = 0; i < 3; ++i)
+        slip[i] -= va[i];
 }
 
+/* ... its speed, in any direction (a new contact at rest is slower than
+   the sleep speed) */
+static double slip_of(const tb__contacts *c, const tb__entry *e, const tb__point *p)
+{
+    double slip[3];
+    slip_velocity(c, e, p, slip);
+    return norm3(slip);
+}
+
+/* ... along the normal (< 0: approaching), for impacts and begin events */
 static double approach_of(const tb__contacts *c, const tb__entry *e, const tb__point *p)
 {
-    double va[3], vb[3];
-    start_velocity(c, e->body_a, p->ra, va);
-    start_velocity(c, e->body_b, p->rb, vb);
-    return (vb[0] - va[0]) * e->normal[0] + (vb[1] - va[1]) * e->normal[1] + (vb[2] - va[2]) * e->normal[2];
+    double slip[3];
+    slip_velocity(c, e, p, slip);
+    return dot3(slip, e->normal);
 }
 
 /* ---- finding contacts ------------------------------------------------------- */
@@ -1046,15 +1054,12 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
            8 built at rest rose and sank by 1 cm box by box in its first
            step. (A real gap that does not close is still timed: resting
            on it, a ball set down on a box hovered 0.7 mm above it.) */
-        *lever = *side_lever = c->rest_lever;
-        /* (A gap between two moving bodies held this way, touching last
+        /* (a gap between two moving bodies held this way, touching last
            step and within a fifth of the slop, is rested on where the
            sweeps meet their rows: a ball landed on a box, every sweep
-           done, rests 0.82 mm above it. Closing such gaps by half each
-           step kept a resting pyramid's rows changing, all 20 sweeps every
-           step instead of 6.6, unless the smallest were left open; and in
-           random heaps it set off a fault of the position patch's fit,
-           since mended, that pushed a body 57 m through the plane.) */
+           done, rests 0.82 mm above it; closing such gaps by half a step
+           kept a resting pyramid's rows from settling) */
+        *lever = *side_lever = c->rest_lever;
         *target = 0;
     }
     return impact;
@@ -1225,7 +1230,7 @@ void tb__level_turns(double s00, double s01, double s11, double b0, double b1, d
 static void patch_pushes(tb__batch *bt, int k, int n)
 {
     const tb__entry *e = bt->source[k];
-    double centre[3] = { 0, 0, 0 }, need[TB__MANIFOLD_POINTS], lever[2][TB__MANIFOLD_POINTS];
+    double centre[3] = { 0, 0, 0 }, need[TB__MANIFOLD_POINTS];
     double mean = 0, s00 = 0, s01 = 0, s11 = 0, b0 = 0, b1 = 0, turn[2];
     int j, d;
     for (j = 0; j < n; ++j) {
@@ -1241,9 +1246,8 @@ static void patch_pushes(tb__batch *bt, int k, int n)
     for (j = 0; j < n; ++j) {
         double off[3], l[2];
         levers_of(e, bt->point[j].source[k]->point, centre, off, l);
-        lever[0][j] = l[0], lever[1][j] = l[1];
-        s00 += lever[0][j] * lever[0][j], s01 += lever[0][j] * lever[1][j], s11 += lever[1][j] * lever[1][j];
-        b0 += lever[0][j] * (need[j] - mean), b1 += lever[1][j] * (need[j] - mean);
+        s00 += l[0] * l[0], s01 += l[0] * l[1], s11 += l[1] * l[1];
+        b0 += l[0] * (need[j] - mean), b1 += l[1] * (need[j] - mean);
     }
     tb__level_turns(s00, s01, s11, b0, b1, turn);
     bt->patch_push[1][k] = turn[0], bt->patch_push[2][k] = turn[1];
@@ -1592,7 +1596,7 @@ static int settled(const tb__contacts *c, double tolerance)
    tolerance (0: never), looked at after sweeps 4, 8, 12 and so on (each
    look copies every impulse first: where nothing settles, as in a falling
    pile, a look after every pair cost 2% of a step). A resting pyramid of
-   210 boxes then takes 10 sweeps a step on average, not 20, to the same
+   210 boxes then takes 6.6 sweeps a step on average, not 20, to the same
    motion (its top box within 1.7 mm over 60 s either way; at 1e-5 m/s it
    crept 1 cm in 10 s). Returns how many sweeps ran. */
 static int sweep_until_settled(tb__contacts *c, int most, double tolerance)

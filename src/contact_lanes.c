@@ -267,34 +267,48 @@ TB__LANE void press(tb__batch *restrict bt, sides *restrict s, int one)
     }
 }
 
-/* Every lane's tilts, about each tangent: no turn of one side on the
-   other, within the press row's force times the range of the points'
-   levers, widened by the rolling resistance (a lane with one point, or
-   points on a line, has no range across it and without rolling
-   resistance does not resist that tilt). */
-TB__LANE void tilt(tb__batch *restrict bt, sides *restrict s, int d, int one)
+/* Every lane's tilt about tangent d, toward a turn of one side on the
+   other of target, within its press's force (press) times the range of
+   the points' levers, widened by the rolling resistance (a lane with one
+   point, or points on a line, has no range across it and without rolling
+   resistance does not resist that tilt); impulse: the row's accumulated
+   impulses. The velocity pass and the position pass's patch share it. */
+TB__LANE void tilt(tb__batch *restrict bt, sides *restrict s, int d, const double *press, const double *target,
+                   double *impulse, int one)
 {
     const int r = TB__ROW_TILT1 + d;
     int k;
     for (k = 0; k < W; ++k) {
-        const double high = bt->impulse[TB__ROW_PRESS][k] * bt->tilt_high[d][k];
-        const double low = bt->impulse[TB__ROW_PRESS][k] * bt->tilt_low[d][k];
-        double turn = bt->impulse[r][k] - bt->mass[r][k] * ANGULAR(bt->dir[1 + d], bt->dir[1 + d], s, k, one);
+        const double high = press[k] * bt->tilt_high[d][k], low = press[k] * bt->tilt_low[d][k];
+        double turn = impulse[k] - bt->mass[r][k] * (ANGULAR(bt->dir[1 + d], bt->dir[1 + d], s, k, one) - target[k]);
         double dt;
         turn = turn > high ? high : turn;
         turn = turn < low ? low : turn;
-        dt = turn - bt->impulse[r][k];
+        dt = turn - impulse[k];
         ANGULAR_PUSH(bt->turn_a[r], bt->turn_b[r], s, k, dt, one);
-        bt->impulse[r][k] = turn;
+        impulse[k] = turn;
     }
 }
 
+/* The tilts of the velocity pass: no turn of one side on the other. */
 TB__LANE void tilts(tb__batch *restrict bt, sides *restrict s, int one)
 {
+    static const double none[W] = { 0 };
+    int d;
     if (!bt->tilting)
         return;
-    tilt(bt, s, 0, one);
-    tilt(bt, s, 1, one);
+    for (d = 0; d < 2; ++d)
+        tilt(bt, s, d, bt->impulse[TB__ROW_PRESS], none, bt->impulse[TB__ROW_TILT1 + d], one);
+}
+
+/* A position row's accumulated impulse, old before, once it is met: the
+   rate now toward target, never pulling, and left alone by a row that
+   never pushed and is not short of its target (idle). */
+TB__LANE double position_total(double old, double mass, double now, double target)
+{
+    double total = old - mass * (now - target);
+    total = total > 0 ? total : 0;
+    return now >= target && old == 0 ? 0 : total;
 }
 
 /* One point of every lane in the position pass: the normal row only, on
@@ -306,12 +320,8 @@ TB__LANE void position_point(const tb__batch *restrict bt, tb__lane_point *restr
     int k;
     for (k = 0; k < W; ++k) {
         const double now = p->predicted[k] + RATE(bt->dir[0], p->arm_a, p->arm_b, s, k, one);
-        const double old = p->position_impulse[k];
-        double total = old - p->mass[k] * (now - p->push_target[k]);
-        double dn;
-        total = total > 0 ? total : 0;
-        total = now >= p->push_target[k] && old == 0 ? 0 : total; /* idle */
-        dn = total - p->position_impulse[k];
+        const double total = position_total(p->position_impulse[k], p->mass[k], now, p->push_target[k]);
+        const double dn = total - p->position_impulse[k];
         PUSH(bt->dir[0], p->turn_a, p->turn_b, s, k, dn, one);
         p->position_impulse[k] = total;
     }
@@ -330,33 +340,15 @@ TB__LANE void position_patch(tb__batch *restrict bt, sides *restrict s, int one)
     int k, d;
     for (k = 0; k < W; ++k) {
         const double now = RATE(bt->dir[0], bt->arm_a[P], bt->arm_b[P], s, k, one);
-        const double old = bt->patch_impulse[0][k];
-        double total = old - bt->mass[P][k] * (now - bt->patch_push[0][k]);
-        double dn;
-        total = total > 0 ? total : 0;
-        total = now >= bt->patch_push[0][k] && old == 0 ? 0 : total; /* idle */
-        dn = total - old;
+        const double total = position_total(bt->patch_impulse[0][k], bt->mass[P][k], now, bt->patch_push[0][k]);
+        const double dn = total - bt->patch_impulse[0][k];
         PUSH(bt->dir[0], bt->turn_a[P], bt->turn_b[P], s, k, dn, one);
         bt->patch_impulse[0][k] = total;
     }
     if (!bt->tilting)
         return;
-    for (d = 0; d < 2; ++d) {
-        const int r = TB__ROW_TILT1 + d;
-        for (k = 0; k < W; ++k) {
-            const double high = bt->patch_impulse[0][k] * bt->tilt_high[d][k];
-            const double low = bt->patch_impulse[0][k] * bt->tilt_low[d][k];
-            const double old = bt->patch_impulse[1 + d][k];
-            double turn = old - bt->mass[r][k] * (ANGULAR(bt->dir[1 + d], bt->dir[1 + d], s, k, one) -
-                                                  bt->patch_push[1 + d][k]);
-            double dt;
-            turn = turn > high ? high : turn;
-            turn = turn < low ? low : turn;
-            dt = turn - old;
-            ANGULAR_PUSH(bt->turn_a[r], bt->turn_b[r], s, k, dt, one);
-            bt->patch_impulse[1 + d][k] = turn;
-        }
-    }
+    for (d = 0; d < 2; ++d)
+        tilt(bt, s, d, bt->patch_impulse[0], bt->patch_push[1 + d], bt->patch_impulse[1 + d], one);
 }
 
 TB__LANE void velocity_batch(tb__batch *bt, double *m, int backwards, int wide, int one)

@@ -397,18 +397,20 @@ static double column_after(double h, int changing)
 }
 
 /* The column stepped at 1/30 s and 1/90 s in turn, as a game's frame
-   times might come, must stand at least as well as stepped at 1/30 s
-   throughout. Last step's impulses are a force times last step's h, so
-   they start this step scaled to its h (as Box2D's dtRatio): kept as they
-   were, a step of a third started from three times the force, and the
-   column ended 6.1e-4 m off (stepped at 0.1 and 0.033 s, 0.3 m). */
+   times might come, must stand as still as stepped at 1/30 s throughout:
+   both within 1 um of where they were put (measured 6e-17 and 0 m).
+   Last step's impulses are a force times last step's h, so they start
+   this step scaled to its h (as Box2D's dtRatio): kept as they were, a
+   step of a third started from three times the force, and the column
+   ended 6.1e-4 m off (stepped at 0.1 and 0.033 s, 0.3 m). */
 static void column_stands_under_changing_steps(void **state)
 {
     const double steady = column_after(1.0 / 30, 0), changing = column_after(1.0 / 30, 1);
     (void)state;
     print_message("column of 10 after 10 s: worst box %.2e m off at 1/30 s, %.2e m at 1/30 and 1/90 s in turn\n",
                   steady, changing);
-    assert_true(changing <= steady);
+    assert_below(steady, 1e-6);
+    assert_below(changing, 1e-6);
 }
 
 /* A stack of n boxes (half extents half[i], 500 kg/m^3) built touching
@@ -579,8 +581,8 @@ static void awake_offset_stacks_stay_up_with_stack_iterations(void **state)
    (velocity_tolerance 0), 1 s: many new contacts, some at rest (the cold
    start solves those together, cold_start.c), most deeper than the slop
    (left to the sweeps). The position pass parts overlaps without giving
-   speed, so no body may go faster than free fall for the second, twice
-   over: 2 g t. */
+   speed, and the bodies start at rest, so none may go faster than free
+   fall for the second: g t (measured at most 4.4 m/s). */
 static void crowds_built_overlapping_stay_calm(void **state)
 {
     int pass, i, t;
@@ -619,7 +621,7 @@ static void crowds_built_overlapping_stay_calm(void **state)
         print_message("crowd %d built overlapping (%s): fastest body %.3g m/s in 1 s\n", pass,
                       pass & 1 ? "every sweep" : "default sweeps", fastest);
         assert_true(isfinite(fastest));
-        assert_below(fastest, 2 * G * 1.0);
+        assert_below(fastest, G * 1.0);
         tb_world_destroy(w);
     }
 }
