@@ -440,9 +440,12 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    before, 9 of 12 fell). Kept awake for long (sleep off), 3 of 40 random
    stacks of 8 lean after 10 s or so and fall (with sleep on they fall
    asleep standing); stack_iterations of the same solve before each
-   step's sweeps (4: all 40 stand, for about 9% of a step) hold them. Not
-   yet held: a body a thousand times heavier than the one it lands on
-   goes through it; (4) a
+   step's sweeps (4: all 40 stand, for about 9% of a step) hold them. The
+   same solve takes a body landing on one 10 or more times lighter or
+   heavier (or resting on one 100 or more times), with the contacts
+   under it: a box 10 to 10000 times heavier dropped on a light one stops
+   on it (the sweeps alone threw it back up, and from 100 times it went
+   through); (4) a
    position pass pushes overlaps apart without adding velocity: rigidly for
    gaps that closed, softly (contact_hertz, damping ratio) for overlaps
    that were already there; each pair first as a patch (its centre pushed

@@ -328,6 +328,8 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
     e->touching = e->asleep = e->colour = e->cached = e->reused = 0;
     if (!found)
         old = previous_entry(c, a.key, b.key);
+    e->struck = 0;
+    e->struck_before = old && old->struck;
     for (k = 0; k < m->count; ++k) {
         tb__point *p = &e->point[k];
         const double *at = m->point[k].pos;
@@ -406,6 +408,7 @@ static tb_status carry_over(tb_world *w, tb__contacts *c, uint32_t shape_a, uint
     *e = *old;
     e->body_a = e->body_b = -1; /* (last step's solver bodies mean nothing now) */
     e->asleep = 1;
+    e->struck = 0;
     return TB_OK;
 }
 
@@ -1257,6 +1260,17 @@ static void patch_pushes(tb__batch *bt, int k, int n)
         bt->patch_impulse[d][k] = 0;
 }
 
+/* Whether entry e joins two bodies whose masses differ ratio-fold or
+   more. */
+static int mismatched(const tb__contacts *c, const tb__entry *e, double ratio)
+{
+    double ia, ib;
+    if (e->body_a < 0 || e->body_b < 0)
+        return 0;
+    ia = c->bodies[e->body_a].inv_mass, ib = c->bodies[e->body_b].inv_mass;
+    return ia >= ratio * ib || ib >= ratio * ia;
+}
+
 /* Lane k's targets, levers and warm-start impulses, its rows set up. */
 static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double fraction, size_t cold[2])
 {
@@ -1267,7 +1281,7 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
        0.1 and 0.033 s fell 0.3 m) */
     const double scale = c->kept_h > 0 ? h / c->kept_h : 1;
     double lever = 0, side_lever = 0, target = 0, force = 0;
-    int j, d, impacts = 0, moving = 0;
+    int j, d, impacts = 0, moving = 0, flying = 0;
     for (j = 0; j < bt->points && bt->point[j].source[k]; ++j) {
         tb__point *p = bt->point[j].source[k];
         double point_target, point_lever, point_side_lever;
@@ -1280,6 +1294,7 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
                           (p->matched || slip_of(c, e, p) <= c->settings.sleep_speed);
         cold[1] += !p->matched && still;
         moving += !still;
+        flying += !still && !(struck && !(p->separation < -c->settings.slop));
         impacts += struck;
         lever += point_lever;
         side_lever += point_side_lever;
@@ -1295,6 +1310,10 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
        pushed on every step unchanged. A capsule spun lying down and stood
        on its end turned the other way ever faster, by 10 rad/s a step. */
     bt->resting[k] = !moving;
+    bt->landing[k] = !flying;
+    e->struck = impacts > 0;
+    bt->heavy[k] = !flying && mismatched(c, e, impacts || e->struck_before ? TB__MASS_RATIO : TB__MASS_RATIO_RESTING);
+    c->heavy_lanes += bt->heavy[k];
     bt->lever[k] = lever / j;
     bt->side_lever[k] = side_lever / j;
     bt->press_target[k] = target / j;
@@ -1631,6 +1650,7 @@ void tb__contacts_solve(tb_world *w, double h)
     tb__sleep_restore(w, c);
     load_bodies(w, c);
     c->rest_lever = tb__force_lever(w) * h;
+    c->heavy_lanes = 0;
     set_up_batches(c, h, &points, cold);
     tb__push_impulses(c->batches, c->batch_count, c->velocity, TB__PUSH_VELOCITY, c->isa);
     iterations = c->settings.velocity_iterations;
@@ -1641,6 +1661,8 @@ void tb__contacts_solve(tb_world *w, double h)
        rest; taken whole, 75 of them took 127 iterations each) */
     if (8 * cold[1] > points)
         tb__cold_start(c, TB__COLD_TIMES * iterations, c->settings.velocity_tolerance, 1);
+    else if (c->heavy_lanes)
+        tb__heavy_landings(c, iterations, c->settings.velocity_tolerance);
     else if (c->settings.stack_iterations > 0)
         tb__cold_start(c, c->settings.stack_iterations, c->settings.velocity_tolerance, 0);
     it = sweep_until_settled(c, iterations, c->settings.velocity_tolerance);

@@ -112,6 +112,14 @@ typedef struct tb__batch {
     int resting[TB__BATCH_LANES];       /* every point at rest: none struck this step or is
                                            deeper than the slop, and the new ones' sides move
                                            slower than the sleep speed (cold_start.c) */
+    int landing[TB__BATCH_LANES];       /* every point at rest or struck this step, none deeper
+                                           than the slop */
+    int heavy[TB__BATCH_LANES];         /* landing, between two bodies whose masses differ
+                                           TB__MASS_RATIO-fold or more where a point of it struck
+                                           this step or the last, TB__MASS_RATIO_RESTING-fold
+                                           where none did (cold_start.c) */
+    int in_solve;                       /* some lane's normal rows are in the cold start's
+                                           solve (its kernels pass over the other batches) */
     /* the position pass's patch, met before the points' own rows: what the
        centre's normal displacement must reach (m), then the turns about
        the tangents (rad) of the least-squares plane through what each
@@ -172,6 +180,20 @@ void tb__level_turns(double s00, double s01, double s11, double b0, double b1, d
    guess was not taken). */
 int tb__cold_start(tb__contacts *c, int most, double tolerance, int whole);
 
+/* The same for the lanes landing near the heavy ones (tb__batch), where
+   their solve met every row and takes no kinetic energy into the step:
+   a heavy body landing on a light one, and the step after. */
+int tb__heavy_landings(tb__contacts *c, int most, double tolerance);
+
+/* Sequential impulses pass a load between bodies of very different masses
+   slowly: a light body under a heavy one needs about as many sweeps as
+   the ratio of their masses to carry it (cold_start.c). */
+#define TB__MASS_RATIO 10
+/* ... and resting, from this ratio on: where a step's sweeps take out
+   less than a fifth of what knocked the pair off (one body 1000 times
+   the other's mass, after it landed, sank 5 cm in 10 s). */
+#define TB__MASS_RATIO_RESTING 100
+
 /* The points between two shapes (or a shape and a particle). */
 typedef struct tb__entry {
     uint32_t key_a, key_b;     /* shape id index1s; key_b | TB__PARTICLE_KEY for a particle */
@@ -188,6 +210,7 @@ typedef struct tb__entry {
     int asleep;                /* carried over unsolved: both sides sleep or are static */
     int colour;                /* its batches' colour, TB__COLOURS: a batch of its own */
     int cached;                /* the fields below hold the last collision */
+    int struck, struck_before; /* a point of it struck this step, last step */
     int reused;                /* this step's manifold is the last collision's, moved */
     double cache_rot[9];       /* b's shape frame in a's when the shapes last collided */
     double cache_pos[3];       /* m: b's shape centre then, in a's frame */
@@ -265,12 +288,14 @@ struct tb__contacts {
     double *cold_rows;         /* [7 * batch_cap * TB__NORMAL_ROWS * TB__BATCH_LANES]: the cold
                                   start's vectors (cold_start.c) */
     size_t cold_rows_cap;
-    uint64_t *colours;         /* [body_cap]: the colours a solver body's manifolds took */
+    uint64_t *colours;         /* [body_count + 1]: the colours a solver body's manifolds
+                                  took; in the solve, the cold start's rings (cold_start.c) */
     size_t colours_cap;
     uint32_t *bucket;          /* [entry_cap]: entries by colour, then points */
     size_t bucket_cap;
     int isa;                   /* the sweeps' instruction set (tb__isa) */
     int sweeps;                /* velocity sweeps the last step took (for tests) */
+    size_t heavy_lanes;        /* lanes of this step that are heavy (tb__batch) */
     double kept_h;             /* s: the step the kept impulses were solved for (0: none) */
     double rest_lever;         /* s: how long a resting contact's impulse acts on positions
                                   this step, as a constant force would under the world's

@@ -548,6 +548,8 @@ TB__LANE void push_normal_batches(const tb__batch *batches, size_t n, double *m,
         const double(*l)[W] = (const double(*)[W])(rows + i * TB__NORMAL_ROWS * W);
         sides s;
         int k;
+        if (!bt->in_solve)
+            continue;
         gather(bt, m, &s, wide, 0);
         for (k = 0; k < W; ++k) {
             ANGULAR_PUSH(bt->turn_a[TB__ROW_TILT1], bt->turn_b[TB__ROW_TILT1], &s, k, l[1][k], 0);
@@ -566,6 +568,10 @@ TB__LANE void normal_rates_batches(const tb__batch *batches, size_t n, const dou
         double(*rate)[W] = (double(*)[W])(out + i * TB__NORMAL_ROWS * W);
         sides s;
         int k;
+        if (!bt->in_solve) {
+            memset(rate, 0, TB__NORMAL_ROWS * W * sizeof **rate);
+            continue;
+        }
         gather(bt, m, &s, wide, 0);
         for (k = 0; k < W; ++k) {
             rate[0][k] = RATE(bt->dir[0], bt->arm_a[TB__ROW_PRESS], bt->arm_b[TB__ROW_PRESS], &s, k, 0);
