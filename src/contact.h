@@ -297,6 +297,7 @@ struct tb__contacts {
     int sweeps;                /* velocity sweeps the last step took (for tests) */
     size_t heavy_lanes;        /* lanes of this step that are heavy (tb__batch) */
     double kept_h;             /* s: the step the kept impulses were solved for (0: none) */
+    double gravity[3];         /* m/s^2: the world's, this step */
     double rest_lever;         /* s: how long a resting contact's impulse acts on positions
                                   this step, as a constant force would under the world's
                                   method (tb__force_lever times h) */
