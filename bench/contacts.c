@@ -38,6 +38,14 @@
      start cold (the pyramid's first); the median leaves such rare steps
      out.
 
+   - heavy: a unit box 10, 100, 1000 and 10000 times as heavy as the 1 kg
+     unit boxes under it dropped 0.5 m onto one of them, and 100 and 1000
+     times onto a column of four (ode_heavy_landing: the same scene in ODE,
+     QuickStep(20)), 10 s at 60 Hz with tumble's defaults: where the heavy
+     box ends against resting on them (through: about minus the column's
+     height), how fast it ever rose after it landed (restitution 0: it
+     should not), and how deep a box under it went below its place.
+     Accuracy, not time.
    - sleep: the pyramid and the pile are run twice, with sleep off (every
      body solved every step: the solver's own cost, the figure held against
      the target) and with the default settings, where resting islands fall
@@ -100,6 +108,44 @@ static void add_plane(tb_world *w, double friction)
     plane.type = TB_SHAPE_PLANE;
     plane.friction = friction;
     check(tb_world_add_shape(w, &plane, NULL), w, "plane");
+}
+
+/* ode_heavy_landing's scene in tumble (the default settings). */
+static void tumble_heavy(const ode_heavy_def *d, ode_heavy_result *out)
+{
+    tb_world *w = new_world(d->gravity, "heavy");
+    tb_body_id ids[18];
+    const double top = 1.5 + d->under, size[3] = { 1, 1, 1 };
+    int i, k, landed = 0;
+    memset(out, 0, sizeof *out);
+    add_plane(w, 0.6);
+    for (i = 0; i < d->under + 2 && i < 18; ++i) {
+        tb_body_def b = tb_default_body_def();
+        tb_shape_def s = tb_default_shape_def();
+        check(tb_mass_box(i == d->under + 1 ? d->ratio : 1, size, &b.mass, NULL), w, "heavy mass");
+        b.position[2] = 0.5 + i + (i == d->under + 1 ? d->gap : 0);
+        check(tb_world_add_body(w, &b, &ids[i]), w, "heavy body");
+        s.type = TB_SHAPE_BOX;
+        s.body = ids[i];
+        s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = 0.5;
+        check(tb_world_add_shape(w, &s, NULL), w, "heavy shape");
+    }
+    for (k = 0; k < d->steps; ++k) {
+        double x[3], v[3];
+        check(tb_world_step(w, 1 / d->hz), w, "heavy step");
+        check(tb_body_position(w, ids[d->under + 1], x), w, "heavy position");
+        check(tb_body_velocity(w, ids[d->under + 1], v), w, "heavy velocity");
+        landed |= x[2] < top + 0.01;
+        if (landed && v[2] > out->rebound)
+            out->rebound = v[2];
+        out->end = x[2] - top;
+        for (i = 0; i <= d->under; ++i) {
+            check(tb_body_position(w, ids[i], x), w, "column position");
+            if (0.5 + i - x[2] > out->sink)
+                out->sink = 0.5 + i - x[2];
+        }
+    }
+    tb_world_destroy(w);
 }
 
 /* Steps w `steps` times at h, timing each step alone. watch (or NULL):
@@ -369,6 +415,27 @@ int main(void)
            1e6 * t1_ms / (pyr1.t.contacts_mean * iterations), pyr1.t.contacts_mean, iterations,
            1e6 * (t2_ms - t1_ms) / (pyr2.t.contacts_mean * 2 * iterations - pyr1.t.contacts_mean * iterations),
            2 * iterations, BOX2D_NS_PER_CONTACT);
+    {
+        static const struct {
+            double ratio;
+            int under;
+        } heavy[] = { { 10, 0 }, { 100, 0 }, { 1000, 0 }, { 10000, 0 }, { 100, 3 }, { 1000, 3 } };
+        size_t i;
+        for (i = 0; i < sizeof heavy / sizeof heavy[0]; ++i) {
+            ode_heavy_def hd = ode_default_heavy_def();
+            ode_heavy_result tr, orr;
+            hd.ratio = heavy[i].ratio;
+            hd.under = heavy[i].under;
+            tumble_heavy(&hd, &tr);
+            if (!ode_heavy_landing(&hd, &orr)) {
+                fprintf(stderr, BENCH_NAME ": ODE heavy landing refused or failed\n");
+                return EXIT_FAILURE;
+            }
+            printf("heavy     box %5.0f times heavier dropped 0.5 m on %d light: tumble ends %+.2e m from its place, rose "
+                   "at %.2f m/s, a light box went %.2e m under its own | ODE QuickStep(20) %+.2e m, %.2f m/s, %.2e m\n",
+                   hd.ratio, hd.under + 1, tr.end, tr.rebound, tr.sink, orr.end, orr.rebound, orr.sink);
+        }
+    }
     free(shapes);
     return 0;
 }

@@ -653,3 +653,75 @@ int ode_pile(const ode_pile_def *def, ode_pile_result *out)
     free(step_ms);
     return 1;
 }
+
+/* --------------------------------------------------------- heavy landing -- */
+
+ode_heavy_def ode_default_heavy_def(void)
+{
+    ode_heavy_def d;
+    d.ratio = 100;
+    d.under = 0;
+    d.gap = 0.5;
+    d.hz = 60;
+    d.iterations = 20;
+    d.steps = 600;
+    d.gravity = 9.81;
+    return d;
+}
+
+#define HEAVY_MAX_UNDER 16
+
+int ode_heavy_landing(const ode_heavy_def *def, ode_heavy_result *out)
+{
+    dWorldID world;
+    dSpaceID space;
+    dBodyID bodies[HEAVY_MAX_UNDER + 2];
+    near_ctx c;
+    const int n = def->under + 2;
+    const double top = 1.5 + def->under;
+    int i, k, landed = 0;
+
+    memset(out, 0, sizeof *out);
+    if (!(finite_positive(def->ratio) && def->under >= 0 && def->under <= HEAVY_MAX_UNDER && isfinite(def->gap) &&
+          def->gap >= 0 && finite_positive(def->hz) && def->iterations > 0 && def->steps > 0 &&
+          isfinite(def->gravity)) ||
+        !ode_open())
+        return 0;
+    world = quick_world(def->gravity, def->iterations, &space);
+    for (i = 0; i < n; ++i) {
+        dMass mass;
+        dGeomID g = dCreateBox(space, 1, 1, 1);
+        bodies[i] = dBodyCreate(world);
+        dMassSetBoxTotal(&mass, i == n - 1 ? def->ratio : 1, 1, 1, 1);
+        dBodySetMass(bodies[i], &mass);
+        dGeomSetBody(g, bodies[i]);
+        dBodySetPosition(bodies[i], 0, 0, 0.5 + i + (i == n - 1 ? def->gap : 0));
+    }
+    c.world = world;
+    c.group = dJointGroupCreate(0);
+    c.mu = 0.6;
+    c.max_contacts = 4;
+    for (k = 0; k < def->steps; ++k) {
+        const dReal *p, *v;
+        c.contacts = 0;
+        dSpaceCollide(space, &c, near_callback);
+        dWorldQuickStep(world, 1 / def->hz);
+        dJointGroupEmpty(c.group);
+        p = dBodyGetPosition(bodies[n - 1]);
+        v = dBodyGetLinearVel(bodies[n - 1]);
+        landed |= p[2] < top + 0.01;
+        if (landed && v[2] > out->rebound)
+            out->rebound = v[2];
+        out->end = p[2] - top;
+        for (i = 0; i < n - 1; ++i) {
+            const double below = 0.5 + i - dBodyGetPosition(bodies[i])[2];
+            if (below > out->sink)
+                out->sink = below;
+        }
+    }
+    dJointGroupDestroy(c.group);
+    dSpaceDestroy(space);
+    dWorldDestroy(world);
+    dCloseODE();
+    return 1;
+}

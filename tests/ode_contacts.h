@@ -285,4 +285,35 @@ int ode_pile_scene(const ode_pile_def *def, ode_shape *shapes);
    or ODE did not initialise. */
 int ode_pile(const ode_pile_def *def, ode_pile_result *out);
 
+/* ------------------------------------------------------- heavy landing
+   A column of `under` + 1 unit boxes of 1 kg on the plane, and a unit box
+   `ratio` times as heavy dropped from `gap` above the top one (centre at
+   1.5 + under + gap), all in a line; QuickStep with `iterations`, up to 4
+   contacts a pair, dContactApprox1 with mu 0.6, no bounce; `steps` steps
+   of 1/hz. The heavy box's end against resting on the column, its fastest
+   rise after it first came within 1 cm of that, and the deepest any
+   column box went below its place. */
+typedef struct ode_heavy_def {
+    double ratio;   /* the heavy box's mass, kg (the others: 1 kg) */
+    int under;      /* boxes under the one it lands on */
+    double gap;     /* m */
+    double hz;      /* 1/s */
+    int iterations; /* QuickStep's */
+    int steps;
+    double gravity; /* m/s^2 */
+} ode_heavy_def;
+
+typedef struct ode_heavy_result {
+    double end;     /* m: heavy box's centre z minus 1.5 + under, at the end */
+    double rebound; /* m/s: its fastest upward speed after it landed */
+    double sink;    /* m: deepest a column box went below its place */
+} ode_heavy_result;
+
+/* ratio 100, under 0, gap 0.5, 60 Hz, 20 iterations, 600 steps, g 9.81 */
+ode_heavy_def ode_default_heavy_def(void);
+
+/* Returns 1 if the run happened, 0 if def was refused or ODE did not
+   initialise. */
+int ode_heavy_landing(const ode_heavy_def *def, ode_heavy_result *out);
+
 #endif
