@@ -423,31 +423,39 @@ static void heavy_landing(double ratio, int under, double gap, int sleep, double
    at 1.6 m/s (restitution 0); it went through the light box (ODE's
    QuickStep: sank 6 cm; 1000 times heavier, through). With restitution 0
    it may not rise (bound: the sleep speed, 0.05 m/s), must end on the
-   column within the slop (5 mm, the overlap the solver leaves alone; it
-   ends 0.9 mm above, a gap under a fifth of the slop being held), and no
-   box under it may go below its place by more than the slop; at the end
+   column within a fifth of the slop (1 mm, the gap a resting contact
+   holds as touching; it ended 0.9 mm above until the part of the landing
+   that holds it up acted as on the ground), and no box under it may go
+   below its place by more than that (dropped 0.1 m, landing at 1.3 m/s,
+   it was timed at the end of its step and pressed the light box 1 cm
+   into the ground, then bounced back at 1.2 m/s); at the end
    no box may jitter (moving faster than 1 mm/s, the resting box's bound;
    a light box under one 1000 times heavier once rose and fell 0.7 mm
-   every other step). Mass ratios 10 to 10000 on one box, 100 and 1000 on
-   a column of four, sleep on (the default) and off. */
+   every other step). Mass ratios 10 to 10000 on one box from 0.1, 0.5
+   and 2 m, 100 and 1000 on a column of four, sleep on (the default) and
+   off. */
 static void heavy_box_lands_on_light_ones(void **state)
 {
     static const struct {
-        double ratio;
+        double ratio, gap;
         int under, sleep;
-    } cases[] = { { 10, 0, 1 }, { 100, 0, 1 }, { 1000, 0, 1 }, { 10000, 0, 1 }, { 100, 0, 0 },
-                  { 1000, 0, 0 }, { 10000, 0, 0 }, { 100, 3, 1 }, { 1000, 3, 1 }, { 100, 3, 0 } };
+    } cases[] = { { 10, 0.1, 0, 1 },    { 10, 0.5, 0, 1 },    { 10, 2, 0, 1 },      { 100, 0.1, 0, 1 },
+                  { 100, 0.5, 0, 1 },   { 100, 2, 0, 1 },     { 1000, 0.1, 0, 1 },  { 1000, 0.5, 0, 1 },
+                  { 1000, 2, 0, 1 },    { 10000, 0.5, 0, 1 }, { 100, 0.5, 0, 0 },   { 1000, 0.5, 0, 0 },
+                  { 10000, 0.5, 0, 0 }, { 100, 0.5, 3, 1 },   { 1000, 0.5, 3, 1 },  { 100, 0.5, 3, 0 } };
+    const double slop = tb_default_contact_settings().slop;
     size_t i;
     (void)state;
     for (i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
         double rebound, end, sink, jitter;
-        heavy_landing(cases[i].ratio, cases[i].under, 0.5, cases[i].sleep, &rebound, &end, &sink, &jitter);
-        print_message("box %g times heavier on %d light (sleep %s): rose at %.2e m/s, ends %+.2e m from its place, "
-                      "a light box went %.2e m under its own, fastest at the end %.2e m/s\n",
-                      cases[i].ratio, cases[i].under + 1, cases[i].sleep ? "on" : "off", rebound, end, sink, jitter);
+        heavy_landing(cases[i].ratio, cases[i].under, cases[i].gap, cases[i].sleep, &rebound, &end, &sink, &jitter);
+        print_message("box %g times heavier dropped %g m on %d light (sleep %s): rose at %.2e m/s, ends %+.2e m from "
+                      "its place, a light box went %.2e m under its own, fastest at the end %.2e m/s\n",
+                      cases[i].ratio, cases[i].gap, cases[i].under + 1, cases[i].sleep ? "on" : "off", rebound, end,
+                      sink, jitter);
         assert_below(rebound, 0.05);
-        assert_below(fabs(end), 0.005);
-        assert_below(sink, 0.005);
+        assert_below(fabs(end), 0.2 * slop);
+        assert_below(sink, 0.2 * slop);
         assert_below(jitter, 1e-3);
     }
 }
