@@ -109,6 +109,8 @@ typedef struct tb__batch {
     double lever[TB__BATCH_LANES];      /* s: how long the patch's normal rows (press, tilts) act
                                            on positions */
     double side_lever[TB__BATCH_LANES]; /* s: ... and its friction rows (tangents, twist) */
+    double keep[TB__BATCH_LANES];       /* the share of its normal impulses to start the next
+                                           step from */
     int resting[TB__BATCH_LANES];       /* every point at rest: none struck this step or is
                                            deeper than the slop, and the new ones' sides move
                                            slower than the sleep speed (cold_start.c) */
