@@ -67,10 +67,18 @@ static double dot(const tb__contacts *c, const double *u, const double *v)
     return sum;
 }
 
+/* Whether lane k of bt is in the heavy landings' solve: landing, and on
+   a body of the rings (heavy_rings). */
+static int reached(const tb__batch *bt, int k, const uint64_t *ring)
+{
+    return bt->source[k] && bt->landing[k] && (ring[bt->a[k]] || ring[bt->b[k]]);
+}
+
 /* Each normal row's mass where the cold start solves it, 0 elsewhere:
    the Jacobi preconditioner, and the mask of the rows taking part: the
-   press of every lane at rest, and its tilts that have a range of levers.
-   (A lane that struck or landed this step is left to the sweeps: its
+   press of every lane at rest (landings: every lane reached), and its
+   tilts that have a range of levers. (Outside the heavy landings, a lane
+   that struck or landed this step is left to the sweeps: its
    speed and its lever differ from those of the lanes at rest on the same
    body, and solved with them, the iterates grew pushes and pulls that
    cancelled in speed but not in position: a body of a random heap was
@@ -88,8 +96,7 @@ static void row_masses(tb__contacts *c, double *mass, int landings)
         double *out = mass + b * ROWS;
         bt->in_solve = !landings;
         for (k = 0; k < TB__BATCH_LANES; ++k) {
-            const int resting = bt->source[k] && (landings ? bt->landing[k] && (ring[bt->a[k]] || ring[bt->b[k]])
-                                                           : bt->resting[k]);
+            const int resting = landings ? reached(bt, k, ring) : bt->source[k] && bt->resting[k];
             bt->in_solve |= resting;
             out[k] = resting ? bt->mass[TB__ROW_PRESS][k] : 0;
             for (d = 0; d < 2; ++d)
@@ -116,12 +123,12 @@ static size_t batches_reached(const tb__contacts *c)
 {
     const uint64_t *ring = c->colours;
     size_t b, count = 0;
-    int k, reached;
+    int k, any;
     for (b = 0; b < c->batch_count; ++b) {
         const tb__batch *bt = &c->batches[b];
-        for (k = 0, reached = 0; k < TB__BATCH_LANES; ++k)
-            reached |= bt->source[k] && bt->landing[k] && (ring[bt->a[k]] || ring[bt->b[k]]);
-        count += (size_t)reached;
+        for (k = 0, any = 0; k < TB__BATCH_LANES; ++k)
+            any |= reached(bt, k, ring);
+        count += (size_t)any;
     }
     return count;
 }

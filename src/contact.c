@@ -965,14 +965,23 @@ static int predict_points(tb__contacts *c, tb__entry *e)
 }
 
 /* Whether entry e joins two bodies whose masses differ ratio-fold or
-   more. */
+   more (their inverse masses from the sweeps' array, in cache by now). */
 static int mismatched(const tb__contacts *c, const tb__entry *e, double ratio)
 {
     double ia, ib;
     if (e->body_a < 0 || e->body_b < 0)
         return 0;
-    ia = c->bodies[e->body_a].inv_mass, ib = c->bodies[e->body_b].inv_mass;
+    ia = c->velocity[TB__MOTION * (e->body_a + 1) + 6], ib = c->velocity[TB__MOTION * (e->body_b + 1) + 6];
     return ia >= ratio * ib || ib >= ratio * ia;
+}
+
+/* The relative normal acceleration a of entry e's two bodies, taken as if
+   the one below were held up: the one above then falls onto it under
+   gravity across the normal, where their free motions fall together
+   (set_up_point). */
+static double held_up(const tb__contacts *c, const tb__entry *e, double a)
+{
+    return fmin(a, -fabs(dot3(c->gravity, e->normal)));
 }
 
 /* See set_up_point's landings. */
@@ -1045,7 +1054,7 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
            light box under one 1000 times heavier rose and fell 0.7 mm
            every other step). */
         if (regap)
-            a = fmin(a, -fabs(dot3(c->gravity, e->normal)));
+            a = held_up(c, e, a);
         /* the first root, as 2 s / (-u + sqrt(u^2 - 2 a s)): the usual
            (-u - sqrt(u^2 - 2 a s)) / a takes two nearly equal numbers
            apart and divides by a, and between two bodies falling together
@@ -1094,8 +1103,7 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
                up to 1 mm above the one under it, to rest on that gap or
                to fall and land again on it without a lane to carry it
                (a light box went 2.5 mm into the ground). */
-            const double fall =
-                e->body_a >= 0 && mismatched(c, e, TB__MASS_RATIO) ? fmin(a, -fabs(dot3(c->gravity, e->normal))) : a;
+            const double fall = mismatched(c, e, TB__MASS_RATIO) ? held_up(c, e, a) : a;
             const double jump = vi > 0 ? vi : 0, held = fall < 0 ? -fall * rest : 0;
             if (jump + held > 0)
                 *lever = (jump * *lever + held * share * rest) / (jump + held);
@@ -1349,15 +1357,16 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
         double point_target, point_lever, point_side_lever, point_keep;
         const int struck =
             set_up_point(c, e, p, bt, k, j, h, fraction, &point_target, &point_lever, &point_side_lever, &point_keep);
+        const int deep = p->separation < -c->settings.slop;
         cold[0] += !p->matched;
         /* at rest: not struck, not deeper than the slop, and (a new point)
            its two sides moving against each other slower than the sleep
-           speed; a warm point's rest is in its warm start already */
-        const int still = !struck && !(p->separation < -c->settings.slop) &&
-                          (p->matched || slip_of(c, e, p) <= c->settings.sleep_speed);
+           speed; a warm point's rest is in its warm start already.
+           Landing: at rest, or struck and not deep. */
+        const int still = !struck && !deep && (p->matched || slip_of(c, e, p) <= c->settings.sleep_speed);
         cold[1] += !p->matched && still;
         moving += !still;
-        flying += !still && !(struck && !(p->separation < -c->settings.slop));
+        flying += !still && !(struck && !deep);
         impacts += struck;
         lever += point_lever;
         side_lever += point_side_lever;
@@ -1723,9 +1732,11 @@ void tb__contacts_solve(tb_world *w, double h)
     iterations = c->settings.velocity_iterations;
     /* many contacts that start at rest without last step's impulses (a
        scene built touching): the normal rows solved together first
-       (cold_start.c). Landings are left to the sweeps: they strike, and
-       the next step starts warm (none of the pile's 80 cold steps is at
-       rest; taken whole, 75 of them took 127 iterations each) */
+       (cold_start.c). Landings are left to the sweeps, they strike and the
+       next step starts warm (none of the pile's 80 cold steps is at rest;
+       taken whole, 75 of them took 127 iterations each), but for a body
+       landing on one of a very different mass: those lanes and the ones
+       near them are solved together (tb__heavy_landings) */
     if (8 * cold[1] > points)
         tb__cold_start(c, TB__COLD_TIMES * iterations, c->settings.velocity_tolerance, 1);
     else if (c->heavy_lanes)

@@ -536,10 +536,11 @@ TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, in
     }
 }
 
-/* The normal rows (press, then the tilts) of every batch, as
-   [batch][TB__NORMAL_ROWS][lane] arrays: impulses given pushed on the
-   velocities m, and each row's rate (the relative velocity it holds) on
-   m into out, as the sweeps see them. */
+/* The normal rows (press, then the tilts) of every batch in the cold
+   start's solve (tb__batch.in_solve), as [batch][TB__NORMAL_ROWS][lane]
+   arrays: impulses given pushed on the velocities m, and each row's rate
+   (the relative velocity it holds) on m into out, as the sweeps see them
+   (0 for a batch outside the solve). */
 TB__LANE void push_normal_batches(const tb__batch *batches, size_t n, double *m, const double *rows, int wide)
 {
     size_t i;
