@@ -837,10 +837,28 @@ static const tb__geom *as_sphere(const tb__geom *g, tb__geom *copy)
     return copy;
 }
 
+/* The radius of a ball about g's centre that holds it (a plane: none). */
+static double bounding_radius(const tb__geom *g)
+{
+    switch (g->kind) {
+    case TB__SHAPE_SPHERE: return g->radius;
+    case TB__SHAPE_CAPSULE: return g->half[2] + g->radius;
+    case TB__SHAPE_BOX: return sqrt(dot(g->half, g->half));
+    default: return HUGE_VAL;
+    }
+}
+
 int tb__collide(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
 {
+    const double reach = bounding_radius(a) + bounding_radius(b) + margin;
     tb__geom ca, cb;
+    double d[3];
     memset(m, 0, sizeof *m);
+    /* balls about the two further apart than the margin: so are the
+       shapes (an eighth of a pile's pairs overlap in their boxes alone) */
+    sub(b->pos, a->pos, d);
+    if (reach < HUGE_VAL && dot(d, d) > reach * reach)
+        return 0;
     a = as_sphere(a, &ca);
     b = as_sphere(b, &cb);
     if (a->kind <= b->kind) {
