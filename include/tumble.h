@@ -412,7 +412,7 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    started from the last step (its impulses scaled to this step's length,
    so steps may change from frame to frame), solves each pair of shapes as one patch
    over its touching points: v_n >= 0 where last step's normal force was
-   centred (or the restitution rebound), no tilt of one shape on the other
+   centred, no tilt of one shape on the other
    while the centre of pressure can stay among the points (the weight a
    tall stack carries is shared between them in one step, not point by
    point over many sweeps: a column of 10 boxes stands still, of 20
@@ -428,7 +428,10 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    stays put under any method; by the time left after impact for a new
    contact (the impact is timed within the step, so a ball bounces to e^2
    of its height at any step size; not at all under explicit Euler, whose
-   positions move with the velocity the step started with); the
+   positions move with the velocity the step started with); a pair that
+   strikes is solved to stop, then bounced by its normal force alone, after
+   the sweeps (as Box2D v3 does: bounced while friction held the contact
+   still, a spinning body took energy from nowhere); the
    sweeps alternate direction, so weight reaches the bottom of a stack
    within a pair of sweeps whatever order the points come in. A step where
    many contacts start at rest without last step's impulses (a scene built

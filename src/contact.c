@@ -1390,7 +1390,12 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
     bt->lever[k] = lever / j;
     bt->keep[k] = keep / j;
     bt->side_lever[k] = side_lever / j;
-    bt->press_target[k] = target / j;
+    /* a lane that bounces (its points' mean target > 0) is solved to
+       stop first, then bounced by its press alone (tb__bounce) */
+    bt->press_target[k] = target < 0 ? target / j : 0;
+    bt->bounce[k] = target > 0 ? target / j : 0;
+    bt->bouncing |= target > 0;
+    c->bounces += target > 0;
     bt->impulse[TB__ROW_PRESS][k] = force * scale;
     for (d = 0; d < 2; ++d) {
         bt->impulse[TB__ROW_TANGENT1 + d][k] = impacts ? 0 : dot3(e->friction_impulse, e->tangent[d]) * scale;
@@ -1493,7 +1498,7 @@ static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t col
             }
             bt->points = e->touching;
             bt->one_sided = e->body_a < 0;
-            bt->tilting = 0;
+            bt->tilting = bt->bouncing = 0;
             last = bucket_of(e) / CLASSES;
             lane = 0;
         }
@@ -1726,7 +1731,7 @@ void tb__contacts_solve(tb_world *w, double h)
     load_bodies(w, c);
     c->rest_lever = tb__force_lever(w) * h;
     memcpy(c->gravity, w->gravity, sizeof c->gravity);
-    c->heavy_lanes = 0;
+    c->heavy_lanes = c->bounces = 0;
     set_up_batches(c, h, &points, cold);
     tb__push_impulses(c->batches, c->batch_count, c->velocity, TB__PUSH_VELOCITY, c->isa);
     iterations = c->settings.velocity_iterations;
@@ -1768,6 +1773,8 @@ void tb__contacts_solve(tb_world *w, double h)
         }
     }
     c->sweeps = it;
+    if (c->bounces)
+        tb__bounce(c->batches, c->batch_count, c->velocity, c->isa);
     /* the impulses' whole effect: momenta, and positions over their lever
        times */
     tb__push_impulses(c->batches, c->batch_count, c->momenta, TB__PUSH_MOMENTA, c->isa);

@@ -507,6 +507,33 @@ TB__LANE void rows_batches(tb__batch *batches, size_t n, const double *m)
     }
 }
 
+/* The press row of every bouncing lane toward its bounce target
+   (tb__bounce); other lanes keep their impulse. */
+TB__LANE void bounce_batches(tb__batch *batches, size_t n, double *m, int wide)
+{
+    enum { P = TB__ROW_PRESS };
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        tb__batch *bt = &batches[i];
+        const int one = 0;
+        sides s;
+        int k;
+        if (!bt->bouncing)
+            continue;
+        gather(bt, m, &s, wide, one);
+        for (k = 0; k < W; ++k) {
+            const double old = bt->impulse[P][k];
+            double total = old - bt->mass[P][k] * (RATE(bt->dir[0], bt->arm_a[P], bt->arm_b[P], &s, k, one) - bt->bounce[k]);
+            double dn;
+            total = bt->bounce[k] > 0 ? (total > 0 ? total : 0) : old;
+            dn = total - old;
+            PUSH(bt->dir[0], bt->turn_a[P], bt->turn_b[P], &s, k, dn, one);
+            bt->impulse[P][k] = total;
+        }
+        scatter(bt, m, &s, wide, one);
+    }
+}
+
 /* Every batch's impulse totals into m (tb__push_impulses). */
 TB__LANE void push_batches(tb__batch *batches, size_t n, double *m, int what, int wide)
 {
@@ -591,6 +618,10 @@ TB__LANE void normal_rates_batches(const tb__batch *batches, size_t n, const dou
     {                                                                                              \
         position_batches(batches, n, m, backwards, wide);                                         \
     }                                                                                              \
+    attr static void bounce_##isa(tb__batch *batches, size_t n, double *m)                         \
+    {                                                                                              \
+        bounce_batches(batches, n, m, wide);                                                       \
+    }                                                                                              \
     attr static void push_##isa(tb__batch *batches, size_t n, double *m, int what)                 \
     {                                                                                              \
         push_batches(batches, n, m, what, wide);                                                  \
@@ -637,6 +668,11 @@ void tb__sweep_velocities(tb__batch *batches, size_t n, double *m, int backwards
 void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards, int isa)
 {
     TB__DISPATCH(isa, position, (batches, n, m, backwards));
+}
+
+void tb__bounce(tb__batch *batches, size_t n, double *m, int isa)
+{
+    TB__DISPATCH(isa, bounce, (batches, n, m));
 }
 
 void tb__push_impulses(tb__batch *batches, size_t n, double *m, int what, int isa)
