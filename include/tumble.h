@@ -431,7 +431,8 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    positions move with the velocity the step started with); a pair that
    strikes is solved to stop, then bounced by its normal force alone, after
    the sweeps (as Box2D v3 does: bounced while friction held the contact
-   still, a spinning body took energy from nowhere); the
+   still, a spinning body took energy from nowhere), its centre leaving no
+   faster than it came plus what gravity adds in the step; the
    sweeps alternate direction, so weight reaches the bottom of a stack
    within a pair of sweeps whatever order the points come in. A step where
    many contacts start at rest without last step's impulses (a scene built
