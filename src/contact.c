@@ -1765,7 +1765,10 @@ void tb__contacts_solve(tb_world *w, double h)
     else if (c->heavy_lanes)
         tb__heavy_landings(c, iterations, c->settings.velocity_tolerance);
     else if (c->settings.stack_iterations > 0)
-        tb__cold_start(c, c->settings.stack_iterations, c->settings.velocity_tolerance, 0);
+        /* all of them, whatever the warm starts left: a stack at rest
+           leaves every row within velocity_tolerance, and skipped there
+           they left it to the sweeps, which let its lean grow */
+        tb__cold_start(c, c->settings.stack_iterations, 0, 0);
     it = sweep_until_settled(c, iterations, c->settings.velocity_tolerance);
     if (8 * cold[0] > points) {
         /* contacts without last step's impulses to start from (a scene

@@ -840,18 +840,25 @@ static void random_offset_stacks_stand(void **state)
 }
 
 /* 40 random stacks of 8 (random_stack) kept awake (sleep off) for 30 s
-   with 4 stack iterations a step: every box within 1 mm of where it was
-   put (measured 2.5e-4 m). With the sweeps alone (stack_iterations 0, the
-   default) 3 of the 40 lean from 10 s or so on, by 1% more a step, and
-   fall: the sweeps reduce the slow lean of a whole stack slowest. */
+   with 8 stack iterations a step. Statically each stands (by 5 cm at the
+   least), so every box stays where it was put: within a micron (measured
+   2.3e-12 m). With the sweeps alone (stack_iterations 0, the default), a
+   lean of a whole stack grows from rounding, by 2 to 3% a step (the
+   sweeps reduce it slowest), until the stack falls: 3 of the 40 from 10 s
+   or so on; one of them at 40 s even with every sweep of 20 done. The
+   stack iterations were skipped where the warm starts left every row
+   within velocity_tolerance, as a stack at rest always does: boxes moved
+   up to 7.4e-5 m, growing (with 4 iterations, one stack fell at 38 s
+   under other rounding). They now run at every step; 4 of them still let
+   a lean grow, 80-fold in 6 s up to 1.4e-4 m in 60 s. */
 static void awake_offset_stacks_stay_up_with_stack_iterations(void **state)
 {
     double least;
-    const double worst = random_stacks(777, 40, 0, 4, 1800, &least);
+    const double worst = random_stacks(777, 40, 0, 8, 1800, &least);
     (void)state;
-    print_message("40 random offset stacks of 8 awake for 30 s, 4 stack iterations: worst box %.3e m\n", worst);
+    print_message("40 random offset stacks of 8 awake for 30 s, 8 stack iterations: worst box %.3e m\n", worst);
     assert_true(least > 0);
-    assert_below(worst, 1e-3);
+    assert_below(worst, 1e-6);
 }
 
 /* 60 random spheres, capsules and boxes (0.1 to 0.6 m, 50 to 5000
