@@ -95,26 +95,26 @@
 #define TB__SINC4 2.7557305902356644e-06    /* 1/362880 - 1.3e-12 */
 #define TB__SINC5 (-2.5027028447633727e-08) /* -1/39916800 + 2.5e-11 */
 
-static inline double tb__cos_poly(double u, double u2, double u4)
+TB__LANE double tb__cos_poly(double u, double u2, double u4)
 {
     /* Estrin's scheme: Horner's chain of dependent operations was the
        critical path of the lanes */
-    return (1 + u * (-1.0 / 2)) + u2 * (TB__COS2 + u * TB__COS3) + u4 * (TB__COS4 + u * TB__COS5);
+    return fma(u4, fma(u, TB__COS5, TB__COS4), fma(u2, fma(u, TB__COS3, TB__COS2), fma(u, -1.0 / 2, 1)));
 }
 
-static inline void tb__sincos4(double x, double *s, double *c)
+TB__LANE void tb__sincos4(double x, double *s, double *c)
 {
     const double u = x * x, u2 = u * u, u4 = u2 * u2;
-    *s = x + x * u * (((-1.0 / 6 + u * (1.0 / 120)) + u2 * (-1.0 / 5040 + u * (1.0 / 362880)))
-                      + u4 * (-1.0 / 39916800));
+    const double odd = fma(u4, -1.0 / 39916800, fma(u2, fma(u, 1.0 / 362880, -1.0 / 5040), fma(u, 1.0 / 120, -1.0 / 6)));
+    *s = fma(x * u, odd, x);
     *c = tb__cos_poly(u, u2, u4);
 }
 
 /* sin(x) / x and cos x from u = x^2 <= 1/16 (|x| <= 1/4). */
-static inline void tb__sinc_cos4(double u, double *sinc, double *c)
+TB__LANE void tb__sinc_cos4(double u, double *sinc, double *c)
 {
     const double u2 = u * u, u4 = u2 * u2;
-    *sinc = (1 + u * (-1.0 / 6)) + u2 * (TB__SINC2 + u * TB__SINC3) + u4 * (TB__SINC4 + u * TB__SINC5);
+    *sinc = fma(u4, fma(u, TB__SINC5, TB__SINC4), fma(u2, fma(u, TB__SINC3, TB__SINC2), fma(u, -1.0 / 6, 1)));
     *c = tb__cos_poly(u, u2, u4);
 }
 
@@ -132,7 +132,7 @@ static void tb__half_turn_big(double u, double k, const double v[3], double r[4]
 }
 
 /* The polynomial path of tb__half_turn, u <= 1/16. */
-static inline void tb__turn_poly(double u, double k, const double v[3], double r[4])
+TB__LANE void tb__turn_poly(double u, double k, const double v[3], double r[4])
 {
     double sinc, c;
     tb__sinc_cos4(u, &sinc, &c);
@@ -143,7 +143,7 @@ static inline void tb__turn_poly(double u, double k, const double v[3], double r
     r[3] = sinc * v[2];
 }
 
-static inline void tb__half_turn(double u, double k, const double v[3], double r[4])
+TB__LANE void tb__half_turn(double u, double k, const double v[3], double r[4])
 {
     if (u > TB__SMALL * TB__SMALL)
         tb__half_turn_big(u, k, v, r);
@@ -157,24 +157,24 @@ static inline void tb__half_turn(double u, double k, const double v[3], double r
    written with t = -2 (p x v) = 2 (x, y, z) x v: v - w t + (x, y, z) x t.
    The negations are exact, so this is the same arithmetic to the bit,
    without them. */
-static inline void tb__to_body(const double q[4], const double v[3], double out[3])
+TB__LANE void tb__to_body(const double q[4], const double v[3], double out[3])
 {
     const double w = q[0], x = q[1], y = q[2], z = q[3];
-    const double tx = 2 * (y * v[2] - z * v[1]);
-    const double ty = 2 * (z * v[0] - x * v[2]);
-    const double tz = 2 * (x * v[1] - y * v[0]);
-    out[0] = v[0] - w * tx + (y * tz - z * ty);
-    out[1] = v[1] - w * ty + (z * tx - x * tz);
-    out[2] = v[2] - w * tz + (x * ty - y * tx);
+    const double tx = 2 * fma(y, v[2], -(z * v[1]));
+    const double ty = 2 * fma(z, v[0], -(x * v[2]));
+    const double tz = 2 * fma(x, v[1], -(y * v[0]));
+    out[0] = fma(-w, tx, v[0]) + fma(y, tz, -(z * ty));
+    out[1] = fma(-w, ty, v[1]) + fma(z, tx, -(x * tz));
+    out[2] = fma(-w, tz, v[2]) + fma(x, ty, -(y * tx));
 }
 
 /* out = a b (Hamilton product). out may be a or b. */
-static inline void tb__qmul(const double a[4], const double b[4], double out[4])
+TB__LANE void tb__qmul(const double a[4], const double b[4], double out[4])
 {
-    const double w = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-    const double x = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-    const double y = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-    const double z = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+    const double w = fma(a[0], b[0], -(a[1] * b[1])) - fma(a[2], b[2], a[3] * b[3]);
+    const double x = fma(a[0], b[1], a[1] * b[0]) + fma(a[2], b[3], -(a[3] * b[2]));
+    const double y = fma(a[0], b[2], -(a[1] * b[3])) + fma(a[2], b[0], a[3] * b[1]);
+    const double z = fma(a[0], b[3], a[1] * b[2]) + fma(a[3], b[0], -(a[2] * b[1]));
     out[0] = w;
     out[1] = x;
     out[2] = y;
@@ -186,12 +186,12 @@ static inline void tb__qmul(const double a[4], const double b[4], double out[4])
    for 1/sqrt, 1 - e/2, then leaves 3 e^2 / 8, far below rounding. A q
    further off (e > 1e-8, say from a caller that does not keep it unit) gets
    the full division by its norm. */
-static inline double tb__norm2(const double q[4])
+TB__LANE double tb__norm2(const double q[4])
 {
-    return q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+    return fma(q[0], q[0], q[1] * q[1]) + fma(q[2], q[2], q[3] * q[3]);
 }
 
-static inline void tb__scale(const double in[4], double f, double q[4])
+TB__LANE void tb__scale(const double in[4], double f, double q[4])
 {
     q[0] = in[0] * f;
     q[1] = in[1] * f;
@@ -199,26 +199,26 @@ static inline void tb__scale(const double in[4], double f, double q[4])
     q[3] = in[3] * f;
 }
 
-static inline void tb__normalize(const double in[4], double q[4])
+TB__LANE void tb__normalize(const double in[4], double q[4])
 {
     const double n2 = tb__norm2(in);
-    tb__scale(in, fabs(n2 - 1) <= 1e-8 ? 1.5 - 0.5 * n2 : 1 / sqrt(n2), q);
+    tb__scale(in, fabs(n2 - 1) <= 1e-8 ? fma(-0.5, n2, 1.5) : 1 / sqrt(n2), q);
 }
 
 /* The lanes take the Newton step without looking: they only hold unit q
    (rotation.h), which the exact turns keep within a few rounding errors, so
    tb__normalize would take it too. */
 
-static inline void tb__newton(const double in[4], double q[4])
+TB__LANE void tb__newton(const double in[4], double q[4])
 {
-    tb__scale(in, 1.5 - 0.5 * tb__norm2(in), q);
+    tb__scale(in, fma(-0.5, tb__norm2(in), 1.5), q);
 }
 
 /* -------------------------------------------------- frozen and isotropic -- */
 
 /* q <- q exp(h w_b / 2), the same rotation as exp(h w / 2) q with the world
    w = R w_b, without going back to the world frame. */
-static inline double tb__frozen_turn(const double q[4], const double L[3], const double invI[3], double k,
+TB__LANE double tb__frozen_turn(const double q[4], const double L[3], const double invI[3], double k,
                                      double w[3])
 {
     double lb[3];
@@ -229,7 +229,10 @@ static inline double tb__frozen_turn(const double q[4], const double L[3], const
     return k * k * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
 }
 
-void tb__rotation_frozen(double q[4], const double L[3], const double invI[3], double h)
+/* The one-body kernels are templates as the lanes are, compiled for each
+   instruction set (below): with fma() in their arithmetic (rotation.h),
+   the portable build calls the C library for every one. */
+TB__LANE void tb__frozen_one(double q[4], const double L[3], const double invI[3], double h)
 {
     double w[3], r[4];
     const double k = 0.5 * h;
@@ -238,7 +241,7 @@ void tb__rotation_frozen(double q[4], const double L[3], const double invI[3], d
     tb__normalize(r, q);
 }
 
-static inline double tb__isotropic_turn(const double L[3], double inv_inertia, double k, double w[3])
+TB__LANE double tb__isotropic_turn(const double L[3], double inv_inertia, double k, double w[3])
 {
     w[0] = inv_inertia * L[0];
     w[1] = inv_inertia * L[1];
@@ -246,7 +249,7 @@ static inline double tb__isotropic_turn(const double L[3], double inv_inertia, d
     return k * k * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
 }
 
-void tb__rotation_isotropic(double q[4], const double L[3], double inv_inertia, double h)
+TB__LANE void tb__isotropic_one(double q[4], const double L[3], double inv_inertia, double h)
 {
     double w[3], r[4];
     const double k = 0.5 * h;
@@ -263,7 +266,7 @@ typedef struct tb__turn_lanes {
     double w[TB__LANES], x[TB__LANES], y[TB__LANES], z[TB__LANES], u[TB__LANES];
 } tb__turn_lanes;
 
-static inline void tb__turn_put(tb__turn_lanes *t, int i, double u, double k, const double w[3])
+TB__LANE void tb__turn_put(tb__turn_lanes *t, int i, double u, double k, const double w[3])
 {
     double r[4];
     tb__turn_poly(u, k, w, r);
@@ -274,7 +277,7 @@ static inline void tb__turn_put(tb__turn_lanes *t, int i, double u, double k, co
     t->u[i] = u;
 }
 
-static inline int tb__turns_small(const tb__turn_lanes *t)
+TB__LANE int tb__turns_small(const tb__turn_lanes *t)
 {
     int i;
     for (i = 0; i < TB__LANES; ++i)
@@ -313,7 +316,7 @@ TB__LANE void tb__isotropic_lanes_t(double *restrict q, const double *restrict L
         }
     }
     for (i = 0; i < n; ++i)
-        tb__rotation_isotropic(q + 4 * i, L + 3 * i, invI[3 * i], h);
+        tb__isotropic_one(q + 4 * i, L + 3 * i, invI[3 * i], h);
 }
 
 TB__LANE void tb__frozen_lanes_t(double *restrict q, const double *restrict L, const double *restrict invI,
@@ -348,7 +351,7 @@ TB__LANE void tb__frozen_lanes_t(double *restrict q, const double *restrict L, c
         }
     }
     for (i = 0; i < n; ++i)
-        tb__rotation_frozen(q + 4 * i, L + 3 * i, invI + 3 * i, h);
+        tb__frozen_one(q + 4 * i, L + 3 * i, invI + 3 * i, h);
 }
 
 /* -------------------------------------------------------------- splitting -- */
@@ -472,14 +475,14 @@ typedef struct tb__spin {
 TB__LANE void tb__turn_a(tb__spin *p, double s, double c, int last)
 {
     const double w = p->w, x0 = p->x, y = p->y, z = p->z;
-    p->w = w * c - x0 * s;
-    p->x = x0 * c + w * s;
-    p->y = y * c + z * s;
-    p->z = z * c - y * s;
+    p->w = fma(w, c, -(x0 * s));
+    p->x = fma(x0, c, w * s);
+    p->y = fma(y, c, z * s);
+    p->z = fma(z, c, -(y * s));
     if (!last) {
-        const double C = 1 - 2 * s * s, S = 2 * s * c, l1 = p->l1, l2 = p->l2;
-        p->l1 = C * l1 + S * l2;
-        p->l2 = C * l2 - S * l1;
+        const double C = fma(-2 * s, s, 1), S = 2 * s * c, l1 = p->l1, l2 = p->l2;
+        p->l1 = fma(C, l1, S * l2);
+        p->l2 = fma(C, l2, -(S * l1));
     }
 }
 
@@ -488,14 +491,14 @@ TB__LANE void tb__turn_a(tb__spin *p, double s, double c, int last)
 TB__LANE void tb__turn_b(tb__spin *p, double s, double c, int l0_only)
 {
     const double w = p->w, x0 = p->x, y = p->y, z = p->z;
-    const double C = 1 - 2 * s * s, S = 2 * s * c, l0 = p->l0, l1 = p->l1;
-    p->w = w * c - z * s;
-    p->x = x0 * c + y * s;
-    p->y = y * c - x0 * s;
-    p->z = z * c + w * s;
-    p->l0 = C * l0 + S * l1;
+    const double C = fma(-2 * s, s, 1), S = 2 * s * c, l0 = p->l0, l1 = p->l1;
+    p->w = fma(w, c, -(z * s));
+    p->x = fma(x0, c, y * s);
+    p->y = fma(y, c, -(x0 * s));
+    p->z = fma(z, c, w * s);
+    p->l0 = fma(C, l0, S * l1);
     if (!l0_only)
-        p->l1 = C * l1 - S * l0;
+        p->l1 = fma(C, l1, -(S * l0));
 }
 
 /* The relabelling as the lanes read it, one number per quantity: the
@@ -690,7 +693,7 @@ TB__LANE double tb__lane_end(tb__spin_lanes *lanes, int i, double g, double *q)
    for those), or a q off unit length (the full normalisation). The same
    rotations as the lanes, the plain way: q and L relabelled, q turned
    itself. */
-static void tb__sincos_any(double x, double *s, double *c)
+TB__LANE void tb__sincos_any(double x, double *s, double *c)
 {
     if (fabs(x) <= TB__SMALL) {
         tb__sincos4(x, s, c);
@@ -700,8 +703,8 @@ static void tb__sincos_any(double x, double *s, double *c)
     }
 }
 
-static void tb__split_any(double q[4], const double L[3], const tb__split_frame *f, double h, const double *ga,
-                          const double *gb, int n)
+TB__LANE void tb__split_any(double q[4], const double L[3], const tb__split_frame *f, double h, const double *ga,
+                            const double *gb, int n)
 {
     const double sign = f->sign, ka = 0.5 * h * f->ca, kb = 0.5 * h * f->cb, k = 0.5 * h * f->a;
     double r[4], lb[3], Lr[3], qr[4];
@@ -743,12 +746,12 @@ static const double tb__bm_b[6] = { TB__BM_B1, TB__BM_B2, TB__BM_B3,
 /* One body the general way: an isotropic one by its own kernel (exact,
    and what the lanes send it to, whatever the method), any other by
    tb__split_any. */
-static void tb__split_general(double q[4], const double L[3], const double invI[3], double h, int accurate)
+TB__LANE void tb__split_general(double q[4], const double L[3], const double invI[3], double h, int accurate)
 {
     tb__split_frame f;
     tb__split_frame_of(invI, &f);
     if (f.isotropic)
-        tb__rotation_isotropic(q, L, invI[0], h);
+        tb__isotropic_one(q, L, invI[0], h);
     else if (accurate)
         tb__split_any(q, L, &f, h, tb__bm_a, tb__bm_b, 7);
     else
@@ -759,8 +762,8 @@ static void tb__split_general(double q[4], const double L[3], const double invI[
    again from their q at the start, the general way. Rare: at h = 1/60 s it
    takes a body spinning at 30 rad/s relative to its turn about L (60
    about A), or an isotropic body among others. */
-static void tb__lanes_redo(double *q, const double *L, const double *invI, double h, int n, int accurate,
-                           const tb__spin_lanes *lanes)
+TB__LANE void tb__lanes_redo(double *q, const double *L, const double *invI, double h, int n, int accurate,
+                             const tb__spin_lanes *lanes)
 {
     int i, k;
     for (i = 0; i < n; ++i)
@@ -893,6 +896,19 @@ TB__LANE void tb__split_block(double *restrict q, const double *restrict L, cons
                                         const tb__lane_frames *f, double h, int n)                      \
     {                                                                                                   \
         tb__split_block(q, L, invI, f, h, n, 1);                                                        \
+    }                                                                                                   \
+    attr static void tb__one_frozen_##isa(double *q, const double *L, const double *invI, double h)    \
+    {                                                                                                   \
+        tb__frozen_one(q, L, invI, h);                                                                  \
+    }                                                                                                   \
+    attr static void tb__one_isotropic_##isa(double *q, const double *L, double inv, double h)         \
+    {                                                                                                   \
+        tb__isotropic_one(q, L, inv, h);                                                                \
+    }                                                                                                   \
+    attr static void tb__one_general_##isa(double *q, const double *L, const double *invI, double h,   \
+                                           int accurate)                                                \
+    {                                                                                                   \
+        tb__split_general(q, L, invI, h, accurate);                                                     \
     }
 
 TB__KERNELS(portable, )
@@ -970,16 +986,30 @@ void tb__accurate_lanes_framed(double *q, const double *L, const double *invI, c
 
 void tb__rotation_split2(double q[4], const double L[3], const double invI[3], double h)
 {
+    const int isa = tb__isa();
     if (TB__NEAR_UNIT(q))
-        tb__split2_portable(q, L, invI, NULL, h, 1);
+        TB__DISPATCH(split2, (q, L, invI, NULL, h, 1));
     else
-        tb__split_general(q, L, invI, h, 0);
+        TB__DISPATCH(one_general, (q, L, invI, h, 0));
 }
 
 void tb__rotation_accurate(double q[4], const double L[3], const double invI[3], double h)
 {
+    const int isa = tb__isa();
     if (TB__NEAR_UNIT(q))
-        tb__accurate_portable(q, L, invI, NULL, h, 1);
+        TB__DISPATCH(accurate, (q, L, invI, NULL, h, 1));
     else
-        tb__split_general(q, L, invI, h, 1);
+        TB__DISPATCH(one_general, (q, L, invI, h, 1));
+}
+
+void tb__rotation_frozen(double q[4], const double L[3], const double invI[3], double h)
+{
+    const int isa = tb__isa();
+    TB__DISPATCH(one_frozen, (q, L, invI, h));
+}
+
+void tb__rotation_isotropic(double q[4], const double L[3], double inv_inertia, double h)
+{
+    const int isa = tb__isa();
+    TB__DISPATCH(one_isotropic, (q, L, inv_inertia, h));
 }

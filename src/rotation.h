@@ -15,8 +15,9 @@
    drifts. Every kernel turns the body by exact rotations, so |L_b| = |L|
    holds to rounding at any step, and renormalises q (|q| = 1 within 4e-16).
    They read and write nothing else, allocate nothing, call libm only for
-   turns beyond their polynomials (noted below), and are safe on any thread;
-   q must not alias L or invI.
+   turns beyond their polynomials (noted below) and, in the portable build,
+   for fma() (below), and are safe on any thread; q must not alias L or
+   invI.
 
    Each kernel comes twice: for one body, and for TB__LANES bodies side by
    side ("lanes", one array per quantity) in loops of fixed length that GCC
@@ -27,10 +28,19 @@
    body gets the same bits alone or in lanes, whatever its neighbours
    (tests/test_rotation.c checks it). The world steps its bodies in lanes.
 
+   Where a product meets a sum the kernels call fma(): one rounding, the
+   same on every instruction set, so the variants still give the same bits
+   (with -ffp-contract=off nothing else is fused). AVX2 and AVX-512 do it
+   in one instruction, which took a fifth off the splitting kernels (1000
+   boxes under "verlet": 9.8 to 7.9 ns a body-step); without them the C
+   library does, exactly, a call each, which makes the portable lanes 8 to
+   80 times slower. Processors without AVX2 (before 2013) pay that.
+
    Costs: per body-step on this project's 2-core x86-64 (gcc -O2, no
    -march), in lanes over 1024 bodies (what a world pays) with AVX-512 and
-   with portable C (SSE2), then for one body stepped alone (each step
-   waiting for the last), +-20% run to run.
+   with portable C (SSE2, fma() through the C library), then for one body
+   stepped alone (each step waiting for the last; the one-body kernels
+   run on the widest instruction set too), +-20% run to run.
    Accuracy: on the intermediate-axis flip of NOTES.md at h = 1/60 s over
    20 s (bench/rotation.c). */
 #ifndef TB_ROTATION_H
@@ -39,12 +49,12 @@
 /* q <- exp(h w / 2) q with w frozen at the start of the step: one exact turn
    about the start's angular velocity. Order 1 for an asymmetric body (it
    misses the turning of w), exact for an isotropic one, where w is constant.
-   libm beyond |w| h = 0.5 rad. 4.5 / 10.5 ns in lanes (40 ns alone). */
+   libm beyond |w| h = 0.5 rad. 3.6 / 80 ns in lanes (37 ns alone). */
 void tb__rotation_frozen(double q[4], const double L[3], const double invI[3], double h);
 
 /* An isotropic body (I1 = I2 = I3 = 1 / inv_inertia) turns about the fixed
    world w = L / I: q <- exp(h w / 2) q, exact. It skips the body-frame
-   transform that tb__rotation_frozen needs. 3 / 6 ns in lanes. */
+   transform that tb__rotation_frozen needs. */
 void tb__rotation_isotropic(double q[4], const double L[3], double inv_inertia, double h);
 
 /* Order 2: Strang splitting of T into a turn about the world L and turns
@@ -53,15 +63,15 @@ void tb__rotation_isotropic(double q[4], const double L[3], double inv_inertia, 
    symmetric tops and for isotropic bodies (which it hands to
    tb__rotation_isotropic), time-reversible; 1.7e-4 rad on the flip. libm
    only for a turn of more than 1/2 rad in one piece (at h = 1/60 s, a
-   spin of about 30 rad/s relative to the turn about L). 9 / 32 ns in
-   lanes (80 ns alone). */
+   spin of about 30 rad/s relative to the turn about L). 11 / 210 ns in
+   lanes (76 ns alone). */
 void tb__rotation_split2(double q[4], const double L[3], const double invI[3], double h);
 
 /* Order 4: the same splitting composed by Blanes and Moan's S6, 13 axis
    turns a step. Also a Poisson map, exact for isotropic bodies and
    symmetric tops, time-reversible. On the flip: energy within 1.1e-10 at
-   every step, 7.5e-10 rad after 20 s. libm as for split2. 23 / 73 ns in
-   lanes (270 ns alone: 13 dependent turns). */
+   every step, 7.5e-10 rad after 20 s. libm as for split2. 19 / 1600 ns
+   in lanes (250 ns alone: 13 dependent turns). */
 void tb__rotation_accurate(double q[4], const double L[3], const double invI[3], double h);
 
 /* ---- bodies in lanes ----------------------------------------------------- */
