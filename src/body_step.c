@@ -333,11 +333,11 @@ static void turn(tb_world *w, size_t b, size_t m, const tb__split_op *op, int is
     else if (iso == 0)
         tb__frozen_lanes(q, L, invI, h, (int)m, isa);
     else
-        for (s = 0; s < m; ++s)
+        for (s = 0; s < m; ++s) /* (one body at a time, on this instruction set) */
             if (frame[s].isotropic)
-                tb__rotation_isotropic(q + 4 * s, L + 3 * s, invI[3 * s], h);
+                tb__isotropic_lanes(q + 4 * s, L + 3 * s, invI + 3 * s, h, 1, isa);
             else
-                tb__rotation_frozen(q + 4 * s, L + 3 * s, invI + 3 * s, h);
+                tb__frozen_lanes(q + 4 * s, L + 3 * s, invI + 3 * s, h, 1, isa);
 }
 
 /* A block's per-body numbers spread to the layout of its 3-vectors:

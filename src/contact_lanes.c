@@ -250,21 +250,28 @@ TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s, int one)
 }
 
 /* Every lane's press row: the normal velocity at the centre of its
-   points >= the mean of their targets. An empty lane has zero masses, so
-   its impulse stays 0. */
-TB__LANE void press(tb__batch *restrict bt, sides *restrict s, int one)
+   points >= target[k] (only: in the lanes whose target > 0, the others
+   keep their impulse); the sweeps' target is the mean of the points'.
+   An empty lane has zero masses, so its impulse stays 0. */
+TB__LANE void press_toward(tb__batch *restrict bt, sides *restrict s, const double *target, int only, int one)
 {
     enum { P = TB__ROW_PRESS };
     int k;
     for (k = 0; k < W; ++k) {
-        double total = bt->impulse[P][k] -
-                       bt->mass[P][k] * (RATE(bt->dir[0], bt->arm_a[P], bt->arm_b[P], s, k, one) - bt->press_target[k]);
+        const double old = bt->impulse[P][k];
+        double total = old - bt->mass[P][k] * (RATE(bt->dir[0], bt->arm_a[P], bt->arm_b[P], s, k, one) - target[k]);
         double dn;
         total = total > 0 ? total : 0;
-        dn = total - bt->impulse[P][k];
+        total = !only || target[k] > 0 ? total : old;
+        dn = total - old;
         PUSH(bt->dir[0], bt->turn_a[P], bt->turn_b[P], s, k, dn, one);
         bt->impulse[P][k] = total;
     }
+}
+
+TB__LANE void press(tb__batch *restrict bt, sides *restrict s, int one)
+{
+    press_toward(bt, s, bt->press_target, 0, one);
 }
 
 /* Every lane's tilt about tangent d, toward a turn of one side on the
@@ -508,29 +515,18 @@ TB__LANE void rows_batches(tb__batch *batches, size_t n, const double *m)
 }
 
 /* The press row of every bouncing lane toward its bounce target
-   (tb__bounce); other lanes keep their impulse. */
+   (tb__bounce). */
 TB__LANE void bounce_batches(tb__batch *batches, size_t n, double *m, int wide)
 {
-    enum { P = TB__ROW_PRESS };
     size_t i;
     for (i = 0; i < n; ++i) {
         tb__batch *bt = &batches[i];
-        const int one = 0;
         sides s;
-        int k;
         if (!bt->bouncing)
             continue;
-        gather(bt, m, &s, wide, one);
-        for (k = 0; k < W; ++k) {
-            const double old = bt->impulse[P][k];
-            double total = old - bt->mass[P][k] * (RATE(bt->dir[0], bt->arm_a[P], bt->arm_b[P], &s, k, one) - bt->bounce[k]);
-            double dn;
-            total = bt->bounce[k] > 0 ? (total > 0 ? total : 0) : old;
-            dn = total - old;
-            PUSH(bt->dir[0], bt->turn_a[P], bt->turn_b[P], &s, k, dn, one);
-            bt->impulse[P][k] = total;
-        }
-        scatter(bt, m, &s, wide, one);
+        gather(bt, m, &s, wide, 0);
+        press_toward(bt, &s, bt->bounce, 1, 0);
+        scatter(bt, m, &s, wide, 0);
     }
 }
 

@@ -269,6 +269,7 @@ static double heap_size(uint64_t *rng)
     return r < 0.2 ? 0.05 + 0.05 * uniform(rng) : r < 0.3 ? 0.5 + 0.25 * uniform(rng) : 0.1 + 0.4 * uniform(rng);
 }
 
+/* Shoemake's uniform rotation */
 static void heap_turn(uint64_t *rng, double q[4])
 {
     const double u = uniform(rng), a = sqrt(1 - u), c = sqrt(u);
@@ -1436,7 +1437,6 @@ static void random_heaps_never_gain_energy(void **state)
             for (i = 0; i < 40; ++i) {
                 tb_body_def b = tb_default_body_def();
                 tb_shape_def s = tb_default_shape_def();
-                double u, a, c, t1, t2;
                 int k;
                 random_shape(&rng, 0.15, 0.35, &s);
                 s.friction = uniform(&rng);
@@ -1444,10 +1444,7 @@ static void random_heaps_never_gain_energy(void **state)
                 mass_of_shape(500, &s, &b.mass);
                 b.position[0] = 1.2 * (i % 3) - 1.2, b.position[1] = 1.2 * (i / 3 % 3) - 1.2;
                 b.position[2] = 0.7 + 1.2 * (i / 9);
-                u = uniform(&rng), a = sqrt(1 - u), c = sqrt(u); /* Shoemake's uniform rotation */
-                t1 = 2 * 3.14159265358979323846 * uniform(&rng), t2 = 2 * 3.14159265358979323846 * uniform(&rng);
-                b.orientation[0] = c * cos(t2), b.orientation[1] = a * sin(t1);
-                b.orientation[2] = a * cos(t1), b.orientation[3] = c * sin(t2);
+                heap_turn(&rng, b.orientation);
                 for (k = 0; k < 3; ++k) {
                     b.velocity[k] = 2 * (uniform(&rng) - 0.5);
                     b.angular_velocity[k] = 10 * (uniform(&rng) - 0.5);
