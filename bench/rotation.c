@@ -27,7 +27,7 @@
 #define BENCH_NAME "bench_rotation"
 
 #include "bench.h"
-#include "rotation.h"
+#include "bodies/bodies.h"
 
 #include <ode/ode.h>
 

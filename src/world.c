@@ -1,5 +1,10 @@
-/* world.c: creating and destroying worlds, world settings, the step driver. */
+/* world.c: the front door: creating and destroying worlds, and the
+   settings that belong to no tier (gravity, drag). */
 #include "world.h"
+#include "bodies/bodies.h"
+#include "contacts/contacts.h"
+#include "stepping/stepping.h"
+#include "forces/forces.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -76,9 +81,9 @@ void tb_world_destroy(tb_world *w)
         tb__alloc(w, w->y, w->y_size * sizeof(double), 0);
     tb__bodies_free(w);
     tb__contacts_free(w);
-    arrays[0] = (void **)&w->mass;
-    arrays[1] = (void **)&w->inv_mass;
-    arrays[2] = (void **)&w->force;
+    arrays[0] = (void **)&w->particle_mass;
+    arrays[1] = (void **)&w->particle_inv_mass;
+    arrays[2] = (void **)&w->particle_force;
     tb__free_arrays(w, arrays, sizes, 3, w->particle_cap);
     tb__ids_free(w, &w->tracer_ids);
     tb__ids_free(w, &w->particle_ids);
@@ -124,160 +129,4 @@ tb_status tb_world_set_drag(tb_world *w, double linear, double quadratic)
         w->quadratic_drag = quadratic;
     }
     return st;
-}
-
-static tb_status refuse_split_with_tracers(tb_world *w, const tb__method *m)
-{
-    if (m->split && w->tracer_count)
-        return tb__fail(w, TB_ERR_ARGUMENT,
-                        "integrator '%s' kicks velocities and tracers have none: "
-                        "use 'euler' or 'rk4' for a world with tracers", m->name);
-    return TB_OK;
-}
-
-tb_status tb_world_set_integrator(tb_world *w, const char *name)
-{
-    const tb__method *m = name ? tb__method_find(name) : NULL;
-    tb_status st;
-    if (!m)
-        return tb__fail(w, TB_ERR_ARGUMENT, "unknown integrator '%s'", name ? name : "(null)");
-    if ((st = tb__check_busy(w, "change the integrator")) != TB_OK)
-        return st;
-    if ((st = refuse_split_with_tracers(w, m)) != TB_OK)
-        return st;
-    w->method = m;
-    return TB_OK;
-}
-
-tb_status tb_world_set_tolerance(tb_world *w, double tolerance)
-{
-    tb_status st = tb__check_busy(w, "change the tolerance");
-    if (st != TB_OK)
-        return st;
-    if (!(isfinite(tolerance) && tolerance > 0))
-        return tb__fail(w, TB_ERR_ARGUMENT, "tolerance must be finite and > 0 (got %g)", tolerance);
-    w->tolerance = tolerance;
-    w->adaptive_h = 0; /* a new tolerance starts the step-size search afresh */
-    return TB_OK;
-}
-
-double tb_world_tolerance(const tb_world *w)
-{
-    return w->tolerance;
-}
-
-const char *tb_world_integrator(const tb_world *w)
-{
-    return w->method->name;
-}
-
-tb_status tb__derive(tb_world *w, double t, const double *y, double *dy)
-{
-    tb_status st = TB_OK;
-    if (w->tracer_count && (st = tb__tracer_derive(w, t, y, dy)) != TB_OK)
-        return st;
-    if ((st = tb__global_forces(w, t, y, y)) != TB_OK)
-        return st;
-    if (w->particle_count)
-        tb__particle_derive(w, y, dy);
-    if (w->body_count)
-        tb__body_derive(w, y, dy);
-    return TB_OK;
-}
-
-void tb__project(tb_world *w, double *y)
-{
-    if (w->body_count)
-        tb__body_project(w, y);
-}
-
-tb_status tb__split_prepare(tb_world *w, double t, const double *seen)
-{
-    w->kick_seen = seen;
-    return tb__global_forces(w, t, w->y, seen ? seen : w->y);
-}
-
-void tb__split_sweep(tb_world *w, const tb__split_op *ops, int n)
-{
-    if (w->particle_count)
-        tb__particle_sweep(w, ops, n);
-    if (w->body_count)
-        tb__body_sweep(w, ops, n);
-}
-
-/* RK4 one block of objects at a time through all four stages, when nothing
-   couples objects: only bodies, no springs, no callbacks (which might see
-   every object). Returns whether it stepped. */
-int tb__fused_rk4(tb_world *w, double h)
-{
-    if (!w->body_count || w->tracer_count || w->particle_count || w->forces.count)
-        return 0;
-    w->force_ready = 0; /* what tb__global_forces finds with no springs or callbacks */
-    tb__body_rk4(w, h);
-    return 1;
-}
-
-int tb__split_velocity_dependent(const tb_world *w)
-{
-    return w->forces.count > 0 || tb__particle_velocity_dependent(w) || tb__body_velocity_dependent(w);
-}
-
-void tb__split_extrapolate(const tb_world *w, double *saved)
-{
-    static const enum tb__quantity rates[] = { TB__PARTICLE_VEL, TB__BODY_MOM, TB__BODY_ANG };
-    const size_t counts[] = { w->particle_count, w->body_count, w->body_count };
-    size_t k, i;
-    for (k = 0; k < 3; ++k) {
-        double *s = saved + w->off[rates[k]];
-        const double *v = w->y + w->off[rates[k]];
-        for (i = 0; i < 3 * counts[k]; ++i)
-            s[i] = 2 * v[i] - s[i];
-    }
-}
-
-/* A step can fail inside a callback. Methods that write the state only after
-   their last force evaluation leave it untouched by construction; the others
-   get a snapshot to roll back to, taken only when something can fail. The
-   guard needs the snapshot always. */
-tb_status tb_world_step(tb_world *w, double h)
-{
-    tb_status st;
-    int snapshot;
-    double *saved = NULL;
-    if (!(isfinite(h) && h > 0))
-        return tb__fail(w, TB_ERR_ARGUMENT, "step must be finite and > 0 (got %g)", h);
-    if ((st = tb__check_busy(w, "step")) != TB_OK)
-        return st;
-    if ((st = refuse_split_with_tracers(w, w->method)) != TB_OK)
-        return st;
-    snapshot = (w->method->updates_before_last_evaluation && w->forces.count > 0) || w->guard != 0;
-    if (snapshot) {
-        if ((st = tb__state_scratch(w, (size_t)w->method->scratch + 1)) != TB_OK)
-            return st;
-        saved = tb__scratch_vector(w, (size_t)w->method->scratch);
-        tb__state_copy(w, saved, w->y);
-    }
-    if (tb__contacts_active(w) && (st = tb__contacts_prepare(w, h)) != TB_OK)
-        return st;
-    w->stepping = 1;
-    st = w->method->step(w, h);
-    w->stepping = 0;
-    if (st != TB_OK) {
-        if (snapshot)
-            tb__state_copy(w, w->y, saved);
-        return st;
-    }
-    if (tb__contacts_active(w))
-        tb__contacts_solve(w, h);
-    if (w->guard != 0 && (st = tb__guard_check(w, saved, h)) != TB_OK)
-        return st; /* rolled back, held forces kept */
-    if (w->body_count && w->body_held) /* held forces last one step, as in ODE */
-        memset(w->body_applied, 0, 6 * w->body_count * sizeof(double));
-    {   /* compensated sum: t after n steps of h is n h to the last bit */
-        const double add = h - w->time_carry, sum = w->time + add;
-        w->time_carry = (sum - w->time) - add;
-        w->time = sum;
-    }
-    ++w->steps;
-    return TB_OK;
 }

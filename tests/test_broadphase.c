@@ -6,7 +6,7 @@
    its memory (allocation failures, no allocation in steady state). */
 #include "test_main.h"
 #include "counting_alloc.h"
-#include "broadphase.h"
+#include "collision/collision.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -4,7 +4,7 @@
    and, over random configurations, depths agree with brute-force distances,
    points lie midway between the surfaces and nothing is ever NaN. */
 #include "test_main.h"
-#include "collide.h"
+#include "collision/collision.h"
 
 #include <math.h>
 #include <string.h>

@@ -3,8 +3,7 @@
    all give the same bits; and a resting pair keeps last step's manifold,
    moved with its shapes, which must agree with colliding them afresh. */
 #include "test_main.h"
-#include "contact.h"
-#include "rotation.h"
+#include "contacts/contacts.h"
 #include "tumble.h"
 
 #include <math.h>

@@ -5,7 +5,7 @@
    then that the kernels in lanes, and the world's fast paths built on them,
    give a body the bits of the one-body kernels and of the general paths. */
 #include "test_main.h"
-#include "body_math.h"
+#include "bodies/bodies.h"
 #include "tumble.h"
 
 #include <math.h>
@@ -49,11 +49,11 @@ static void rotate(const double q[4], double sign, const double v[3], double out
     c[2] = -q[2];
     c[3] = -q[3];
     if (sign > 0) {
-        quat_mul(q, p, t);
-        quat_mul(t, c, t);
+        tb__quat_mul(q, p, t);
+        tb__quat_mul(t, c, t);
     } else {
-        quat_mul(c, p, t);
-        quat_mul(t, q, t);
+        tb__quat_mul(c, p, t);
+        tb__quat_mul(t, q, t);
     }
     out[0] = t[1];
     out[1] = t[2];
@@ -103,7 +103,7 @@ static double angle_between(const double a[4], const double b[4])
 {
     const double c[4] = { a[0], -a[1], -a[2], -a[3] };
     double d[4];
-    quat_mul(c, b, d);
+    tb__quat_mul(c, b, d);
     return 2 * atan2(sqrt(d[1] * d[1] + d[2] * d[2] + d[3] * d[3]), fabs(d[0]));
 }
 
@@ -254,12 +254,12 @@ static void isotropic_bodies_rotate_exactly(void **state)
     body(I, w0, q0, invI, L);
     for (s = 0; s < 2; ++s) {
         const long n = 120;
-        const double t = n * steps[s], rate = norm3(L) / I[0];
-        axis[0] = L[0] / norm3(L);
-        axis[1] = L[1] / norm3(L);
-        axis[2] = L[2] / norm3(L);
+        const double t = n * steps[s], rate = tb__norm3(L) / I[0];
+        axis[0] = L[0] / tb__norm3(L);
+        axis[1] = L[1] / tb__norm3(L);
+        axis[2] = L[2] / tb__norm3(L);
         axis_angle(axis, rate * t, turn);
-        quat_mul(turn, q0, exact);
+        tb__quat_mul(turn, q0, exact);
         for (k = 0; k < KERNELS; ++k) {
             double q[4];
             memcpy(q, q0, sizeof q);
@@ -304,14 +304,14 @@ static void check_top(kernel_fn *step, const char *name, int sym, double Is, dou
     memcpy(q, q0, sizeof q);
     run(step, q, L, invI, h, n);
 
-    axis[0] = L[0] / norm3(L);
-    axis[1] = L[1] / norm3(L);
-    axis[2] = L[2] / norm3(L);
-    axis_angle(axis, t * invI[o1] * norm3(L), turn);
-    quat_mul(turn, q0, exact);
+    axis[0] = L[0] / tb__norm3(L);
+    axis[1] = L[1] / tb__norm3(L);
+    axis[2] = L[2] / tb__norm3(L);
+    axis_angle(axis, t * invI[o1] * tb__norm3(L), turn);
+    tb__quat_mul(turn, q0, exact);
     es[sym] = 1;
     axis_angle(es, t * (invI[sym] - invI[o1]) * I[sym] * w0[sym], turn);
-    quat_mul(exact, turn, exact);
+    tb__quat_mul(exact, turn, exact);
     err_q = angle_between(q, exact);
 
     /* w in the body frame: (w_o1 + i w_o2)(t) = (w_o1 + i w_o2)(0) e^{i Omega t} */
@@ -324,7 +324,7 @@ static void check_top(kernel_fn *step, const char *name, int sym, double Is, dou
     wp0 = w0[o1] * cos(phase) - w0[o2] * sin(phase);
     wq0 = w0[o1] * sin(phase) + w0[o2] * cos(phase);
     err_w = sqrt((w[o1] - wp0) * (w[o1] - wp0) + (w[o2] - wq0) * (w[o2] - wq0) + (w[sym] - w0[sym]) * (w[sym] - w0[sym]))
-            / norm3(w0);
+            / tb__norm3(w0);
     print_message("%-8s I_%d = %.1f h = %.3f: precession %5.1f rad, w off by %.2e, q off by %.2e rad\n", name, sym,
                   Is, h, phase, err_w, err_q);
     assert_below(err_w, 1e-12);
@@ -398,7 +398,7 @@ static void flip_keeps_momentum_norm(void **state)
         for (s = 0; s < FLIP_STEPS; ++s) {
             kernels[k].step(q, L, invI, FLIP_T / FLIP_STEPS);
             rotate(q, -1, L, lb);
-            worst = fmax(worst, fabs(norm3(lb) / norm3(L) - 1));
+            worst = fmax(worst, fabs(tb__norm3(lb) / tb__norm3(L) - 1));
         }
         print_message("%-8s worst relative drift of |L_b| %.2e\n", kernels[k].name, worst);
         assert_below(worst, 1e-12);
@@ -530,9 +530,9 @@ static void axis_order_does_not_matter(void **state)
                 invI2[n] = invI[perm[j][n]];
             }
             matrix_to_quaternion(P, p);
-            quat_mul(q0, p, q2);
+            tb__quat_mul(q0, p, q2);
             run(kernels[k].step, q2, L, invI2, 1.0 / 60, 600);
-            quat_mul(q, p, qp);
+            tb__quat_mul(q, p, qp);
             print_message("%-8s order (%d %d %d): %.2e rad\n", kernels[k].name, perm[j][0], perm[j][1], perm[j][2],
                           angle_between(qp, q2));
             assert_below(angle_between(qp, q2), 1e-12);
@@ -607,7 +607,7 @@ static void large_steps_stay_exact(void **state)
             kernels[k].step(q, L, invI, 0.5);
             rotate(q, -1, L, lb);
             worst_q = fmax(worst_q, fabs(qnorm(q) - 1));
-            worst_l = fmax(worst_l, fabs(norm3(lb) / norm3(L) - 1));
+            worst_l = fmax(worst_l, fabs(tb__norm3(lb) / tb__norm3(L) - 1));
         }
         print_message("%-8s h = 0.5: %.2e rad from the reference after 2 s; | |q| - 1 | %.1e, |L_b| %.1e\n",
                       kernels[k].name, angle_between(q, ref), worst_q, worst_l);

@@ -1,0 +1,301 @@
+/* shapes.c: shapes attached to bodies or static, the contact settings and
+   the events of the last step: the public side of the collision tier. */
+#include "contacts/contacts.h"
+
+#include <math.h>
+#include <string.h>
+
+tb_shape_def tb_default_shape_def(void)
+{
+    tb_shape_def def;
+    memset(&def, 0, sizeof def);
+    def.type = TB_SHAPE_SPHERE;
+    def.orientation[0] = 1;
+    def.radius = 0.5;
+    def.half_extents[0] = def.half_extents[1] = def.half_extents[2] = 0.5;
+    def.normal[2] = 1;
+    def.friction = 0.6;
+    def.category = 1;
+    def.mask = 0xFFFFFFFFu;
+    return def;
+}
+
+tb_contact_settings tb_default_contact_settings(void)
+{
+    tb_contact_settings s;
+    memset(&s, 0, sizeof s);
+    s.hertz = 30;
+    s.damping_ratio = 10;
+    s.max_push = 3;
+    s.restitution_threshold = 1;
+    s.slop = 0.005;
+    s.velocity_iterations = 20;
+    s.velocity_tolerance = 1e-6;
+    s.position_iterations = 3;
+    s.particle_radius = -1;
+    s.particle_friction = 0.6;
+    s.sleep_speed = 0.05;
+    s.sleep_time = 0.5;
+    return s;
+}
+
+static void remove_slot(tb__contacts *c, uint32_t slot);
+
+/* The shapes of a removed body go with it. */
+static void body_removed(tb_world *w, uint32_t body_index1)
+{
+    tb__contacts *c = w->contacts;
+    size_t i;
+    if (!c)
+        return;
+    for (i = c->shape_count; i-- > 0;)
+        if (c->shapes[i].body == body_index1)
+            remove_slot(c, (uint32_t)i);
+}
+
+static tb_status contacts_of(tb_world *w, tb__contacts **out)
+{
+    if (!w->contacts) {
+        tb__contacts *c = tb__alloc(w, NULL, 0, sizeof *c);
+        if (!c)
+            return tb__fail(w, TB_ERR_MEMORY, "out of memory for shapes");
+        memset(c, 0, sizeof *c);
+        c->settings = tb_default_contact_settings();
+        c->isa = tb__isa();
+        w->contacts = c;
+        w->body_removed = body_removed;
+    }
+    *out = w->contacts;
+    return TB_OK;
+}
+
+void tb__contacts_free(tb_world *w)
+{
+    tb__contacts *c = w->contacts;
+    if (!c)
+        return;
+    tb__alloc(w, c->shapes, c->shape_cap * sizeof *c->shapes, 0);
+    tb__ids_free(w, &c->ids);
+    tb__sap_free(w, &c->sap);
+    tb__alloc(w, c->lo, 3 * c->proxy_cap * sizeof(double), 0);
+    tb__alloc(w, c->hi, 3 * c->proxy_cap * sizeof(double), 0);
+    tb__alloc(w, c->category, c->proxy_cap * sizeof(uint32_t), 0);
+    tb__alloc(w, c->mask, c->proxy_cap * sizeof(uint32_t), 0);
+    tb__alloc(w, c->group, c->proxy_cap * sizeof(uint32_t), 0);
+    tb__alloc(w, c->proxy, c->proxy_cap * sizeof(uint32_t), 0);
+    tb__alloc(w, c->margin, c->proxy_cap * sizeof(double), 0);
+    tb__alloc(w, c->geoms, c->proxy_cap * sizeof(tb__geom), 0);
+    tb__alloc(w, c->pairs, c->pair_cap * sizeof *c->pairs, 0);
+    tb__alloc(w, c->entries, c->entry_cap * sizeof *c->entries, 0);
+    tb__alloc(w, c->previous, c->previous_cap * sizeof *c->previous, 0);
+    tb__alloc(w, c->order, c->order_cap * sizeof *c->order, 0);
+    tb__alloc(w, c->previous_order, c->previous_order_cap * sizeof *c->previous_order, 0);
+    tb__alloc(w, c->order_scratch, c->order_scratch_cap * sizeof *c->order_scratch, 0);
+    tb__alloc(w, c->starts, c->starts_cap * sizeof *c->starts, 0);
+    tb__alloc(w, c->previous_starts, c->previous_starts_cap * sizeof *c->previous_starts, 0);
+    tb__alloc(w, c->batches, c->batch_cap * sizeof *c->batches, 0);
+    tb__alloc(w, c->settle, c->settle_cap * sizeof *c->settle, 0);
+    tb__alloc(w, c->cold_rows, c->cold_rows_cap * sizeof *c->cold_rows, 0);
+    tb__alloc(w, c->colours, c->colours_cap * sizeof *c->colours, 0);
+    tb__alloc(w, c->bucket, c->bucket_cap * sizeof *c->bucket, 0);
+    tb__alloc(w, c->owner, c->proxy_cap * sizeof(uint32_t), 0);
+    tb__alloc(w, c->poses, c->pose_cap * sizeof *c->poses, 0);
+    tb__alloc(w, c->island_scratch, c->island_scratch_cap * sizeof(double), 0);
+    tb__alloc(w, c->motion_block, TB__MOTION_BYTES(c->motion_cap), 0); /* velocity, motion, momenta */
+    tb__alloc(w, c->bodies, c->body_cap * sizeof *c->bodies, 0);
+    tb__alloc(w, c->body_map, c->body_map_cap * sizeof(int32_t), 0);
+    tb__alloc(w, c->particle_map, c->particle_map_cap * sizeof(int32_t), 0);
+    tb__alloc(w, c->events, c->event_cap * sizeof *c->events, 0);
+    tb__alloc(w, c, sizeof *c, 0);
+    w->contacts = NULL;
+}
+
+static int positive(double x)
+{
+    return isfinite(x) && x > 0;
+}
+
+static tb_status check_shape(tb_world *w, const tb_shape_def *def)
+{
+    const double qn = sqrt(def->orientation[0] * def->orientation[0] + def->orientation[1] * def->orientation[1] +
+                           def->orientation[2] * def->orientation[2] + def->orientation[3] * def->orientation[3]);
+    uint32_t slot;
+    if (!tb__finite3(def->position) || !(fabs(qn - 1) <= 1e-6))
+        return tb__fail(w, TB_ERR_ARGUMENT, "shape: position must be finite and orientation a unit quaternion");
+    if (!(isfinite(def->friction) && def->friction >= 0) ||
+        !(def->restitution >= 0 && def->restitution <= 1) ||
+        !(isfinite(def->rolling_resistance) && def->rolling_resistance >= 0))
+        return tb__fail(w, TB_ERR_ARGUMENT,
+                        "shape: friction and rolling_resistance must be finite and >= 0, restitution in [0, 1] "
+                        "(got %g, %g, %g)",
+                        def->friction, def->rolling_resistance, def->restitution);
+    switch (def->type) {
+    case TB_SHAPE_SPHERE:
+        if (!positive(def->radius))
+            return tb__fail(w, TB_ERR_ARGUMENT, "sphere: radius must be finite and > 0 (got %g)", def->radius);
+        break;
+    case TB_SHAPE_CAPSULE:
+        if (!positive(def->radius) || !(isfinite(def->half_length) && def->half_length >= 0))
+            return tb__fail(w, TB_ERR_ARGUMENT,
+                            "capsule: radius must be > 0 and half_length >= 0, both finite (got %g, %g)",
+                            def->radius, def->half_length);
+        break;
+    case TB_SHAPE_BOX:
+        if (!positive(def->half_extents[0]) || !positive(def->half_extents[1]) || !positive(def->half_extents[2]))
+            return tb__fail(w, TB_ERR_ARGUMENT, "box: half extents must be finite and > 0 (got %g, %g, %g)",
+                            def->half_extents[0], def->half_extents[1], def->half_extents[2]);
+        break;
+    case TB_SHAPE_PLANE: {
+        const double n = sqrt(def->normal[0] * def->normal[0] + def->normal[1] * def->normal[1] +
+                              def->normal[2] * def->normal[2]);
+        if (!tb__finite3(def->normal) || !(fabs(n - 1) <= 1e-6) || !isfinite(def->offset))
+            return tb__fail(w, TB_ERR_ARGUMENT, "plane: the normal must be a unit vector (|n| = %g) and the offset finite",
+                            n);
+        if (!TB_ID_IS_NULL(def->body))
+            return tb__fail(w, TB_ERR_ARGUMENT, "plane: planes are static (give no body)");
+        break;
+    }
+    default:
+        return tb__fail(w, TB_ERR_ARGUMENT, "shape: unknown type %d", (int)def->type);
+    }
+    if (!TB_ID_IS_NULL(def->body) && !tb__ids_lookup(&w->body_ids, def->body.index1, def->body.generation, &slot))
+        return tb__fail(w, TB_ERR_STALE_ID, "shape: body id %u.%u is removed or from another world",
+                        def->body.index1, def->body.generation);
+    return TB_OK;
+}
+
+tb_status tb_world_add_shape(tb_world *w, const tb_shape_def *def, tb_shape_id *id)
+{
+    tb__contacts *c;
+    tb__shape *s;
+    tb_shape_id made;
+    tb_status st;
+    if ((st = tb__check_busy(w, "add a shape")) != TB_OK)
+        return st;
+    if (!def)
+        return tb__fail(w, TB_ERR_ARGUMENT, "tb_world_add_shape needs a definition");
+    if ((st = check_shape(w, def)) != TB_OK)
+        return st;
+    if ((st = contacts_of(w, &c)) != TB_OK)
+        return st;
+    if ((st = tb__reserve(w, (void **)&c->shapes, &c->shape_cap, c->shape_count + 1, sizeof *s)) != TB_OK)
+        return st;
+    if ((st = tb__ids_reserve(w, &c->ids, c->shape_count + 1)) != TB_OK)
+        return st;
+    s = &c->shapes[c->shape_count];
+    memset(s, 0, sizeof *s);
+    s->kind = def->type == TB_SHAPE_SPHERE    ? TB__SHAPE_SPHERE
+              : def->type == TB_SHAPE_CAPSULE ? TB__SHAPE_CAPSULE
+              : def->type == TB_SHAPE_BOX     ? TB__SHAPE_BOX
+                                              : TB__SHAPE_PLANE;
+    s->body = def->body.index1;
+    s->body_generation = def->body.generation;
+    memcpy(s->pos, def->position, sizeof s->pos);
+    memcpy(s->rot, def->orientation, sizeof s->rot);
+    tb__normalise(s->rot);
+    s->radius = def->radius;
+    if (def->type == TB_SHAPE_BOX)
+        memcpy(s->half, def->half_extents, sizeof s->half);
+    if (def->type == TB_SHAPE_CAPSULE)
+        s->half[2] = def->half_length;
+    memcpy(s->normal, def->normal, sizeof s->normal);
+    s->offset = def->offset;
+    s->friction = def->friction;
+    s->restitution = def->restitution;
+    s->rolling_resistance = def->rolling_resistance;
+    s->category = def->category;
+    s->mask = def->mask;
+    s->reach = sqrt(s->pos[0] * s->pos[0] + s->pos[1] * s->pos[1] + s->pos[2] * s->pos[2]) +
+               (s->kind == TB__SHAPE_BOX ? sqrt(s->half[0] * s->half[0] + s->half[1] * s->half[1] +
+                                                s->half[2] * s->half[2])
+                                         : s->radius + s->half[2]);
+    c->planes += s->kind == TB__SHAPE_PLANE;
+    tb__ids_acquire(&c->ids, (uint32_t)c->shape_count, &made.index1, &made.generation);
+    c->shape_count++;
+    tb__wake_all(w); /* it may reach into what sleeps */
+    if (id)
+        *id = made;
+    return TB_OK;
+}
+
+static void remove_slot(tb__contacts *c, uint32_t slot)
+{
+    const uint32_t last = (uint32_t)c->shape_count - 1;
+    uint32_t index1, generation;
+    tb__ids_at(&c->ids, slot, &index1, &generation);
+    c->planes -= c->shapes[slot].kind == TB__SHAPE_PLANE;
+    if (slot != last) {
+        c->shapes[slot] = c->shapes[last];
+        tb__ids_move(&c->ids, last, slot);
+    }
+    tb__ids_release(&c->ids, index1);
+    c->shape_count--;
+}
+
+tb_status tb_world_remove_shape(tb_world *w, tb_shape_id id)
+{
+    uint32_t slot;
+    tb_status st;
+    if ((st = tb__check_busy(w, "remove a shape")) != TB_OK)
+        return st;
+    if (!w->contacts || !tb__ids_lookup(&w->contacts->ids, id.index1, id.generation, &slot))
+        return tb__fail(w, TB_ERR_STALE_ID, "shape id %u.%u is null, removed or from another world", id.index1,
+                        id.generation);
+    remove_slot(w->contacts, slot);
+    tb__wake_all(w); /* what it held up must fall */
+    return TB_OK;
+}
+
+
+int tb__contacts_active(const tb_world *w)
+{
+    return w->contacts && w->contacts->shape_count > 0;
+}
+
+size_t tb_world_shape_count(const tb_world *w)
+{
+    return w->contacts ? w->contacts->shape_count : 0;
+}
+
+tb_status tb_world_set_contact_settings(tb_world *w, const tb_contact_settings *s)
+{
+    tb__contacts *c;
+    tb_status st;
+    if ((st = tb__check_busy(w, "change the contact settings")) != TB_OK)
+        return st;
+    if (!s || !positive(s->hertz) || !(isfinite(s->damping_ratio) && s->damping_ratio >= 0) ||
+        !positive(s->max_push) || !(isfinite(s->restitution_threshold) && s->restitution_threshold >= 0) ||
+        !(isfinite(s->slop) && s->slop >= 0) || s->velocity_iterations < 1 || s->position_iterations < 0 ||
+        s->stack_iterations < 0 ||
+        !(isfinite(s->velocity_tolerance) && s->velocity_tolerance >= 0) ||
+        !isfinite(s->particle_radius) || !(isfinite(s->particle_friction) && s->particle_friction >= 0) ||
+        !(s->particle_restitution >= 0 && s->particle_restitution <= 1) ||
+        !(isfinite(s->sleep_speed) && s->sleep_speed >= 0) || !(s->sleep_time > 0))
+        return tb__fail(w, TB_ERR_ARGUMENT,
+                        "contact settings: hertz and max_push must be > 0, damping_ratio, threshold, slop and "
+                        "particle friction >= 0, at least 1 velocity iteration, position and stack iterations "
+                        ">= 0, velocity_tolerance finite and >= 0, restitution in [0, 1], "
+                        "sleep_speed finite and >= 0, sleep_time > 0 (INFINITY: never sleep)");
+    if ((st = contacts_of(w, &c)) != TB_OK)
+        return st;
+    c->settings = *s;
+    tb__wake_all(w); /* what rests under the old settings may not under the new */
+    return TB_OK;
+}
+
+tb_contact_settings tb_world_contact_settings(const tb_world *w)
+{
+    return w->contacts ? w->contacts->settings : tb_default_contact_settings();
+}
+
+const tb_contact_event *tb_world_contact_events(const tb_world *w, size_t *count)
+{
+    if (count)
+        *count = w->contacts ? w->contacts->event_count : 0;
+    return w->contacts ? w->contacts->events : NULL;
+}
+
+size_t tb_world_contact_count(const tb_world *w)
+{
+    return w->contacts ? w->contacts->touching_points : 0;
+}

@@ -1,0 +1,199 @@
+/* sleep.c: islands of resting bodies fall asleep, and wake when something
+   reaches them (the rules are in tumble.h, "Sleep").
+
+   Each step, after the solve, a body with shapes that is slower than
+   sleep_speed adds the step to its rest time (any faster step resets it).
+   Bodies joined by touching contacts form islands (union-find over this
+   step's entries); an island whose every body has rested sleep_time falls
+   asleep under one tag, with zero momenta. While it sleeps its pairs are
+   not collided but carried from step to step (so no end events, and warm
+   starts ready for when it wakes), the solver leaves it out, and its pose
+   is put back after the integrator's free motion. */
+#include "contacts/contacts.h"
+
+#include <math.h>
+#include <string.h>
+
+static int sleep_allowed(const tb_world *w)
+{
+    return w->contacts && isfinite(w->contacts->settings.sleep_time) && w->forces.count == 0;
+}
+
+uint32_t tb__proxy_island(const tb_world *w, const tb__contacts *c, size_t k)
+{
+    return c->owner[k] ? w->body_island[c->owner[k] - 1] : 0;
+}
+
+/* Does proxy k move this step (an awake body, or a particle faster than
+   the sleep speed)? */
+static int moving(const tb_world *w, const tb__contacts *c, size_t k)
+{
+    if (c->proxy[k] & TB__PARTICLE_KEY) {
+        const double *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * (c->proxy[k] & ~TB__PARTICLE_KEY);
+        return tb__norm3(v) > c->settings.sleep_speed;
+    }
+    return c->owner[k] && !w->body_island[c->owner[k] - 1];
+}
+
+tb_status tb__sleep_prepare(tb_world *w, tb__contacts *c)
+{
+    size_t i, n = 0;
+    tb_status st;
+    if (!w->body_sleeping) { /* (all woken since the last step: no pose to put back) */
+        c->pose_count = 0;
+        return TB_OK;
+    }
+    /* wake what moving things reach: their bounds already hold the step's
+       motion */
+    for (i = 0; i < c->pair_count; ++i) {
+        const uint32_t a = c->pairs[i].a, b = c->pairs[i].b;
+        const uint32_t ia = tb__proxy_island(w, c, a), ib = tb__proxy_island(w, c, b);
+        if (ia && moving(w, c, b))
+            tb__wake_island(w, ia);
+        else if (ib && moving(w, c, a))
+            tb__wake_island(w, ib);
+    }
+    /* the poses to put back after the free motion */
+    if ((st = tb__reserve(w, (void **)&c->poses, &c->pose_cap, w->body_sleeping + 1, sizeof *c->poses)) != TB_OK)
+        return st;
+    for (i = 0; i < w->body_count && n < w->body_sleeping; ++i)
+        if (w->body_island[i]) {
+            tb__pose *p = &c->poses[n++];
+            p->slot = (uint32_t)i;
+            memcpy(p->x, w->y + w->off[TB__BODY_POS] + 3 * i, sizeof p->x);
+            memcpy(p->q, w->y + w->off[TB__BODY_ROT] + 4 * i, sizeof p->q);
+        }
+    c->pose_count = n;
+    return TB_OK;
+}
+
+void tb__sleep_restore(tb_world *w, tb__contacts *c)
+{
+    size_t i;
+    for (i = 0; i < c->pose_count; ++i) {
+        const tb__pose *p = &c->poses[i];
+        memcpy(w->y + w->off[TB__BODY_POS] + 3 * p->slot, p->x, sizeof p->x);
+        memcpy(w->y + w->off[TB__BODY_ROT] + 4 * p->slot, p->q, sizeof p->q);
+        memset(w->y + w->off[TB__BODY_MOM] + 3 * p->slot, 0, 3 * sizeof(double));
+        memset(w->y + w->off[TB__BODY_ANG] + 3 * p->slot, 0, 3 * sizeof(double));
+    }
+}
+
+static uint32_t root_of(uint32_t *link, uint32_t s)
+{
+    while (link[s] != s)
+        s = link[s] = link[link[s]];
+    return s;
+}
+
+void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
+{
+    const size_t n = w->body_count;
+    size_t i;
+    uint32_t *link, *tag;
+    double *reach, *least;
+    if (!sleep_allowed(w) || n == 0)
+        return;
+    if (tb__reserve(w, (void **)&c->island_scratch, &c->island_scratch_cap, 3 * n, sizeof(double)) != TB_OK)
+        return; /* out of memory: nothing falls asleep this step */
+    reach = c->island_scratch, least = reach + n, link = (uint32_t *)(least + n), tag = link + n;
+    for (i = 0; i < n; ++i) {
+        reach[i] = 0;
+        least[i] = INFINITY;
+        link[i] = (uint32_t)i;
+        tag[i] = 0;
+    }
+    for (i = 0; i < c->shape_count; ++i) {
+        const tb__shape *s = &c->shapes[i];
+        uint32_t slot;
+        if (s->body && tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot))
+            reach[slot] = fmax(reach[slot], s->reach);
+    }
+    /* rest times */
+    for (i = 0; i < n; ++i) {
+        double v[3], omega[3];
+        if (w->body_island[i] || reach[i] == 0)
+            continue;
+        tb__body_velocity(w, (uint32_t)i, v, omega);
+        w->body_rest[i] = tb__norm3(v) + tb__norm3(omega) * reach[i] < c->settings.sleep_speed ? w->body_rest[i] + h : 0;
+    }
+    /* ... and that moved slower than that over the step: the position pass
+       moves a body out of an overlap without giving it speed (a plate
+       buried in the plane fell asleep 0.4 m deep, pushed up at 3 m/s) */
+    for (i = 0; i < c->body_count; ++i) {
+        const tb__solver_body *b = &c->bodies[i];
+        const double *x, *q;
+        double dx[3], turn[4];
+        const double q0c[4] = { b->q0[0], -b->q0[1], -b->q0[2], -b->q0[3] };
+        int k;
+        if (b->tier != TB__BODIES || w->body_island[b->slot] || w->body_rest[b->slot] == 0)
+            continue;
+        x = w->y + w->off[TB__BODY_POS] + 3 * b->slot, q = w->y + w->off[TB__BODY_ROT] + 4 * b->slot;
+        for (k = 0; k < 3; ++k)
+            dx[k] = x[k] - b->x0[k];
+        tb__quat_mul(q, q0c, turn); /* (cos, sin n) of half the step's turn */
+        if (tb__norm3(dx) + 2 * tb__norm3(turn + 1) * reach[b->slot] >= c->settings.sleep_speed * h)
+            w->body_rest[b->slot] = 0;
+    }
+    /* islands: bodies joined by touching contacts this step */
+    for (i = 0; i < c->entry_count; ++i) {
+        const tb__entry *e = &c->entries[i];
+        const tb__solver_body *a, *b;
+        if (!e->touching || e->asleep || e->body_a < 0 || e->body_b < 0)
+            continue;
+        a = &c->bodies[e->body_a], b = &c->bodies[e->body_b];
+        if (a->tier == TB__BODIES && b->tier == TB__BODIES)
+            link[root_of(link, a->slot)] = root_of(link, b->slot);
+    }
+    for (i = 0; i < n; ++i)
+        if (!w->body_island[i] && reach[i] > 0) {
+            const uint32_t r = root_of(link, (uint32_t)i);
+            least[r] = fmin(least[r], w->body_rest[i]);
+        }
+    /* islands that all rested long enough fall asleep, tagged by a fresh
+       number (kept apart from 0, which means awake) */
+    for (i = 0; i < n; ++i) {
+        uint32_t r;
+        if (w->body_island[i] || reach[i] == 0)
+            continue;
+        r = root_of(link, (uint32_t)i);
+        if (!(least[r] >= c->settings.sleep_time))
+            continue;
+        if (!tag[r]) { /* the island's first body */
+            if (++c->next_island == 0)
+                ++c->next_island;
+            tag[r] = c->next_island;
+        }
+        w->body_island[i] = tag[r];
+        memset(w->y + w->off[TB__BODY_MOM] + 3 * i, 0, 3 * sizeof(double));
+        memset(w->y + w->off[TB__BODY_ANG] + 3 * i, 0, 3 * sizeof(double));
+        w->body_sleeping++;
+    }
+}
+
+tb_status tb_body_asleep(const tb_world *w, tb_body_id id, int *asleep)
+{
+    uint32_t s;
+    tb_status st = tb__body_find(w, id, &s);
+    if (st != TB_OK)
+        return st;
+    if (!asleep)
+        return tb__fail((tb_world *)w, TB_ERR_ARGUMENT, "tb_body_asleep needs an output pointer");
+    *asleep = w->body_island[s] != 0;
+    return TB_OK;
+}
+
+tb_status tb_body_wake(tb_world *w, tb_body_id id)
+{
+    uint32_t s;
+    tb_status st;
+    if ((st = tb__check_busy(w, "wake a body")) != TB_OK || (st = tb__body_find(w, id, &s)) != TB_OK)
+        return st;
+    tb__wake_body(w, s);
+    return TB_OK;
+}
+
+size_t tb_world_sleeping_count(const tb_world *w)
+{
+    return w->body_sleeping;
+}

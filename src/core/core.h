@@ -1,0 +1,176 @@
+/* core.h: what every tier of the core stands on (not public): memory and
+   messages through the world, generation-checked ids, ordered lists, the
+   state vector's layout, and the choice of instruction set for the loops
+   over lanes. Nothing here knows of particles, bodies or contacts beyond
+   the list of state arrays. */
+#ifndef TB_CORE_H
+#define TB_CORE_H
+
+#include "tumble.h"
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+/* ---- the state vector (state.c) -------------------------------------------
+
+   The mutable state of a world is one vector of doubles, y, cut into flat
+   arrays per quantity, in the order of TB__QUANTITIES below:
+
+       y = [ tracer pos | particle pos | particle vel | body pos | body q | body P | body L ]
+
+   Each array is sized by its tier's capacity, so adding an object moves
+   nothing until a capacity doubles. Generic integrators (Euler, RK4) treat y
+   as one vector and walk its used segments; split integrators (symplectic
+   Euler, Verlet) kick and drift the velocity and position arrays in place.
+   Constant parameters (masses, spring constants) live outside y, so a
+   snapshot of the state is a copy of y. */
+
+/* The tiers of objects, and the arrays of the state vector y: name, tier,
+   doubles per object. This one list drives the layout, resizing and copying
+   of y (state.c). */
+enum tb__tier { TB__TRACERS, TB__PARTICLES, TB__BODIES, TB__TIERS };
+
+#define TB__QUANTITIES(X)                                                                  \
+    X(TRACER_POS, TB__TRACERS, 3)   /* m */                                              \
+    X(PARTICLE_POS, TB__PARTICLES, 3) /* m */                                            \
+    X(PARTICLE_VEL, TB__PARTICLES, 3) /* m/s */                                          \
+    X(BODY_POS, TB__BODIES, 3)      /* m, centre of mass */                              \
+    X(BODY_ROT, TB__BODIES, 4)      /* unit quaternion (w, x, y, z), world from principal axes */ \
+    X(BODY_MOM, TB__BODIES, 3)      /* kg m/s, linear momentum P */                      \
+    X(BODY_ANG, TB__BODIES, 3)      /* kg m^2/s, angular momentum L about the centre, world frame */
+
+enum tb__quantity {
+#define TB__ENUM(name, tier, width) TB__##name,
+    TB__QUANTITIES(TB__ENUM)
+#undef TB__ENUM
+    TB__QUANTITY_COUNT
+};
+
+/* Lay y out for `cap` objects of `tier`, the other tiers keeping theirs. */
+tb_status tb__state_resize(tb_world *w, enum tb__tier tier, size_t cap);
+tb_status tb__state_scratch(tb_world *w, size_t count);
+double *tb__scratch_vector(tb_world *w, size_t k);
+/* out = base + a * dir over the used part of the state. out may be base. */
+void tb__state_axpy(const tb_world *w, double *out, const double *base, double a, const double *dir);
+void tb__state_copy(const tb_world *w, double *out, const double *in);
+/* Copy every state array's entry of object `from` of `tier` over `to`
+   (swap-remove), as the field list TB__QUANTITIES says. */
+void tb__state_move(tb_world *w, enum tb__tier tier, size_t from, size_t to);
+/* out = a in over the used part of the state. */
+void tb__state_scale(const tb_world *w, double *out, double a, const double *in);
+/* RMS over the used state of err_i / (tol (1 + max(|y0_i|, |y1_i|))): an
+   embedded pair's error estimate measured against a tolerance that is
+   absolute near zero and relative for large values. <= 1 means accept. */
+double tb__state_error_norm(const tb_world *w, const double *err, const double *y0, const double *y1, double tol);
+
+/* ---- ids (ids.c): generation-checked id tables, one per kind of object ---- */
+typedef struct tb__ids {
+    uint32_t *slot;        /* [capacity] per id: its slot, or the next free id */
+    uint32_t *generation;  /* [capacity] per id: bumped on release, never 0 */
+    uint32_t *owner;       /* [capacity] per slot: the id index living there */
+    uint32_t capacity;     /* ids and slots allocated */
+    uint32_t used;         /* ids ever handed out (high-water mark) */
+    uint32_t free_head;    /* first free id index + 1, 0 when none */
+} tb__ids;
+
+tb_status tb__ids_reserve(tb_world *w, tb__ids *ids, size_t capacity);
+void tb__ids_free(tb_world *w, tb__ids *ids);
+/* Hand out an id for `slot`; capacity must have been reserved. */
+void tb__ids_acquire(tb__ids *ids, uint32_t slot, uint32_t *index1, uint32_t *generation);
+/* 1 and the slot when the id is live. */
+int tb__ids_lookup(const tb__ids *ids, uint32_t index1, uint32_t generation, uint32_t *slot);
+void tb__ids_release(tb__ids *ids, uint32_t index1);
+/* The object in slot `from` moved to slot `to` (swap-remove). */
+void tb__ids_move(tb__ids *ids, uint32_t from, uint32_t to);
+void tb__ids_at(const tb__ids *ids, uint32_t slot, uint32_t *index1, uint32_t *generation);
+
+/* ---- lists (list.c) ----------------------------------------------------------
+   An ordered list of small items with ids (fields, user forces). Removal
+   keeps the order, so sums over the list keep their rounding. */
+typedef struct tb__list {
+    unsigned char *items;  /* [cap * item_size] */
+    size_t count, cap, item_size;
+    tb__ids ids;
+} tb__list;
+
+tb_status tb__list_add(tb_world *w, tb__list *list, const void *item, uint32_t *index1, uint32_t *generation);
+tb_status tb__list_remove(tb_world *w, tb__list *list, uint32_t index1, uint32_t generation, const char *what);
+void tb__list_free(tb_world *w, tb__list *list);
+#define TB__LIST_AT(list, type, i) ((type *)(void *)((list)->items + (i) * (list)->item_size))
+
+/* ---- memory and messages (memory.c) --------------------------------------- */
+void *tb__alloc(tb_world *w, void *ptr, size_t old_size, size_t new_size);
+/* Grow a group of parallel arrays from old_cap to new_cap elements, all or
+   nothing: on failure every array is as it was. */
+tb_status tb__grow(tb_world *w, void **arrays[], const size_t elem_size[], int n,
+                   size_t count, size_t old_cap, size_t new_cap);
+/* Grow one array to hold at least `need` items of `size` bytes (doubling,
+   from 16), its first *cap items kept; on failure it is as it was. */
+tb_status tb__reserve(tb_world *w, void **array, size_t *cap, size_t need, size_t size);
+void tb__free_arrays(tb_world *w, void **arrays[], const size_t elem_size[], int n, size_t cap);
+/* Record a message and return status (for `return tb__fail(...)`). */
+tb_status tb__fail(tb_world *w, tb_status status, const char *fmt, ...);
+int tb__finite3(const double v[3]);
+/* sum a_i b_i over n, in order */
+double tb__dot(const double *a, const double *b, size_t n);
+/* TB_ERR_BUSY with a message while the world is stepping (inside a callback). */
+tb_status tb__check_busy(tb_world *w, const char *what);
+
+/* ---- instruction sets (isa.c) ---------------------------------------------
+
+   The loops over lanes (rotation kernels, body sweeps, contact sweeps) are
+   compiled once per instruction set and chosen at run time: portable C
+   (SSE2 on x86-64, two lanes an instruction), AVX2 (four) and AVX-512
+   (eight), on x86-64 with GCC or Clang. Every variant does the same
+   operations in the same order, so all give the same bits
+   (tests/contacts/test_contact_lanes.c, every_instruction_set_gives_the_same_bits).
+
+   TB__FOR_EACH_ISA(GEN) expands GEN(suffix, attribute, isa) once per
+   instruction set this build can dispatch to; a file defines its variants
+   with it and calls one with TB__DISPATCH(isa, name, (args)), which calls
+   name_<suffix> args for isa. */
+enum { TB__ISA_PORTABLE = 0, TB__ISA_AVX2 = 1, TB__ISA_AVX512 = 2 };
+
+/* The widest instruction set this processor runs (any value up to it may
+   be passed where an isa is taken). */
+int tb__isa(void);
+
+/* For the definition of a piece of the work of one lane: it must be
+   inlined into the loops over lanes for GCC to vectorise those, whatever
+   its size. */
+#if defined(__GNUC__)
+#define TB__LANE static inline __attribute__((always_inline))
+#else
+#define TB__LANE static inline
+#endif
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define TB__X86_DISPATCH 1
+#define TB__TARGET_AVX2 __attribute__((target("avx2,fma")))
+#if defined(__clang__)
+#define TB__TARGET_AVX512 __attribute__((target("avx512f")))
+#else
+/* GCC's generic tuning would split AVX-512 loops into 256-bit halves */
+#define TB__TARGET_AVX512 __attribute__((target("avx512f,prefer-vector-width=512")))
+#endif
+#define TB__FOR_EACH_ISA(GEN)                   \
+    GEN(portable, , TB__ISA_PORTABLE)           \
+    GEN(avx2, TB__TARGET_AVX2, TB__ISA_AVX2)    \
+    GEN(avx512, TB__TARGET_AVX512, TB__ISA_AVX512)
+#define TB__DISPATCH(isa, name, args)    \
+    do {                                 \
+        if ((isa) == TB__ISA_AVX512)     \
+            name##_avx512 args;          \
+        else if ((isa) == TB__ISA_AVX2)  \
+            name##_avx2 args;            \
+        else                             \
+            name##_portable args;        \
+    } while (0)
+#else
+#define TB__X86_DISPATCH 0
+#define TB__FOR_EACH_ISA(GEN) GEN(portable, , TB__ISA_PORTABLE)
+#define TB__DISPATCH(isa, name, args) ((void)(isa), name##_portable args)
+#endif
+
+#endif

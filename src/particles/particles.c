@@ -1,0 +1,278 @@
+/* particles.c: point masses, their local forces (gravity, drag) and the
+   kernels that move them: derive for generic methods, kick and drift for
+   split methods. */
+#include "particles/particles.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Particles per block of a split sweep: positions and velocities of a block
+   (2 x 6 KiB) stay in L1 between its kick and its drift. */
+#define BLOCK 256
+
+tb_particle_def tb_default_particle_def(void)
+{
+    tb_particle_def def;
+    memset(&def, 0, sizeof def);
+    def.mass = 1;
+    return def;
+}
+
+static tb_status find(const tb_world *w, tb_particle_id id, uint32_t *slot)
+{
+    if (!tb__ids_lookup(&w->particle_ids, id.index1, id.generation, slot))
+        return tb__fail((tb_world *)w, TB_ERR_STALE_ID,
+                        "particle id %u.%u is null, removed or from another world", id.index1, id.generation);
+    return TB_OK;
+}
+
+static tb_status grow(tb_world *w)
+{
+    size_t cap = w->particle_cap ? 2 * w->particle_cap : 8;
+    void **arrays[3];
+    size_t sizes[3] = { sizeof(double), sizeof(double), 3 * sizeof(double) };
+    tb_status st;
+    arrays[0] = (void **)&w->particle_mass;
+    arrays[1] = (void **)&w->particle_inv_mass;
+    arrays[2] = (void **)&w->particle_force;
+    /* Each step leaves things consistent if the next one fails: the state may
+       be laid out for more particles than the arrays hold, never fewer. */
+    if ((st = tb__ids_reserve(w, &w->particle_ids, cap)) != TB_OK)
+        return st;
+    if ((st = tb__state_resize(w, TB__PARTICLES, cap)) != TB_OK)
+        return st;
+    if ((st = tb__grow(w, arrays, sizes, 3, w->particle_count, w->particle_cap, cap)) != TB_OK)
+        return st;
+    w->particle_cap = cap;
+    return TB_OK;
+}
+
+tb_status tb_world_add_particle(tb_world *w, const tb_particle_def *def, tb_particle_id *id)
+{
+    tb_status st;
+    uint32_t slot;
+    tb_particle_id made;
+    if ((st = tb__check_busy(w, "add a particle")) != TB_OK)
+        return st;
+    if (!def)
+        return tb__fail(w, TB_ERR_ARGUMENT, "particle definition must not be NULL");
+    if (!tb__finite3(def->position) || !tb__finite3(def->velocity))
+        return tb__fail(w, TB_ERR_ARGUMENT, "particle position and velocity must be finite");
+    if (!(isfinite(def->mass) && def->mass > 0))
+        return tb__fail(w, TB_ERR_ARGUMENT, "particle mass must be finite and > 0 (got %g)", def->mass);
+    if (w->particle_count == w->particle_cap && (st = grow(w)) != TB_OK)
+        return st;
+    slot = (uint32_t)w->particle_count++;
+    memcpy(w->y + w->off[TB__PARTICLE_POS] + 3 * slot, def->position, 3 * sizeof(double));
+    memcpy(w->y + w->off[TB__PARTICLE_VEL] + 3 * slot, def->velocity, 3 * sizeof(double));
+    w->particle_mass[slot] = def->pinned ? 0 : def->mass;
+    w->particle_inv_mass[slot] = def->pinned ? 0 : 1 / def->mass;
+    tb__ids_acquire(&w->particle_ids, slot, &made.index1, &made.generation);
+    if (id)
+        *id = made;
+    return TB_OK;
+}
+
+tb_status tb_world_remove_particle(tb_world *w, tb_particle_id id)
+{
+    tb_status st;
+    uint32_t slot, last;
+    if ((st = tb__check_busy(w, "remove a particle")) != TB_OK)
+        return st;
+    if ((st = find(w, id, &slot)) != TB_OK)
+        return st;
+    last = (uint32_t)w->particle_count - 1;
+    if (w->particle_removed)
+        w->particle_removed(w, slot, last);
+    if (slot != last) {
+        tb__state_move(w, TB__PARTICLES, last, slot);
+        w->particle_mass[slot] = w->particle_mass[last];
+        w->particle_inv_mass[slot] = w->particle_inv_mass[last];
+        tb__ids_move(&w->particle_ids, last, slot);
+    }
+    tb__ids_release(&w->particle_ids, id.index1);
+    w->particle_count--;
+    return TB_OK;
+}
+
+static tb_status get3(const tb_world *w, tb_particle_id id, size_t offset, double out[3])
+{
+    uint32_t slot;
+    tb_status st = find(w, id, &slot);
+    if (st == TB_OK)
+        memcpy(out, w->y + offset + 3 * slot, 3 * sizeof(double));
+    return st;
+}
+
+static tb_status set3(tb_world *w, tb_particle_id id, size_t offset, const double in[3], const char *what)
+{
+    uint32_t slot;
+    tb_status st = tb__check_busy(w, "set a particle's state");
+    if (st == TB_OK)
+        st = find(w, id, &slot);
+    if (st != TB_OK)
+        return st;
+    if (!in || !tb__finite3(in))
+        return tb__fail(w, TB_ERR_ARGUMENT, "particle %s must be finite", what);
+    memcpy(w->y + offset + 3 * slot, in, 3 * sizeof(double));
+    return TB_OK;
+}
+
+tb_status tb_particle_position(const tb_world *w, tb_particle_id id, double position[3])
+{
+    return get3(w, id, w->off[TB__PARTICLE_POS], position);
+}
+
+tb_status tb_particle_velocity(const tb_world *w, tb_particle_id id, double velocity[3])
+{
+    return get3(w, id, w->off[TB__PARTICLE_VEL], velocity);
+}
+
+tb_status tb_particle_set_position(tb_world *w, tb_particle_id id, const double position[3])
+{
+    return set3(w, id, w->off[TB__PARTICLE_POS], position, "position");
+}
+
+tb_status tb_particle_set_velocity(tb_world *w, tb_particle_id id, const double velocity[3])
+{
+    return set3(w, id, w->off[TB__PARTICLE_VEL], velocity, "velocity");
+}
+
+tb_status tb_particle_mass(const tb_world *w, tb_particle_id id, double *mass)
+{
+    uint32_t slot;
+    tb_status st = find(w, id, &slot);
+    if (st == TB_OK)
+        *mass = w->particle_mass[slot];
+    return st;
+}
+
+size_t tb_world_particle_count(const tb_world *w)
+{
+    return w->particle_count;
+}
+
+const double *tb_world_particle_positions(const tb_world *w)
+{
+    return w->y ? w->y + w->off[TB__PARTICLE_POS] : NULL;
+}
+
+const double *tb_world_particle_velocities(const tb_world *w)
+{
+    return w->y ? w->y + w->off[TB__PARTICLE_VEL] : NULL;
+}
+
+const double *tb_world_particle_masses(const tb_world *w)
+{
+    return w->particle_mass;
+}
+
+tb_particle_id tb_world_particle_at(const tb_world *w, size_t slot)
+{
+    tb_particle_id id = { 0, 0 };
+    if (slot < w->particle_count)
+        tb__ids_at(&w->particle_ids, (uint32_t)slot, &id.index1, &id.generation);
+    return id;
+}
+
+/* ------------------------------------------------------------ stepping -- */
+
+/* Acceleration of particles [b, e) from the global forces `f` (or none) and
+   the local ones, gravity and drag: a = (f + m g - (c1 + c2 |v|) v) / m,
+   scaled and added to `out` (a kick: v += h a) or assigned (derive). `v`,
+   the velocity the drag sees, may be `out` itself. */
+static void accelerate(const tb_world *w, size_t b, size_t e, const double *f, const double *v,
+                       double *out, double scale, int add)
+{
+    const double *m = w->particle_mass, *im = w->particle_inv_mass;
+    const double gx = w->gravity[0], gy = w->gravity[1], gz = w->gravity[2];
+    const double c1 = w->linear_drag, c2 = w->quadratic_drag;
+    size_t i;
+    for (i = b; i < e; ++i) {
+        const double vx = v[3 * i], vy = v[3 * i + 1], vz = v[3 * i + 2];
+        const double drag = c2 != 0 ? c1 + c2 * sqrt(vx * vx + vy * vy + vz * vz) : c1;
+        double fx = m[i] * gx - drag * vx, fy = m[i] * gy - drag * vy, fz = m[i] * gz - drag * vz;
+        const double s = scale * im[i];
+        if (f) {
+            fx += f[3 * i];
+            fy += f[3 * i + 1];
+            fz += f[3 * i + 2];
+        }
+        if (add) {
+            out[3 * i] += s * fx;
+            out[3 * i + 1] += s * fy;
+            out[3 * i + 2] += s * fz;
+        } else {
+            out[3 * i] = s * fx;
+            out[3 * i + 1] = s * fy;
+            out[3 * i + 2] = s * fz;
+        }
+    }
+}
+
+void tb__particle_derive(tb_world *w, const double *y, double *dy)
+{
+    const double *vel = y + w->off[TB__PARTICLE_VEL];
+    memcpy(dy + w->off[TB__PARTICLE_POS], vel, 3 * w->particle_count * sizeof(double));
+    accelerate(w, 0, w->particle_count, w->force_ready ? w->particle_force : NULL, vel, dy + w->off[TB__PARTICLE_VEL], 1, 0);
+}
+
+int tb__particle_velocity_dependent(const tb_world *w)
+{
+    return (w->particle_count && (w->linear_drag != 0 || w->quadratic_drag != 0)) || w->spring_damped > 0;
+}
+
+/* The common case of a sweep, where a scene has only the local forces
+   gravity and linear drag (no springs, callbacks or quadratic drag), seen at
+   the velocity being kicked: one pass that kicks and drifts each particle
+   while its velocity is in registers. The same arithmetic as accelerate()
+   (so the same bits) without its per-particle branches; `restrict` lets
+   GCC -O2 pack pairs of doubles. Streaming 10^6 particles it runs at the
+   memory-bandwidth limit, where the general blocked sweep is 1.7x slower. */
+static void kick_drift_local(double *restrict x, double *restrict v, const double *restrict m,
+                             const double *restrict im, size_t n, double hk, double hd,
+                             const double g[3], double c1, int drift)
+{
+    const double gx = g[0], gy = g[1], gz = g[2];
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        const double s = hk * im[i], mi = m[i];
+        double *vi = v + 3 * i;
+        vi[0] += s * (mi * gx - c1 * vi[0]);
+        vi[1] += s * (mi * gy - c1 * vi[1]);
+        vi[2] += s * (mi * gz - c1 * vi[2]);
+        if (drift) {
+            double *xi = x + 3 * i;
+            xi[0] += hd * vi[0];
+            xi[1] += hd * vi[1];
+            xi[2] += hd * vi[2];
+        }
+    }
+}
+
+void tb__particle_sweep(tb_world *w, const tb__split_op *ops, int n)
+{
+    double *pos = w->y + w->off[TB__PARTICLE_POS], *vel = w->y + w->off[TB__PARTICLE_VEL];
+    const double *f = w->force_ready ? w->particle_force : NULL;
+    const double *seen = w->kick_seen ? w->kick_seen + w->off[TB__PARTICLE_VEL] : vel;
+    size_t b, i;
+    int k;
+    if (!f && w->quadratic_drag == 0 && seen == vel && !ops[0].drift && (n == 1 || (n == 2 && ops[1].drift))) {
+        /* kick, or kick then drift, with local forces only */
+        kick_drift_local(pos, vel, w->particle_mass, w->particle_inv_mass, w->particle_count, ops[0].h, n == 2 ? ops[1].h : 0,
+                         w->gravity, w->linear_drag, n == 2);
+        return;
+    }
+    for (b = 0; b < w->particle_count; b += BLOCK) {
+        size_t e = b + BLOCK < w->particle_count ? b + BLOCK : w->particle_count;
+        for (k = 0; k < n; ++k) {
+            const double h = ops[k].h;
+            if (ops[k].drift) {
+                for (i = 3 * b; i < 3 * e; ++i)
+                    pos[i] += h * vel[i];
+            } else {
+                accelerate(w, b, e, f, seen, vel, h, 1);
+            }
+        }
+    }
+}

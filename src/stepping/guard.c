@@ -1,0 +1,155 @@
+/* guard.c: the blow-up guard. After a step it looks for a state that is no
+   longer finite, or (when asked) energy that grew faster than the physics
+   allows, names the object and the likely cause, and rolls the world back.
+   It is off by default because it needs a copy of the state every step;
+   the tumble command turns it on. */
+#include "stepping/stepping.h"
+#include "bodies/bodies.h"
+#include "forces/forces.h"
+#include "particles/particles.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static const struct {
+    enum tb__tier tier;
+    int width;
+} quantities[] = {
+#define TB__DESCRIBE(name, tier, width) { tier, width },
+    TB__QUANTITIES(TB__DESCRIBE)
+#undef TB__DESCRIBE
+};
+
+static const char *const tier_names[TB__TIERS] = { "tracer", "particle", "body" };
+static const char *const quantity_names[TB__QUANTITY_COUNT] = {
+    "position", "position", "velocity", "position", "orientation", "momentum", "angular momentum"
+};
+
+static size_t tier_count(const tb_world *w, enum tb__tier tier)
+{
+    return tier == TB__TRACERS ? w->tracer_count : tier == TB__PARTICLES ? w->particle_count : w->body_count;
+}
+
+static const tb__ids *tier_ids(const tb_world *w, enum tb__tier tier)
+{
+    return tier == TB__TRACERS ? &w->tracer_ids : tier == TB__PARTICLES ? &w->particle_ids : &w->body_ids;
+}
+
+static unsigned id_of(const tb_world *w, enum tb__tier tier, size_t slot)
+{
+    uint32_t index1, generation;
+    tb__ids_at(tier_ids(w, tier), (uint32_t)slot, &index1, &generation);
+    return (unsigned)index1;
+}
+
+/* The first non-finite number of the state, as "particle 17's velocity". */
+static int find_non_finite(const tb_world *w, char *out, size_t size)
+{
+    int q;
+    for (q = 0; q < TB__QUANTITY_COUNT; ++q) {
+        const double *a = w->y + w->off[q];
+        const size_t n = tier_count(w, quantities[q].tier) * (size_t)quantities[q].width;
+        size_t i;
+        for (i = 0; i < n; ++i)
+            if (!isfinite(a[i])) {
+                const size_t slot = i / (size_t)quantities[q].width;
+                snprintf(out, size, "%s %u's %s is not finite", tier_names[quantities[q].tier],
+                         id_of(w, quantities[q].tier, slot), quantity_names[q]);
+                return 1;
+            }
+    }
+    return 0;
+}
+
+/* Kinetic, rotational and spring energy (never negative), and the gravity
+   potential, of the state y. */
+static void energies(const tb_world *w, const double *y, double *positive, double *gravity)
+{
+    const tb_energy e = tb__energy_of(w, y);
+    *positive = e.kinetic + e.rotational + e.spring;
+    *gravity = e.gravity;
+}
+
+/* The object whose kinetic energy grew the most over the step. */
+static void biggest_gain(const tb_world *w, const double *before, char *out, size_t size)
+{
+    double best = -INFINITY;
+    size_t i, k;
+    enum tb__tier tier = TB__PARTICLES;
+    size_t slot = 0;
+    for (i = 0; i < w->particle_count; ++i) {
+        const double *v1 = w->y + w->off[TB__PARTICLE_VEL] + 3 * i;
+        const double *v0 = before + w->off[TB__PARTICLE_VEL] + 3 * i;
+        double gain = 0;
+        for (k = 0; k < 3; ++k)
+            gain += w->particle_mass[i] * (v1[k] * v1[k] - v0[k] * v0[k]) / 2;
+        if (gain > best)
+            best = gain, tier = TB__PARTICLES, slot = i;
+    }
+    for (i = 0; i < w->body_count; ++i) {
+        const double *p1 = w->y + w->off[TB__BODY_MOM] + 3 * i;
+        const double *p0 = before + w->off[TB__BODY_MOM] + 3 * i;
+        double gain = 0;
+        for (k = 0; k < 3; ++k)
+            gain += w->body_inv_mass[i] * (p1[k] * p1[k] - p0[k] * p0[k]) / 2;
+        if (gain > best)
+            best = gain, tier = TB__BODIES, slot = i;
+    }
+    if (best > -INFINITY)
+        snprintf(out, size, "%s %u gained the most", tier_names[tier], id_of(w, tier, slot));
+    else
+        snprintf(out, size, "no particle or body moved");
+}
+
+tb_status tb__guard_check(tb_world *w, const double *before, double h)
+{
+    char what[256], cause[TB_MESSAGE_SIZE];
+    tb_advice advice;
+    if (!find_non_finite(w, what, sizeof what)) {
+        double p0, u0, p1, u1, allowed;
+        if (!(w->guard > 1 && w->guard < INFINITY))
+            return TB_OK;
+        energies(w, before, &p0, &u0);
+        energies(w, w->y, &p1, &u1);
+        /* gravity may turn its potential into motion; beyond that, the
+           energy may grow by the factor asked (forces that do work, such as
+           callbacks, must fit in it) */
+        allowed = w->guard * (p0 + fmax(0, u0 - u1));
+        if (!(p1 > allowed) || allowed == 0)
+            return TB_OK;
+        {
+            char who[64];
+            biggest_gain(w, before, who, sizeof who);
+            snprintf(what, sizeof what, "the energy grew %.3g times in one step (guard %g; %s)",
+                     p0 > 0 ? p1 / p0 : INFINITY, w->guard, who);
+        }
+    }
+    /* back to the last good state, then ask the advisor why */
+    tb__state_copy(w, w->y, before);
+    if (tb_world_advise(w, h, &advice) == TB_OK && advice.exceeded)
+        snprintf(cause, sizeof cause, "%s", advice.text);
+    else
+        snprintf(cause, sizeof cause, "no stability limit of %s is exceeded: look at the forces on it (callbacks, "
+                 "applied forces, huge velocities)", w->method->name);
+    return tb__fail(w, TB_ERR_UNSTABLE, "step %lu (t = %.6g s): %s; %s. The world is back at t = %.6g s",
+                    w->steps + 1, w->time + h, what, cause, w->time);
+}
+
+tb_status tb_world_set_guard(tb_world *w, double energy_growth)
+{
+    tb_status st = tb__check_busy(w, "change the guard");
+    if (st != TB_OK)
+        return st;
+    if (!(energy_growth == 0 || energy_growth > 1)) /* NaN fails both */
+        return tb__fail(w, TB_ERR_ARGUMENT,
+                        "guard must be 0 (off), > 1 (the largest energy growth per step) or inf "
+                        "(finiteness only) (got %g)", energy_growth);
+    w->guard = energy_growth;
+    return TB_OK;
+}
+
+double tb_world_guard(const tb_world *w)
+{
+    return w->guard;
+}

@@ -1,0 +1,309 @@
+/* integrators.c: the stepping methods, each a short function over the
+   state-vector primitives (derive, axpy) or the split primitives (prepare
+   forces, sweep kicks and drifts). Adding a method touches this file only. */
+#include "stepping/stepping.h"
+#include "bodies/bodies.h"
+#include "forces/forces.h"
+#include "particles/particles.h"
+
+#include <math.h>
+#include <string.h>
+
+/* y += h F(t, y). Writes y only after its one evaluation. */
+static tb_status euler(tb_world *w, double h)
+{
+    tb_status st = tb__state_scratch(w, 1);
+    double *dy;
+    if (st != TB_OK)
+        return st;
+    dy = tb__scratch_vector(w, 0);
+    if ((st = tb__derive(w, w->time, w->y, dy)) != TB_OK)
+        return st;
+    tb__state_axpy(w, w->y, w->y, h, dy);
+    tb__project(w, w->y);
+    return TB_OK;
+}
+
+/* Classic RK4 with three scratch vectors: a stage state, a stage slope and
+   the running sum k1 + 2 k2 + 2 k3 + k4. Writes y only at the end, then
+   projects it (unit quaternions). Stage states are not projected: the
+   quaternion equation q' = (0, w) q / 2, with w computed from q / |q|, keeps
+   |q| by itself, and projecting stages perturbs them by O(h^2), which costs
+   RK4 its order (measured on the flip: 4.5e-4 rad with stage projection,
+   see test_bodies for the figure without). When nothing couples objects,
+   the world steps them one block at a time through all four stages
+   (tb__fused_rk4), with these very operations: the same bits, without the
+   passes over the whole state. */
+static tb_status rk4(tb_world *w, double h)
+{
+    const double t = w->time;
+    double *stage, *k, *sum;
+    tb_status st;
+    if (tb__fused_rk4(w, h))
+        return TB_OK;
+    if ((st = tb__state_scratch(w, 3)) != TB_OK)
+        return st;
+    stage = tb__scratch_vector(w, 0);
+    k = tb__scratch_vector(w, 1);
+    sum = tb__scratch_vector(w, 2);
+    if ((st = tb__derive(w, t, w->y, sum)) != TB_OK)
+        return st;
+    tb__state_axpy(w, stage, w->y, h / 2, sum);
+    if ((st = tb__derive(w, t + h / 2, stage, k)) != TB_OK)
+        return st;
+    tb__state_axpy(w, sum, sum, 2, k);
+    tb__state_axpy(w, stage, w->y, h / 2, k);
+    if ((st = tb__derive(w, t + h / 2, stage, k)) != TB_OK)
+        return st;
+    tb__state_axpy(w, sum, sum, 2, k);
+    tb__state_axpy(w, stage, w->y, h, k);
+    if ((st = tb__derive(w, t + h, stage, k)) != TB_OK)
+        return st;
+    tb__state_axpy(w, sum, sum, 1, k);
+    tb__state_axpy(w, w->y, w->y, h / 6, sum);
+    tb__project(w, w->y);
+    return TB_OK;
+}
+
+/* Kick with the forces at the start, then drift with the new velocity.
+   Anisotropic bodies turn with w frozen at the start of the drift (first
+   order), as in ODE. */
+static tb_status symplectic_euler(tb_world *w, double h)
+{
+    const tb__split_op kick_drift[2] = { { 0, h, TB__ROTATE_FROZEN }, { 1, h, TB__ROTATE_FROZEN } };
+    tb_status st = tb__split_prepare(w, w->time, NULL);
+    if (st != TB_OK)
+        return st;
+    tb__split_sweep(w, kick_drift, 2);
+    return TB_OK;
+}
+
+/* Kick h/2, drift h, evaluate the forces again, kick h/2. The second
+   evaluation comes after the state moved: tb_world_step snapshots it when a
+   callback could fail there.
+   Velocity-dependent forces (drag, damping, callbacks) are evaluated for the
+   closing kick at the predicted end velocity v_n + h a_n = 2 v_half - v_n,
+   not at v_half: that keeps the method second order with damping (on
+   v' = -k v it multiplies by 1 - kh + (kh)^2 / 2 per step) at no extra
+   evaluation. Position-only forces never see the difference.
+   `rotation` is how the drift turns anisotropic bodies through their free
+   motion: "verlet" uses the symmetric axis splitting (second order, keeps
+   the energy error bounded), "verlet_exact" the accurate kernel. */
+static tb_status verlet_with(tb_world *w, double h, tb__rotation_kind rotation)
+{
+    const tb__split_op kick_drift[2] = { { 0, h / 2, rotation }, { 1, h, rotation } };
+    const tb__split_op kick[1] = { { 0, h / 2, rotation } };
+    double *predicted = NULL;
+    tb_status st;
+    if (w->forces.count == 0 && w->spring_count == 0 && w->particle_count == 0 && !tb__split_velocity_dependent(w)) {
+        /* Bodies alone, whose forces (gravity, held forces) depend on
+           nothing the drift changes: the closing kick adds what it would
+           add after a second evaluation, so one sweep does the three ops
+           on each block while it sits in L1 (the same operations, the same
+           bits), instead of walking the momenta twice. */
+        const tb__split_op kick_drift_kick[3] = { { 0, h / 2, rotation }, { 1, h, rotation }, { 0, h / 2, rotation } };
+        if ((st = tb__split_prepare(w, w->time, NULL)) != TB_OK)
+            return st;
+        tb__split_sweep(w, kick_drift_kick, 3);
+        return TB_OK;
+    }
+    if (tb__split_velocity_dependent(w)) {
+        if ((st = tb__state_scratch(w, 1)) != TB_OK)
+            return st;
+        predicted = tb__scratch_vector(w, 0);
+        tb__state_copy(w, predicted, w->y);
+    }
+    if ((st = tb__split_prepare(w, w->time, NULL)) != TB_OK)
+        return st;
+    tb__split_sweep(w, kick_drift, 2);
+    if (predicted)
+        tb__split_extrapolate(w, predicted);
+    st = tb__split_prepare(w, w->time + h, predicted);
+    if (st == TB_OK)
+        tb__split_sweep(w, kick, 1);
+    w->kick_seen = NULL;
+    return st;
+}
+
+static tb_status verlet(tb_world *w, double h)
+{
+    return verlet_with(w, h, TB__ROTATE_SPLIT2);
+}
+
+static tb_status verlet_exact(tb_world *w, double h)
+{
+    return verlet_with(w, h, TB__ROTATE_ACCURATE);
+}
+
+/* name, order, split, updates before its last evaluation, scratch vectors */
+/* Linearised backward Euler (implicit.c): one conjugate-gradient solve per
+   step; stable at any step on springs and drag, and dissipative. */
+static tb_status implicit_euler(tb_world *w, double h)
+{
+    return tb__implicit_step(w, h);
+}
+
+/* Dormand-Prince 5(4): the fifth-order solution advances, the embedded
+   fourth-order one estimates the local error. A step of H is covered by
+   substeps whose size is set by the standard controller
+   h <- h min(5, max(0.2, 0.9 err^(-1/5))); a rejected substep (err > 1, or
+   a non-finite state) is retried smaller from the same state. The running
+   state lives in scratch and is written to the world only at the end, so a
+   failing callback leaves the world as it was. */
+static const double DP_C[7] = { 0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1, 1 };
+static const double DP_A[7][6] = {
+    { 0 },
+    { 1.0 / 5 },
+    { 3.0 / 40, 9.0 / 40 },
+    { 44.0 / 45, -56.0 / 15, 32.0 / 9 },
+    { 19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729 },
+    { 9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656 },
+    { 35.0 / 384, 0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84 },
+};
+/* fifth-order weights minus fourth-order ones */
+static const double DP_E[7] = { 71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525,
+                                -1.0 / 40 };
+#define DP_MAX_SUBSTEPS 1000000
+
+static tb_status dopri5(tb_world *w, double H)
+{
+    double *k[7], *y, *next, *err, *swap, h, done = 0;
+    int have_k1 = 0, j, s;
+    long substeps = 0;
+    tb_status st = tb__state_scratch(w, 10);
+    if (st != TB_OK)
+        return st;
+    for (j = 0; j < 7; ++j)
+        k[j] = tb__scratch_vector(w, (size_t)j);
+    y = tb__scratch_vector(w, 7);
+    next = tb__scratch_vector(w, 8);
+    err = tb__scratch_vector(w, 9);
+    tb__state_copy(w, y, w->y);
+    h = w->adaptive_h > 0 ? w->adaptive_h : H;
+    while (done < H) {
+        const double t = w->time + done;
+        const int last = h >= H - done;
+        const double step = last ? H - done : h;
+        double e;
+        if (++substeps > DP_MAX_SUBSTEPS || step <= 1e-14 * (1 + fabs(t)))
+            return tb__fail(w, TB_ERR_ARGUMENT,
+                            "dopri5: the substep fell to %g s at t = %.17g s: too stiff for tolerance %g "
+                            "(try implicit_euler)", step, t, w->tolerance);
+        if (!have_k1 && (st = tb__derive(w, t, y, k[0])) != TB_OK)
+            return st;
+        have_k1 = 1;
+        for (s = 1; s < 7; ++s) {
+            tb__state_axpy(w, next, y, step * DP_A[s][0], k[0]);
+            for (j = 1; j < s; ++j)
+                if (DP_A[s][j] != 0)
+                    tb__state_axpy(w, next, next, step * DP_A[s][j], k[j]);
+            if ((st = tb__derive(w, t + DP_C[s] * step, next, k[s])) != TB_OK)
+                return st;
+        }
+        tb__state_scale(w, err, step * DP_E[0], k[0]);
+        for (j = 2; j < 7; ++j)
+            tb__state_axpy(w, err, err, step * DP_E[j], k[j]);
+        e = tb__state_error_norm(w, err, y, next, w->tolerance);
+        if (!(e <= 1)) { /* rejected, or not finite: shrink and retry */
+            h = step * (isfinite(e) ? fmax(0.2, 0.9 * pow(e, -0.2)) : 0.2);
+            continue;
+        }
+        tb__project(w, next);
+        swap = y, y = next, next = swap;
+        /* first same as last: the seventh stage is the next first, unless
+           projecting moved the state */
+        swap = k[0], k[0] = k[6], k[6] = swap;
+        have_k1 = w->body_count == 0;
+        done = last ? H : done + step;
+        if (!last || step == h)
+            h = step * fmin(5, fmax(0.2, 0.9 * pow(fmax(e, 1e-10), -0.2)));
+    }
+    w->adaptive_h = h;
+    tb__state_copy(w, w->y, y);
+    return TB_OK;
+}
+
+/* "auto": the plan (auto.c) names a method and a number of equal substeps;
+   it is made again when the step, the tolerance or the set of objects
+   changes. The substeps see their own times; the driver adds h at the end. */
+static tb_status auto_step(tb_world *w, double h)
+{
+    const double key[8] = { h, w->tolerance, (double)w->tracer_count, (double)w->particle_count,
+                            (double)w->spring_count, (double)w->body_count, (double)w->forces.count,
+                            (double)w->fields.count };
+    const double t0 = w->time;
+    tb_status st = TB_OK;
+    long i;
+    if (!w->auto_method || memcmp(key, w->auto_key, sizeof key) != 0) {
+        if ((st = w->method->plan(w, h)) != TB_OK)
+            return st;
+        memcpy(w->auto_key, key, sizeof key);
+    }
+    for (i = 0; i < w->auto_substeps && st == TB_OK; ++i) {
+        w->time = t0 + (double)i * (h / (double)w->auto_substeps);
+        st = w->auto_method->step(w, h / (double)w->auto_substeps);
+    }
+    w->time = t0;
+    return st;
+}
+
+const char *tb_world_auto_choice(const tb_world *w, long *substeps)
+{
+    if (substeps)
+        *substeps = w->auto_method ? w->auto_substeps : 0;
+    return w->auto_method ? w->auto_method->name : NULL;
+}
+
+/* Stability limits (|h lambda|): explicit Euler's region |1 + z| <= 1 never
+   reaches the imaginary axis; the split methods are bounded for h w < 2 and
+   damp a decay for h k < 2; RK4's region reaches 2 sqrt 2 on the imaginary
+   axis and 2.785 on the negative real axis. */
+static const tb__method methods[] = {
+    { "euler", 1, 0, 0, 1, euler, 0, 2, 0, NULL, 0 },
+    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, 2, 2, 0, NULL, 1 },
+    { "verlet", 2, 1, 1, 1, verlet, 2, 2, 0, NULL, 0.5 },
+    { "rk4", 4, 0, 0, 3, rk4, 2.8284271247461903, 2.785293563405282, 0, NULL, 0.5 },
+    { "verlet_exact", 2, 1, 1, 1, verlet_exact, 2, 2, 0, NULL, 0.5 },
+    { "implicit_euler", 1, 1, 0, 4, implicit_euler, INFINITY, INFINITY, 0, NULL, 1 },
+    { "dopri5", 5, 0, 0, 10, dopri5, INFINITY, INFINITY, 1, NULL, 0.5 },
+    { "auto", 0, 0, 1, 10, auto_step, INFINITY, INFINITY, 1, tb__auto_plan, 0.5 },
+};
+#define METHOD_COUNT ((int)(sizeof methods / sizeof methods[0]))
+
+/* n substeps of a method with share c move x by (h/n)^2 a c each and by
+   the velocity they add: h^2 a (c / n + (n - 1) / (2 n)) in all. */
+double tb__force_lever(const tb_world *w)
+{
+    if (w->method->plan && w->auto_method && w->auto_substeps > 0)
+        return 0.5 + (w->auto_method->force_lever - 0.5) / (double)w->auto_substeps;
+    return w->method->force_lever;
+}
+
+const tb__method *tb__method_find(const char *name)
+{
+    int i;
+    for (i = 0; name && i < METHOD_COUNT; ++i)
+        if (strcmp(methods[i].name, name) == 0)
+            return &methods[i];
+    return NULL;
+}
+
+const tb__method *tb__method_at(int index)
+{
+    return index >= 0 && index < METHOD_COUNT ? &methods[index] : NULL;
+}
+
+int tb_integrator_count(void)
+{
+    return METHOD_COUNT;
+}
+
+const char *tb_integrator_name(int index)
+{
+    return index >= 0 && index < METHOD_COUNT ? methods[index].name : NULL;
+}
+
+int tb_integrator_order(int index)
+{
+    return index >= 0 && index < METHOD_COUNT ? methods[index].order : 0;
+}

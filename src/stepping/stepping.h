@@ -1,0 +1,66 @@
+/* stepping.h: the step and its methods (not public): the step driver and
+   the primitives the methods are written in (step.c), the integrators
+   (integrators.c, implicit.c), the automatic choice of method (auto.c),
+   the stability advisor (advisor.c), the blow-up guard (guard.c) and the
+   energy and momentum diagnostics (diagnostics.c). The methods know
+   nothing of tracers, particles or bodies: they call the primitives,
+   which each tier supplies its part of. */
+#ifndef TB_STEPPING_H
+#define TB_STEPPING_H
+
+#include "world.h"
+
+/* ---- integrators.c ------------------------------------------------------- */
+const tb__method *tb__method_find(const char *name);
+const tb__method *tb__method_at(int index); /* NULL past the end */
+/* The force_lever of the step just taken (auto: of the method it chose,
+   over its substeps). */
+double tb__force_lever(const tb_world *w);
+
+/* ---- the primitives (step.c) ----------------------------------------------- */
+/* dy = F(t, y), the whole state's derivative. */
+tb_status tb__derive(tb_world *w, double t, const double *y, double *dy);
+/* Put y back on its constraints after a generic stage (unit quaternions). */
+void tb__project(tb_world *w, double *y);
+/* RK4 fused: when nothing couples objects (no springs, no callbacks), each
+   object's derivative depends on the object alone, so the step can go
+   object by object through all four stages, with the generic method's
+   arithmetic (the same bits) but none of its passes over the whole state.
+   1 when it stepped the world, 0 when the world needs the generic method
+   (coupling forces, or objects of a tier that offers no fused step: only
+   bodies offer one, tb__body_rk4). */
+int tb__fused_rk4(tb_world *w, double h);
+/* Split methods: kicks and drifts. tb__split_prepare evaluates the forces
+   that are not local to one object (springs, callbacks) at the current
+   positions, with velocities and momenta taken from `seen` (a state vector,
+   or NULL for the current state); the kicks of tb__split_sweep add the local
+   forces (gravity, drag, damping, held forces), also seeing `seen`. */
+tb_status tb__split_prepare(tb_world *w, double t, const double *seen);
+void tb__split_sweep(tb_world *w, const tb__split_op *ops, int n);
+/* Whether any force depends on velocity (drag, damping, callbacks). */
+int tb__split_velocity_dependent(const tb_world *w);
+/* saved = 2 y - saved on the velocities and momenta: with saved = y_n and
+   the current state after a half kick, this predicts the end-of-step ones. */
+void tb__split_extrapolate(const tb_world *w, double *saved);
+
+/* ---- implicit.c: linearised backward Euler --------------------------------- */
+/* The particles' linear solve; the whole step (bodies kicked and drifted). */
+tb_status tb__implicit_particles(tb_world *w, double h);
+tb_status tb__implicit_step(tb_world *w, double h);
+
+/* ---- advisor.c, auto.c, guard.c, diagnostics.c ---------------------------- */
+/* The stiffest spring mode w (rad/s) by power iteration, and the stiffest
+   spring where that mode is largest. Uses two scratch state vectors. */
+tb_status tb__stiffest_mode(tb_world *w, double *omega, tb_spring_id *culprit);
+/* The fastest drag or damping decay rate (1/s) of particles and bodies. */
+double tb__fastest_decay(const tb_world *w);
+/* Choose w->auto_method and w->auto_substeps for steps of h. */
+tb_status tb__auto_plan(tb_world *w, double h);
+/* After a step from the state `before`: TB_OK, or TB_ERR_UNSTABLE with a
+   message naming the step, the object and the likely cause (the caller
+   rolls back). */
+tb_status tb__guard_check(tb_world *w, const double *before, double h);
+/* The energies of state y (any state vector of the world). */
+tb_energy tb__energy_of(const tb_world *w, const double *y);
+
+#endif
