@@ -1,14 +1,24 @@
 /* tumble_lua.c: the Lua 5.4 module `tumble`, over the public C API only.
 
    Types are full userdata with locked metatables: tumble.world owns a
-   tb_world; tumble.particle, tumble.tracer, tumble.spring, tumble.field and
-   tumble.force are handles holding a value id and, as user value, their
-   world (so a handle keeps its world alive and every call checks the id).
+   tb_world; tumble.particle, tumble.tracer, tumble.spring, tumble.body,
+   tumble.shape, tumble.field and tumble.force are handles holding a value
+   id and, as user value, their world (so a handle keeps its world alive and
+   every call checks the id).
 
    The world's user value is a table holding its Lua callbacks under
    integer keys and the tables handed to them (reused from call to call).
    Callbacks run under lua_pcall with a traceback handler inside a protected
-   C function, so no Lua error ever unwinds through the core. */
+   C function, so no Lua error ever unwinds through the core.
+
+   Names: Lua reserves the lua_ and luaL_ prefixes, so the binding's types
+   are tl_*. Static functions carry no prefix: a function Lua calls is named
+   after its Lua name (module_world for tumble.world, world_step for
+   world:step, body_pos for body:pos, handle_* for what every handle has,
+   world_gc for a metamethod); every other function starts with a verb
+   (check_ raises unless the value is valid, read_ requires a value, opt_
+   takes one if present, push_ leaves one on the Lua stack, to_ converts).
+   The same rule holds in tumble_main.c. */
 #include "tumble_lua.h"
 
 #include <lauxlib.h>
@@ -18,36 +28,36 @@
 
 #define WORLD_MT "tumble.world"
 
-enum handle_kind { H_PARTICLE, H_TRACER, H_SPRING, H_FIELD, H_FORCE, H_BODY, H_SHAPE, H_KINDS };
+enum tl_handle_kind { H_PARTICLE, H_TRACER, H_SPRING, H_FIELD, H_FORCE, H_BODY, H_SHAPE, H_KINDS };
 static const char *const handle_mt[H_KINDS] = {
     "tumble.particle", "tumble.tracer", "tumble.spring", "tumble.field", "tumble.force", "tumble.body",
     "tumble.shape"
 };
 
-typedef struct lua_world {
+typedef struct tl_world {
     tb_world *world;  /* NULL once closed */
     double dt;        /* default step, s */
     lua_State *L;     /* while tb_lua_step runs: the thread stepping ... */
     int index;        /* ... and the world's absolute stack index there */
     int next_key;     /* next callback key in the user value table */
-} lua_world;
+} tl_world;
 
-typedef struct lua_handle {
+typedef struct tl_handle {
     int kind;
     uint32_t index1, generation;
     int key;          /* fields and forces written in Lua: their callback key */
-} lua_handle;
+} tl_handle;
 
 /* What a C callback needs to find its Lua function. Lives as a userdata in
    the world's user value table, so its address is stable. */
-typedef struct lua_callback {
-    lua_world *owner;
+typedef struct tl_callback {
+    tl_world *owner;
     int key;
-} lua_callback;
+} tl_callback;
 
 /* ------------------------------------------------------------ helpers -- */
 
-static int traceback(lua_State *L)
+static int add_traceback(lua_State *L)
 {
     const char *msg = lua_tostring(L, 1);
     if (!msg) {
@@ -61,7 +71,7 @@ static int traceback(lua_State *L)
 }
 
 /* Copy the first line of s into a message buffer. */
-static void first_line(char *out, size_t size, const char *s)
+static void copy_first_line(char *out, size_t size, const char *s)
 {
     size_t n = strcspn(s ? s : "", "\n");
     if (n >= size)
@@ -70,15 +80,15 @@ static void first_line(char *out, size_t size, const char *s)
     out[n] = 0;
 }
 
-static lua_world *to_world(lua_State *L, int idx)
+static tl_world *check_world(lua_State *L, int idx)
 {
-    lua_world *lw = luaL_checkudata(L, idx, WORLD_MT);
+    tl_world *lw = luaL_checkudata(L, idx, WORLD_MT);
     if (!lw->world)
         luaL_error(L, "tumble: the world is closed");
     return lw;
 }
 
-static int fail(lua_State *L, lua_world *lw, const char *fname)
+static int raise_world_error(lua_State *L, tl_world *lw, const char *fname)
 {
     return luaL_error(L, "%s: %s", fname, tb_world_message(lw->world));
 }
@@ -150,7 +160,7 @@ static int opt_number(lua_State *L, int idx, const char *key, const char *fname,
 }
 
 /* Three numbers at idx, or one {x, y, z} table. */
-static void vec3_args(lua_State *L, int idx, const char *fname, double out[3])
+static void read_vec3_args(lua_State *L, int idx, const char *fname, double out[3])
 {
     if (lua_type(L, idx) == LUA_TTABLE) {
         read_vec3(L, idx, fname, "argument", out);
@@ -183,7 +193,7 @@ static void push_vec3_table(lua_State *L, const double v[3])
 
 static void push_handle(lua_State *L, int world_idx, int kind, uint32_t index1, uint32_t generation, int key)
 {
-    lua_handle *h;
+    tl_handle *h;
     world_idx = lua_absindex(L, world_idx);
     h = lua_newuserdatauv(L, sizeof *h, 1);
     h->kind = kind;
@@ -196,9 +206,9 @@ static void push_handle(lua_State *L, int world_idx, int kind, uint32_t index1, 
 }
 
 /* The handle at idx (of `kind`) and its open world. */
-static lua_handle *check_handle(lua_State *L, int idx, int kind, lua_world **lw)
+static tl_handle *check_handle(lua_State *L, int idx, int kind, tl_world **lw)
 {
-    lua_handle *h = luaL_checkudata(L, idx, handle_mt[kind]);
+    tl_handle *h = luaL_checkudata(L, idx, handle_mt[kind]);
     lua_getiuservalue(L, idx, 1);
     *lw = lua_touserdata(L, -1);
     lua_pop(L, 1);
@@ -207,7 +217,7 @@ static lua_handle *check_handle(lua_State *L, int idx, int kind, lua_world **lw)
     return h;
 }
 
-static tb_particle_id particle_id(const lua_handle *h)
+static tb_particle_id to_particle_id(const tl_handle *h)
 {
     tb_particle_id id;
     id.index1 = h->index1;
@@ -215,7 +225,7 @@ static tb_particle_id particle_id(const lua_handle *h)
     return id;
 }
 
-static tb_tracer_id tracer_id(const lua_handle *h)
+static tb_tracer_id to_tracer_id(const tl_handle *h)
 {
     tb_tracer_id id;
     id.index1 = h->index1;
@@ -223,67 +233,67 @@ static tb_tracer_id tracer_id(const lua_handle *h)
     return id;
 }
 
-static int particle_get(lua_State *L, tb_status (*get)(const tb_world *, tb_particle_id, double[3]),
+static int get_particle_vec3(lua_State *L, tb_status (*get)(const tb_world *, tb_particle_id, double[3]),
                         const char *fname)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_PARTICLE, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_PARTICLE, &lw);
     double v[3];
-    if (get(lw->world, particle_id(h), v) != TB_OK)
-        return fail(L, lw, fname);
+    if (get(lw->world, to_particle_id(h), v) != TB_OK)
+        return raise_world_error(L, lw, fname);
     return push_vec3(L, v);
 }
 
-static int particle_set(lua_State *L, tb_status (*set)(tb_world *, tb_particle_id, const double[3]),
+static int set_particle_vec3(lua_State *L, tb_status (*set)(tb_world *, tb_particle_id, const double[3]),
                         const char *fname)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_PARTICLE, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_PARTICLE, &lw);
     double v[3];
-    vec3_args(L, 2, fname, v);
-    if (set(lw->world, particle_id(h), v) != TB_OK)
-        return fail(L, lw, fname);
+    read_vec3_args(L, 2, fname, v);
+    if (set(lw->world, to_particle_id(h), v) != TB_OK)
+        return raise_world_error(L, lw, fname);
     return 0;
 }
 
-static int particle_pos(lua_State *L) { return particle_get(L, tb_particle_position, "particle:pos"); }
-static int particle_vel(lua_State *L) { return particle_get(L, tb_particle_velocity, "particle:vel"); }
-static int particle_set_pos(lua_State *L) { return particle_set(L, tb_particle_set_position, "particle:set_pos"); }
-static int particle_set_vel(lua_State *L) { return particle_set(L, tb_particle_set_velocity, "particle:set_vel"); }
+static int particle_pos(lua_State *L) { return get_particle_vec3(L, tb_particle_position, "particle:pos"); }
+static int particle_vel(lua_State *L) { return get_particle_vec3(L, tb_particle_velocity, "particle:vel"); }
+static int particle_set_pos(lua_State *L) { return set_particle_vec3(L, tb_particle_set_position, "particle:set_pos"); }
+static int particle_set_vel(lua_State *L) { return set_particle_vec3(L, tb_particle_set_velocity, "particle:set_vel"); }
 
 static int particle_mass(lua_State *L)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_PARTICLE, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_PARTICLE, &lw);
     double m;
-    if (tb_particle_mass(lw->world, particle_id(h), &m) != TB_OK)
-        return fail(L, lw, "particle:mass");
+    if (tb_particle_mass(lw->world, to_particle_id(h), &m) != TB_OK)
+        return raise_world_error(L, lw, "particle:mass");
     lua_pushnumber(L, m);
     return 1;
 }
 
 static int tracer_pos(lua_State *L)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_TRACER, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_TRACER, &lw);
     double v[3];
-    if (tb_tracer_position(lw->world, tracer_id(h), v) != TB_OK)
-        return fail(L, lw, "tracer:pos");
+    if (tb_tracer_position(lw->world, to_tracer_id(h), v) != TB_OK)
+        return raise_world_error(L, lw, "tracer:pos");
     return push_vec3(L, v);
 }
 
 static int tracer_set_pos(lua_State *L)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_TRACER, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_TRACER, &lw);
     double v[3];
-    vec3_args(L, 2, "tracer:set_pos", v);
-    if (tb_tracer_set_position(lw->world, tracer_id(h), v) != TB_OK)
-        return fail(L, lw, "tracer:set_pos");
+    read_vec3_args(L, 2, "tracer:set_pos", v);
+    if (tb_tracer_set_position(lw->world, to_tracer_id(h), v) != TB_OK)
+        return raise_world_error(L, lw, "tracer:set_pos");
     return 0;
 }
 
-static tb_body_id body_id(const lua_handle *h)
+static tb_body_id to_body_id(const tl_handle *h)
 {
     tb_body_id id;
     id.index1 = h->index1;
@@ -291,64 +301,64 @@ static tb_body_id body_id(const lua_handle *h)
     return id;
 }
 
-static int body_get(lua_State *L, tb_status (*get)(const tb_world *, tb_body_id, double[3]), const char *fname)
+static int get_body_vec3(lua_State *L, tb_status (*get)(const tb_world *, tb_body_id, double[3]), const char *fname)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_BODY, &lw);
     double v[3];
-    if (get(lw->world, body_id(h), v) != TB_OK)
-        return fail(L, lw, fname);
+    if (get(lw->world, to_body_id(h), v) != TB_OK)
+        return raise_world_error(L, lw, fname);
     return push_vec3(L, v);
 }
 
-static int body_set(lua_State *L, tb_status (*set)(tb_world *, tb_body_id, const double[3]), const char *fname)
+static int set_body_vec3(lua_State *L, tb_status (*set)(tb_world *, tb_body_id, const double[3]), const char *fname)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_BODY, &lw);
     double v[3];
-    vec3_args(L, 2, fname, v);
-    if (set(lw->world, body_id(h), v) != TB_OK)
-        return fail(L, lw, fname);
+    read_vec3_args(L, 2, fname, v);
+    if (set(lw->world, to_body_id(h), v) != TB_OK)
+        return raise_world_error(L, lw, fname);
     return 0;
 }
 
-static int body_pos(lua_State *L) { return body_get(L, tb_body_position, "body:pos"); }
-static int body_vel(lua_State *L) { return body_get(L, tb_body_velocity, "body:vel"); }
-static int body_omega(lua_State *L) { return body_get(L, tb_body_angular_velocity, "body:omega"); }
-static int body_set_pos(lua_State *L) { return body_set(L, tb_body_set_position, "body:set_pos"); }
-static int body_set_vel(lua_State *L) { return body_set(L, tb_body_set_velocity, "body:set_vel"); }
-static int body_set_omega(lua_State *L) { return body_set(L, tb_body_set_angular_velocity, "body:set_omega"); }
-static int body_torque(lua_State *L) { return body_set(L, tb_body_apply_torque, "body:torque"); }
+static int body_pos(lua_State *L) { return get_body_vec3(L, tb_body_position, "body:pos"); }
+static int body_vel(lua_State *L) { return get_body_vec3(L, tb_body_velocity, "body:vel"); }
+static int body_omega(lua_State *L) { return get_body_vec3(L, tb_body_angular_velocity, "body:omega"); }
+static int body_set_pos(lua_State *L) { return set_body_vec3(L, tb_body_set_position, "body:set_pos"); }
+static int body_set_vel(lua_State *L) { return set_body_vec3(L, tb_body_set_velocity, "body:set_vel"); }
+static int body_set_omega(lua_State *L) { return set_body_vec3(L, tb_body_set_angular_velocity, "body:set_omega"); }
+static int body_torque(lua_State *L) { return set_body_vec3(L, tb_body_apply_torque, "body:torque"); }
 
 /* body:asleep(): true while it sleeps; body:wake() */
 static int body_asleep(lua_State *L)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_BODY, &lw);
     int asleep;
-    if (tb_body_asleep(lw->world, body_id(h), &asleep) != TB_OK)
-        return fail(L, lw, "body:asleep");
+    if (tb_body_asleep(lw->world, to_body_id(h), &asleep) != TB_OK)
+        return raise_world_error(L, lw, "body:asleep");
     lua_pushboolean(L, asleep);
     return 1;
 }
 
 static int body_wake(lua_State *L)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
-    if (tb_body_wake(lw->world, body_id(h)) != TB_OK)
-        return fail(L, lw, "body:wake");
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_BODY, &lw);
+    if (tb_body_wake(lw->world, to_body_id(h)) != TB_OK)
+        return raise_world_error(L, lw, "body:wake");
     return 0;
 }
 
 static int body_rot(lua_State *L)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_BODY, &lw);
     double q[4];
     int k;
-    if (tb_body_orientation(lw->world, body_id(h), q) != TB_OK)
-        return fail(L, lw, "body:rot");
+    if (tb_body_orientation(lw->world, to_body_id(h), q) != TB_OK)
+        return raise_world_error(L, lw, "body:rot");
     for (k = 0; k < 4; ++k)
         lua_pushnumber(L, q[k]);
     return 4;
@@ -371,22 +381,22 @@ static void read_quat(lua_State *L, int idx, const char *fname, double q[4])
 
 static int body_set_rot(lua_State *L)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_BODY, &lw);
     double q[4];
     read_quat(L, 2, "body:set_rot", q);
-    if (tb_body_set_orientation(lw->world, body_id(h), q) != TB_OK)
-        return fail(L, lw, "body:set_rot");
+    if (tb_body_set_orientation(lw->world, to_body_id(h), q) != TB_OK)
+        return raise_world_error(L, lw, "body:set_rot");
     return 0;
 }
 
 static int body_momentum(lua_State *L)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_BODY, &lw);
     double p[3], l[3];
-    if (tb_body_momentum(lw->world, body_id(h), p, l) != TB_OK)
-        return fail(L, lw, "body:momentum");
+    if (tb_body_momentum(lw->world, to_body_id(h), p, l) != TB_OK)
+        return raise_world_error(L, lw, "body:momentum");
     push_vec3(L, p);
     push_vec3(L, l);
     return 6;
@@ -394,11 +404,11 @@ static int body_momentum(lua_State *L)
 
 static int body_mass(lua_State *L)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_BODY, &lw);
     double m, I[3];
-    if (tb_body_mass(lw->world, body_id(h), &m, I) != TB_OK)
-        return fail(L, lw, "body:mass");
+    if (tb_body_mass(lw->world, to_body_id(h), &m, I) != TB_OK)
+        return raise_world_error(L, lw, "body:mass");
     lua_pushnumber(L, m);
     return 1 + push_vec3(L, I);
 }
@@ -406,23 +416,23 @@ static int body_mass(lua_State *L)
 /* body:push(force, point): a force (N, world) at a world point, held for the
    next step; body:push_local(force, body_point) takes the point in the
    body's principal frame. */
-static int body_push_with(lua_State *L, int local, const char *fname)
+static int apply_body_force(lua_State *L, int local, const char *fname)
 {
-    lua_world *lw;
-    lua_handle *h = check_handle(L, 1, H_BODY, &lw);
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_BODY, &lw);
     double f[3], p[3];
     tb_status st;
     read_vec3(L, 2, fname, "force", f);
     read_vec3(L, 3, fname, "point", p);
-    st = local ? tb_body_apply_force_at_body_point(lw->world, body_id(h), f, p)
-               : tb_body_apply_force(lw->world, body_id(h), f, p);
+    st = local ? tb_body_apply_force_at_body_point(lw->world, to_body_id(h), f, p)
+               : tb_body_apply_force(lw->world, to_body_id(h), f, p);
     if (st != TB_OK)
-        return fail(L, lw, fname);
+        return raise_world_error(L, lw, fname);
     return 0;
 }
 
-static int body_push(lua_State *L) { return body_push_with(L, 0, "body:push"); }
-static int body_push_local(lua_State *L) { return body_push_with(L, 1, "body:push_local"); }
+static int body_push(lua_State *L) { return apply_body_force(L, 0, "body:push"); }
+static int body_push_local(lua_State *L) { return apply_body_force(L, 1, "body:push_local"); }
 
 /* Forget a Lua callback of the world at world_idx: function and record. */
 static void forget_callback(lua_State *L, int world_idx, int key)
@@ -437,9 +447,9 @@ static void forget_callback(lua_State *L, int world_idx, int key)
 
 static int handle_remove(lua_State *L)
 {
-    lua_handle *h;
+    tl_handle *h;
     int kind, k;
-    lua_world *lw;
+    tl_world *lw;
     tb_status st = TB_OK;
     for (kind = 0; kind < H_KINDS && !luaL_testudata(L, 1, handle_mt[kind]); ++kind)
         ;
@@ -448,16 +458,16 @@ static int handle_remove(lua_State *L)
     h = check_handle(L, 1, kind, &lw);
     k = h->kind;
     if (k == H_PARTICLE) {
-        st = tb_world_remove_particle(lw->world, particle_id(h));
+        st = tb_world_remove_particle(lw->world, to_particle_id(h));
     } else if (k == H_TRACER) {
-        st = tb_world_remove_tracer(lw->world, tracer_id(h));
+        st = tb_world_remove_tracer(lw->world, to_tracer_id(h));
     } else if (k == H_SPRING) {
         tb_spring_id id;
         id.index1 = h->index1;
         id.generation = h->generation;
         st = tb_world_remove_spring(lw->world, id);
     } else if (k == H_BODY) {
-        st = tb_world_remove_body(lw->world, body_id(h));
+        st = tb_world_remove_body(lw->world, to_body_id(h));
     } else if (k == H_SHAPE) {
         tb_shape_id id;
         id.index1 = h->index1;
@@ -475,7 +485,7 @@ static int handle_remove(lua_State *L)
         st = tb_world_remove_force(lw->world, id);
     }
     if (st != TB_OK)
-        return fail(L, lw, "remove");
+        return raise_world_error(L, lw, "remove");
     if (h->key) {
         lua_getiuservalue(L, 1, 1); /* the handle's world */
         forget_callback(L, lua_gettop(L), h->key);
@@ -486,7 +496,7 @@ static int handle_remove(lua_State *L)
 
 static int handle_id(lua_State *L)
 {
-    lua_handle *h = NULL;
+    tl_handle *h = NULL;
     int kind;
     for (kind = 0; kind < H_KINDS && !h; ++kind)
         h = luaL_testudata(L, 1, handle_mt[kind]);
@@ -499,14 +509,14 @@ static int handle_id(lua_State *L)
 
 static int handle_tostring(lua_State *L)
 {
-    lua_handle *h = lua_touserdata(L, 1);
+    tl_handle *h = lua_touserdata(L, 1);
     lua_pushfstring(L, "%s %d.%d", handle_mt[h->kind], (int)h->index1, (int)h->generation);
     return 1;
 }
 
 static int handle_eq(lua_State *L)
 {
-    lua_handle *a = lua_touserdata(L, 1), *b = lua_touserdata(L, 2);
+    tl_handle *a = lua_touserdata(L, 1), *b = lua_touserdata(L, 2);
     lua_getiuservalue(L, 1, 1);
     lua_getiuservalue(L, 2, 1);
     lua_pushboolean(L, a->kind == b->kind && a->index1 == b->index1 && a->generation == b->generation &&
@@ -538,7 +548,7 @@ static const luaL_Reg plain_methods[] = {
 /* ------------------------------------------------ callbacks into Lua -- */
 
 /* A table in the world's table under `name`, made if missing. */
-static int scratch_table(lua_State *L, int table_idx, const char *name)
+static int get_scratch_table(lua_State *L, int table_idx, const char *name)
 {
     if (lua_getfield(L, table_idx, name) != LUA_TTABLE) {
         lua_pop(L, 1);
@@ -549,7 +559,7 @@ static int scratch_table(lua_State *L, int table_idx, const char *name)
     return lua_gettop(L);
 }
 
-static void fill(lua_State *L, int table_idx, const double *values, size_t n)
+static void fill_array(lua_State *L, int table_idx, const double *values, size_t n)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
@@ -559,7 +569,7 @@ static void fill(lua_State *L, int table_idx, const double *values, size_t n)
 }
 
 /* Add the numbers of the table at idx, 1..n, to out. */
-static void add_back(lua_State *L, int table_idx, double *out, size_t n, const char *what)
+static void add_from_table(lua_State *L, int table_idx, double *out, size_t n, const char *what)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
@@ -574,118 +584,126 @@ static void add_back(lua_State *L, int table_idx, double *out, size_t n, const c
     }
 }
 
-typedef struct force_call { lua_callback *cb; const tb_force_args *args; } force_call;
-typedef struct field_call { lua_callback *cb; const tb_field_args *args; } field_call;
+/* What run_force and run_field get through lua_pcall, as light userdata. */
+typedef struct tl_force_call { tl_callback *cb; const tb_force_args *args; } tl_force_call;
+typedef struct tl_field_call { tl_callback *cb; const tb_field_args *args; } tl_field_call;
 
-/* Protected body of a Lua force: (call record, the world's table).
+/* Call a Lua force, under lua_pcall: (call record, the world's table).
    fn(t, state, forces, body_forces, body_torques): state = {n, pos, vel,
    mass, bodies = {n, pos, rot, vel, omega, mass}} in flat arrays; forces,
    body_forces and body_torques flat arrays of zeros to add to. */
-static int force_body(lua_State *L)
+static int run_force(lua_State *L)
 {
-    force_call *c = lua_touserdata(L, 1);
+    tl_force_call *c = lua_touserdata(L, 1);
     const tb_force_args *a = c->args;
     const int t = 2; /* the world's table */
     int state;
     lua_rawgeti(L, t, c->cb->key);
     lua_pushnumber(L, a->time);
-    state = scratch_table(L, t, "force_state");
+    state = get_scratch_table(L, t, "force_state");
     lua_pushinteger(L, (lua_Integer)a->count);
     lua_setfield(L, state, "n");
-    fill(L, scratch_table(L, state, "pos"), a->positions, 3 * a->count);
-    fill(L, scratch_table(L, state, "vel"), a->velocities, 3 * a->count);
-    fill(L, scratch_table(L, state, "mass"), a->masses, a->count);
+    fill_array(L, get_scratch_table(L, state, "pos"), a->positions, 3 * a->count);
+    fill_array(L, get_scratch_table(L, state, "vel"), a->velocities, 3 * a->count);
+    fill_array(L, get_scratch_table(L, state, "mass"), a->masses, a->count);
     lua_settop(L, state);
     {
-        int bodies = scratch_table(L, state, "bodies");
+        int bodies = get_scratch_table(L, state, "bodies");
         lua_pushinteger(L, (lua_Integer)a->body_count);
         lua_setfield(L, bodies, "n");
-        fill(L, scratch_table(L, bodies, "pos"), a->body_positions, 3 * a->body_count);
-        fill(L, scratch_table(L, bodies, "rot"), a->body_orientations, 4 * a->body_count);
-        fill(L, scratch_table(L, bodies, "vel"), a->body_velocities, 3 * a->body_count);
-        fill(L, scratch_table(L, bodies, "omega"), a->body_angular_velocities, 3 * a->body_count);
-        fill(L, scratch_table(L, bodies, "mass"), a->body_masses, a->body_count);
+        fill_array(L, get_scratch_table(L, bodies, "pos"), a->body_positions, 3 * a->body_count);
+        fill_array(L, get_scratch_table(L, bodies, "rot"), a->body_orientations, 4 * a->body_count);
+        fill_array(L, get_scratch_table(L, bodies, "vel"), a->body_velocities, 3 * a->body_count);
+        fill_array(L, get_scratch_table(L, bodies, "omega"), a->body_angular_velocities, 3 * a->body_count);
+        fill_array(L, get_scratch_table(L, bodies, "mass"), a->body_masses, a->body_count);
         lua_settop(L, state);
     }
-    fill(L, scratch_table(L, t, "force_out"), NULL, 3 * a->count);
-    fill(L, scratch_table(L, t, "body_force_out"), NULL, 3 * a->body_count);
-    fill(L, scratch_table(L, t, "body_torque_out"), NULL, 3 * a->body_count);
+    fill_array(L, get_scratch_table(L, t, "force_out"), NULL, 3 * a->count);
+    fill_array(L, get_scratch_table(L, t, "body_force_out"), NULL, 3 * a->body_count);
+    fill_array(L, get_scratch_table(L, t, "body_torque_out"), NULL, 3 * a->body_count);
     lua_call(L, 5, 0);
     lua_getfield(L, t, "force_out");
-    add_back(L, lua_gettop(L), a->forces, 3 * a->count, "forces");
+    add_from_table(L, lua_gettop(L), a->forces, 3 * a->count, "forces");
     if (a->body_count) {
         lua_getfield(L, t, "body_force_out");
-        add_back(L, lua_gettop(L), a->body_forces, 3 * a->body_count, "body_forces");
+        add_from_table(L, lua_gettop(L), a->body_forces, 3 * a->body_count, "body_forces");
         lua_getfield(L, t, "body_torque_out");
-        add_back(L, lua_gettop(L), a->body_torques, 3 * a->body_count, "body_torques");
+        add_from_table(L, lua_gettop(L), a->body_torques, 3 * a->body_count, "body_torques");
     }
     return 0;
 }
 
-/* fn(t, pos, vel): pos flat positions, vel a flat array of 3n zeros to add to. */
-static int field_body(lua_State *L)
+/* Call a Lua field, under lua_pcall: (call record, the world's table).
+   fn(t, pos, vel): pos flat positions, vel a flat array of 3n zeros to add to. */
+static int run_field(lua_State *L)
 {
-    field_call *c = lua_touserdata(L, 1);
+    tl_field_call *c = lua_touserdata(L, 1);
     const tb_field_args *a = c->args;
     const int t = 2; /* the world's table */
     int vel;
     lua_rawgeti(L, t, c->cb->key);
     lua_pushnumber(L, a->time);
-    fill(L, scratch_table(L, t, "field_pos"), a->positions, 3 * a->count);
-    vel = scratch_table(L, t, "field_out");
-    fill(L, vel, NULL, 3 * a->count);
+    fill_array(L, get_scratch_table(L, t, "field_pos"), a->positions, 3 * a->count);
+    vel = get_scratch_table(L, t, "field_out");
+    fill_array(L, vel, NULL, 3 * a->count);
     lua_call(L, 3, 0);
     lua_getfield(L, t, "field_out");
-    add_back(L, lua_gettop(L), a->velocities, 3 * a->count, "vel");
+    add_from_table(L, lua_gettop(L), a->velocities, 3 * a->count, "vel");
     return 0;
 }
 
-static tb_status call_protected(lua_callback *cb, lua_CFunction body, void *call, char *message)
+/* Run `run` (run_force or run_field) on the thread stepping the world, with
+   a traceback handler; a Lua error becomes TB_ERR_CALLBACK and its first
+   line the message. */
+static tb_status run_protected(tl_callback *cb, lua_CFunction run, void *call, char *message)
 {
     lua_State *L = cb->owner->L;
     int top, rc;
     if (!L) {
-        first_line(message, TB_MESSAGE_SIZE, "a Lua callback ran outside tb_lua_step (use it to step Lua worlds)");
+        copy_first_line(message, TB_MESSAGE_SIZE,
+                        "a Lua callback ran outside tb_lua_step (use it to step Lua worlds)");
         return TB_ERR_CALLBACK;
     }
     if (!lua_checkstack(L, 8)) {
-        first_line(message, TB_MESSAGE_SIZE, "Lua stack overflow");
+        copy_first_line(message, TB_MESSAGE_SIZE, "Lua stack overflow");
         return TB_ERR_CALLBACK;
     }
     top = lua_gettop(L);
-    lua_pushcfunction(L, traceback);
-    lua_pushcfunction(L, body);
+    lua_pushcfunction(L, add_traceback);
+    lua_pushcfunction(L, run);
     lua_pushlightuserdata(L, call);
     /* Stack indices belong to a call frame: fetch the world's table here, in
-       the frame that tb_lua_step was called from, and hand it to the body. */
+       the frame that tb_lua_step was called from, and hand it to `run`. */
     lua_getiuservalue(L, cb->owner->index, 1);
     rc = lua_pcall(L, 2, 0, top + 1);
     if (rc != LUA_OK)
-        first_line(message, TB_MESSAGE_SIZE, lua_tostring(L, -1));
+        copy_first_line(message, TB_MESSAGE_SIZE, lua_tostring(L, -1));
     lua_settop(L, top);
     return rc == LUA_OK ? TB_OK : TB_ERR_CALLBACK;
 }
 
-static tb_status lua_force(const tb_force_args *args, void *user)
+/* The tb_force_fn and tb_field_fn the core holds for a Lua function; user
+   is its tl_callback. */
+static tb_status call_lua_force(const tb_force_args *args, void *user)
 {
-    force_call c;
+    tl_force_call c;
     c.cb = user;
     c.args = args;
-    return call_protected(c.cb, force_body, &c, args->message);
+    return run_protected(c.cb, run_force, &c, args->message);
 }
 
-static tb_status lua_field(const tb_field_args *args, void *user)
+static tb_status call_lua_field(const tb_field_args *args, void *user)
 {
-    field_call c;
+    tl_field_call c;
     c.cb = user;
     c.args = args;
-    return call_protected(c.cb, field_body, &c, args->message);
+    return run_protected(c.cb, run_field, &c, args->message);
 }
 
 /* Store the function at fn_idx in the world's table; returns the record. */
-static lua_callback *keep_callback(lua_State *L, int world_idx, lua_world *lw, int fn_idx)
+static tl_callback *keep_callback(lua_State *L, int world_idx, tl_world *lw, int fn_idx)
 {
-    lua_callback *cb;
+    tl_callback *cb;
     int key = ++lw->next_key;
     lua_getiuservalue(L, world_idx, 1);
     lua_pushvalue(L, fn_idx);
@@ -714,11 +732,11 @@ static void read_drag(lua_State *L, int idx, const char *fname, double *linear, 
     opt_number(L, idx, "quadratic", fname, quadratic);
 }
 
-static int world_new(lua_State *L)
+static int module_world(lua_State *L)
 {
     tb_world_def def = tb_default_world_def();
     char message[TB_MESSAGE_SIZE];
-    lua_world *lw;
+    tl_world *lw;
     double dt = 1.0 / 60;
     int top;
     if (lua_isnoneornil(L, 1))
@@ -762,7 +780,7 @@ static int world_new(lua_State *L)
 
 static int world_close(lua_State *L)
 {
-    lua_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    tl_world *lw = luaL_checkudata(L, 1, WORLD_MT);
     if (lw->L)
         return luaL_error(L, "tumble: cannot close a world while it is stepping");
     tb_world_destroy(lw->world);
@@ -772,7 +790,7 @@ static int world_close(lua_State *L)
 
 static int world_gc(lua_State *L)
 {
-    lua_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    tl_world *lw = luaL_checkudata(L, 1, WORLD_MT);
     tb_world_destroy(lw->world);
     lw->world = NULL;
     return 0;
@@ -780,7 +798,7 @@ static int world_gc(lua_State *L)
 
 static int world_tostring(lua_State *L)
 {
-    lua_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    tl_world *lw = luaL_checkudata(L, 1, WORLD_MT);
     if (!lw->world)
         lua_pushliteral(L, "tumble.world (closed)");
     else
@@ -793,7 +811,7 @@ static int world_tostring(lua_State *L)
 
 static int world_particle(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     tb_particle_def def = tb_default_particle_def();
     tb_particle_id id;
     check_options(L, 2, "world:particle", particle_options);
@@ -804,23 +822,30 @@ static int world_particle(lua_State *L)
     def.pinned = lua_toboolean(L, -1);
     lua_pop(L, 1);
     if (tb_world_add_particle(lw->world, &def, &id) != TB_OK)
-        return fail(L, lw, "world:particle");
+        return raise_world_error(L, lw, "world:particle");
     push_handle(L, 1, H_PARTICLE, id.index1, id.generation, 0);
     return 1;
 }
 
 static int world_tracer(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     tb_tracer_def def = tb_default_tracer_def();
     tb_tracer_id id;
     check_options(L, 2, "world:tracer", tracer_options);
     opt_vec3(L, 2, "pos", "world:tracer", def.position);
     if (tb_world_add_tracer(lw->world, &def, &id) != TB_OK)
-        return fail(L, lw, "world:tracer");
+        return raise_world_error(L, lw, "world:tracer");
     push_handle(L, 1, H_TRACER, id.index1, id.generation, 0);
     return 1;
 }
+
+/* The key of a body table that gives the body's mass properties, in the
+   order of read_mass's keys[]; MASS_DEFAULT when the table gives none. */
+enum tl_mass_source {
+    MASS_DEFAULT = -1,
+    MASS_SPHERE, MASS_BOX, MASS_CYLINDER, MASS_CAPSULE, MASS_POINTS, MASS_MESH, MASS_INERTIA, MASS_SOURCES
+};
 
 /* Mass properties from a body definition table: `inertia = {I1, I2, I3}`
    (principal moments, with `mass`), or one shape (`sphere = r`,
@@ -829,30 +854,31 @@ static int world_tracer(lua_State *L)
    {...}}` with 1-based indices) with `density` or `mass`. */
 static void read_mass(lua_State *L, int idx, tb_mass *m)
 {
-    static const char *const shapes[] = { "sphere", "box", "cylinder", "capsule", "points", "mesh", "inertia" };
+    static const char *const keys[MASS_SOURCES] = { "sphere", "box", "cylinder", "capsule", "points", "mesh",
+                                                    "inertia" };
     const char *fname = "world:body";
     char message[TB_MESSAGE_SIZE];
     double density = 1, total = 0, I[3], v[3];
     int has_density = opt_number(L, idx, "density", fname, &density);
     int has_mass = opt_number(L, idx, "mass", fname, &total);
-    int k, found = -1, top = lua_gettop(L);
+    int k, found = MASS_DEFAULT, top = lua_gettop(L);
     tb_status st = TB_OK;
-    for (k = 0; k < 7; ++k) {
-        if (lua_getfield(L, idx, shapes[k]) != LUA_TNIL) {
-            if (found >= 0)
-                luaL_error(L, "%s: give one shape, not both '%s' and '%s'", fname, shapes[found], shapes[k]);
+    for (k = 0; k < MASS_SOURCES; ++k) {
+        if (lua_getfield(L, idx, keys[k]) != LUA_TNIL) {
+            if (found != MASS_DEFAULT)
+                luaL_error(L, "%s: give one shape, not both '%s' and '%s'", fname, keys[found], keys[k]);
             found = k;
         }
         lua_pop(L, 1);
     }
     if (has_density && has_mass)
         luaL_error(L, "%s: give 'density' or 'mass', not both", fname);
-    if (found < 0) { /* the default body, perhaps with another mass */
+    if (found == MASS_DEFAULT) { /* perhaps scaled to another mass below */
         tb_body_def d = tb_default_body_def();
         *m = d.mass;
         if (has_density)
             luaL_error(L, "%s: 'density' needs a shape", fname);
-    } else if (found == 6) {
+    } else if (found == MASS_INERTIA) {
         lua_getfield(L, idx, "inertia");
         read_vec3(L, lua_gettop(L), fname, "inertia", I);
         if (has_density)
@@ -863,25 +889,26 @@ static void read_mass(lua_State *L, int idx, tb_mass *m)
         m->frame[0] = 1;
         has_mass = 0;
     } else {
-        lua_getfield(L, idx, shapes[found]);
-        /* (lua_rawgeti and lua_rawlen read no further than they are told:
-           a string here would be read as a table) */
-        if (found >= 2 && found <= 4 && !lua_istable(L, -1))
-            luaL_error(L, "%s: '%s' must be a table (got %s)", fname, shapes[found], luaL_typename(L, -1));
-        if (found == 0) {
+        lua_getfield(L, idx, keys[found]);
+        /* lua_rawgeti and lua_rawlen need a table and do not check for one,
+           so the sources read with them are checked here. */
+        if ((found == MASS_CYLINDER || found == MASS_CAPSULE || found == MASS_POINTS) && !lua_istable(L, -1))
+            luaL_error(L, "%s: '%s' must be a table (got %s)", fname, keys[found], luaL_typename(L, -1));
+        if (found == MASS_SPHERE) {
             st = tb_mass_sphere(density, luaL_checknumber(L, -1), m, message);
-        } else if (found == 1) {
+        } else if (found == MASS_BOX) {
             read_vec3(L, lua_gettop(L), fname, "box", v);
             st = tb_mass_box(density, v, m, message);
-        } else if (found == 2 || found == 3) {
+        } else if (found == MASS_CYLINDER || found == MASS_CAPSULE) {
             double r, l;
             lua_rawgeti(L, -1, 1);
             lua_rawgeti(L, -2, 2);
             r = luaL_checknumber(L, -2);
             l = luaL_checknumber(L, -1);
             lua_pop(L, 2);
-            st = found == 2 ? tb_mass_cylinder(density, r, l, m, message) : tb_mass_capsule(density, r, l, m, message);
-        } else if (found == 4) {
+            st = found == MASS_CYLINDER ? tb_mass_cylinder(density, r, l, m, message)
+                                        : tb_mass_capsule(density, r, l, m, message);
+        } else if (found == MASS_POINTS) {
             size_t n = lua_rawlen(L, -1), i;
             double *pos = lua_newuserdatauv(L, 4 * n * sizeof(double) + 1, 0), *mass = pos + 3 * n;
             for (i = 0; i < n; ++i) {
@@ -897,7 +924,7 @@ static void read_mass(lua_State *L, int idx, tb_mass *m)
                 lua_pop(L, 1);
             }
             st = tb_mass_points(n, pos, mass, m, message);
-        } else {
+        } else { /* MASS_MESH */
             int mesh = lua_gettop(L);
             size_t nv, nt, i;
             double *vertices;
@@ -943,7 +970,7 @@ static const char *const body_options[] = {
 
 static int world_body(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     tb_body_def def = tb_default_body_def();
     tb_body_id id;
     check_options(L, 2, "world:body", body_options);
@@ -957,7 +984,7 @@ static int world_body(lua_State *L)
     opt_number(L, 2, "linear_damping", "world:body", &def.linear_damping);
     opt_number(L, 2, "angular_damping", "world:body", &def.angular_damping);
     if (tb_world_add_body(lw->world, &def, &id) != TB_OK)
-        return fail(L, lw, "world:body");
+        return raise_world_error(L, lw, "world:body");
     push_handle(L, 1, H_BODY, id.index1, id.generation, 0);
     return 1;
 }
@@ -973,7 +1000,7 @@ static const char *const shape_options[] = { "type", "body", "pos", "rot", "radi
 static int world_shape(lua_State *L)
 {
     static const char *const types[] = { "sphere", "capsule", "box", "plane", NULL };
-    lua_world *lw = to_world(L, 1), *other;
+    tl_world *lw = check_world(L, 1), *other;
     tb_shape_def def = tb_default_shape_def();
     tb_shape_id id;
     double bits;
@@ -982,10 +1009,10 @@ static int world_shape(lua_State *L)
     def.type = (tb_shape_type)luaL_checkoption(L, -1, NULL, types);
     lua_pop(L, 1);
     if (lua_getfield(L, 2, "body") != LUA_TNIL) {
-        lua_handle *b = check_handle(L, lua_gettop(L), H_BODY, &other);
+        tl_handle *b = check_handle(L, lua_gettop(L), H_BODY, &other);
         if (other != lw)
             return luaL_error(L, "world:shape: the body belongs to another world");
-        def.body = body_id(b);
+        def.body = to_body_id(b);
     }
     lua_pop(L, 1);
     opt_vec3(L, 2, "pos", "world:shape", def.position);
@@ -1007,7 +1034,7 @@ static int world_shape(lua_State *L)
     opt_number(L, 2, "mask", "world:shape", &bits);
     def.mask = (uint32_t)bits;
     if (tb_world_add_shape(lw->world, &def, &id) != TB_OK)
-        return fail(L, lw, "world:shape");
+        return raise_world_error(L, lw, "world:shape");
     push_handle(L, 1, H_SHAPE, id.index1, id.generation, 0);
     return 1;
 }
@@ -1025,7 +1052,7 @@ static const char *const contact_options[] = { "hertz", "damping_ratio", "max_pu
 
 static int world_contacts(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     tb_contact_settings cs = tb_world_contact_settings(lw->world);
     double vi = cs.velocity_iterations, pi = cs.position_iterations, si = cs.stack_iterations;
     check_options(L, 2, "world:contacts", contact_options);
@@ -1047,7 +1074,7 @@ static int world_contacts(lua_State *L)
     cs.position_iterations = pi >= 0 && pi < 1e6 ? (int)pi : -1;
     cs.stack_iterations = si >= 0 && si < 1e6 ? (int)si : -1;
     if (tb_world_set_contact_settings(lw->world, &cs) != TB_OK)
-        return fail(L, lw, "world:contacts");
+        return raise_world_error(L, lw, "world:contacts");
     return 0;
 }
 
@@ -1058,7 +1085,7 @@ static int world_contacts(lua_State *L)
 static int world_events(lua_State *L)
 {
     size_t n, i;
-    const tb_contact_event *ev = tb_world_contact_events(to_world(L, 1)->world, &n);
+    const tb_contact_event *ev = tb_world_contact_events(check_world(L, 1)->world, &n);
     lua_createtable(L, (int)n, 0);
     for (i = 0; i < n; ++i) {
         lua_createtable(L, 0, 7);
@@ -1088,20 +1115,20 @@ static int world_events(lua_State *L)
 /* world:spring(a, b_or_point, {k = N/m, damping = N s/m, rest = m}) */
 static int world_spring(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1), *other;
+    tl_world *lw = check_world(L, 1), *other;
     tb_spring_def def = tb_default_spring_def();
     tb_spring_id id;
-    lua_handle *a = check_handle(L, 2, H_PARTICLE, &other);
+    tl_handle *a = check_handle(L, 2, H_PARTICLE, &other);
     if (other != lw)
         return luaL_error(L, "world:spring: particle a belongs to another world");
-    def.a = particle_id(a);
+    def.a = to_particle_id(a);
     if (lua_type(L, 3) == LUA_TTABLE) {
         read_vec3(L, 3, "world:spring", "anchor", def.anchor);
     } else {
-        lua_handle *b = check_handle(L, 3, H_PARTICLE, &other);
+        tl_handle *b = check_handle(L, 3, H_PARTICLE, &other);
         if (other != lw)
             return luaL_error(L, "world:spring: particle b belongs to another world");
-        def.b = particle_id(b);
+        def.b = to_particle_id(b);
     }
     if (!lua_isnoneornil(L, 4)) {
         check_options(L, 4, "world:spring", spring_options);
@@ -1110,32 +1137,32 @@ static int world_spring(lua_State *L)
         opt_number(L, 4, "rest", "world:spring", &def.rest_length);
     }
     if (tb_world_add_spring(lw->world, &def, &id) != TB_OK)
-        return fail(L, lw, "world:spring");
+        return raise_world_error(L, lw, "world:spring");
     push_handle(L, 1, H_SPRING, id.index1, id.generation, 0);
     return 1;
 }
 
 static int world_drag(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     double linear = 0, quadratic = 0;
     read_drag(L, 2, "world:drag", &linear, &quadratic);
     if (tb_world_set_drag(lw->world, linear, quadratic) != TB_OK)
-        return fail(L, lw, "world:drag");
+        return raise_world_error(L, lw, "world:drag");
     return 0;
 }
 
 /* world:field{uniform = v} | world:field{vortex = omega, centre = c} | world:field(fn) */
 static int world_field(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     tb_field_id id;
     tb_status st;
     int key = 0;
     if (lua_type(L, 2) == LUA_TFUNCTION) {
-        lua_callback *cb = keep_callback(L, 1, lw, 2);
+        tl_callback *cb = keep_callback(L, 1, lw, 2);
         key = cb->key;
-        st = tb_world_add_field(lw->world, lua_field, cb, &id);
+        st = tb_world_add_field(lw->world, call_lua_field, cb, &id);
         if (st != TB_OK)
             forget_callback(L, 1, key);
     } else {
@@ -1150,21 +1177,21 @@ static int world_field(lua_State *L)
             return luaL_error(L, "world:field: give {uniform = {x, y, z}}, {vortex = omega, centre = c} or a function");
     }
     if (st != TB_OK)
-        return fail(L, lw, "world:field");
+        return raise_world_error(L, lw, "world:field");
     push_handle(L, 1, H_FIELD, id.index1, id.generation, key);
     return 1;
 }
 
 static int world_force(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
-    lua_callback *cb;
+    tl_world *lw = check_world(L, 1);
+    tl_callback *cb;
     tb_force_id id;
     luaL_checktype(L, 2, LUA_TFUNCTION);
     cb = keep_callback(L, 1, lw, 2);
-    if (tb_world_add_force(lw->world, lua_force, cb, &id) != TB_OK) {
+    if (tb_world_add_force(lw->world, call_lua_force, cb, &id) != TB_OK) {
         forget_callback(L, 1, cb->key);
-        return fail(L, lw, "world:force");
+        return raise_world_error(L, lw, "world:force");
     }
     push_handle(L, 1, H_FORCE, id.index1, id.generation, cb->key);
     return 1;
@@ -1172,28 +1199,28 @@ static int world_force(lua_State *L)
 
 static int world_step(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     double h = luaL_optnumber(L, 2, lw->dt);
     if (tb_lua_step(L, 1, h) != TB_OK)
-        return fail(L, lw, "world:step");
+        return raise_world_error(L, lw, "world:step");
     return 0;
 }
 
 static int world_time(lua_State *L)
 {
-    lua_pushnumber(L, tb_world_time(to_world(L, 1)->world));
+    lua_pushnumber(L, tb_world_time(check_world(L, 1)->world));
     return 1;
 }
 
 static int world_dt(lua_State *L)
 {
-    lua_pushnumber(L, to_world(L, 1)->dt);
+    lua_pushnumber(L, check_world(L, 1)->dt);
     return 1;
 }
 
 static int world_set_dt(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     double dt = luaL_checknumber(L, 2);
     if (!(isfinite(dt) && dt > 0))
         return luaL_error(L, "world:set_dt: step must be finite and > 0 (got %f)", dt);
@@ -1203,33 +1230,33 @@ static int world_set_dt(lua_State *L)
 
 static int world_integrator(lua_State *L)
 {
-    lua_pushstring(L, tb_world_integrator(to_world(L, 1)->world));
+    lua_pushstring(L, tb_world_integrator(check_world(L, 1)->world));
     return 1;
 }
 
 static int world_set_integrator(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     if (tb_world_set_integrator(lw->world, luaL_checkstring(L, 2)) != TB_OK)
-        return fail(L, lw, "world:set_integrator");
+        return raise_world_error(L, lw, "world:set_integrator");
     return 0;
 }
 
 static int world_set_tolerance(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     if (tb_world_set_tolerance(lw->world, luaL_checknumber(L, 2)) != TB_OK)
-        return fail(L, lw, "world:set_tolerance");
+        return raise_world_error(L, lw, "world:set_tolerance");
     return 0;
 }
 
 /* world:set_guard(true | false | factor) */
 static int world_set_guard(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     const double g = lua_isboolean(L, 2) ? (lua_toboolean(L, 2) ? HUGE_VAL : 0) : luaL_checknumber(L, 2);
     if (tb_world_set_guard(lw->world, g) != TB_OK)
-        return fail(L, lw, "world:set_guard");
+        return raise_world_error(L, lw, "world:set_guard");
     return 0;
 }
 
@@ -1237,7 +1264,7 @@ static int world_set_guard(lua_State *L)
 static int world_auto_choice(lua_State *L)
 {
     long substeps;
-    const char *name = tb_world_auto_choice(to_world(L, 1)->world, &substeps);
+    const char *name = tb_world_auto_choice(check_world(L, 1)->world, &substeps);
     if (!name)
         return 0;
     lua_pushstring(L, name);
@@ -1248,23 +1275,23 @@ static int world_auto_choice(lua_State *L)
 static int world_gravity(lua_State *L)
 {
     double g[3];
-    tb_world_gravity(to_world(L, 1)->world, g);
+    tb_world_gravity(check_world(L, 1)->world, g);
     return push_vec3(L, g);
 }
 
 static int world_set_gravity(lua_State *L)
 {
-    lua_world *lw = to_world(L, 1);
+    tl_world *lw = check_world(L, 1);
     double g[3];
-    vec3_args(L, 2, "world:set_gravity", g);
+    read_vec3_args(L, 2, "world:set_gravity", g);
     if (tb_world_set_gravity(lw->world, g) != TB_OK)
-        return fail(L, lw, "world:set_gravity");
+        return raise_world_error(L, lw, "world:set_gravity");
     return 0;
 }
 
 static int world_energy(lua_State *L)
 {
-    tb_energy e = tb_world_energy(to_world(L, 1)->world);
+    tb_energy e = tb_world_energy(check_world(L, 1)->world);
     lua_createtable(L, 0, 5);
     lua_pushnumber(L, e.kinetic);
     lua_setfield(L, -2, "kinetic");
@@ -1282,21 +1309,21 @@ static int world_energy(lua_State *L)
 static int world_momentum(lua_State *L)
 {
     double p[3];
-    tb_world_momentum(to_world(L, 1)->world, p);
+    tb_world_momentum(check_world(L, 1)->world, p);
     return push_vec3(L, p);
 }
 
 static int world_angular_momentum(lua_State *L)
 {
     double l[3];
-    tb_world_angular_momentum(to_world(L, 1)->world, l);
+    tb_world_angular_momentum(check_world(L, 1)->world, l);
     return push_vec3(L, l);
 }
 
 /* particles, tracers, springs, bodies */
 static int world_counts(lua_State *L)
 {
-    tb_world *w = to_world(L, 1)->world;
+    tb_world *w = check_world(L, 1)->world;
     lua_pushinteger(L, (lua_Integer)tb_world_particle_count(w));
     lua_pushinteger(L, (lua_Integer)tb_world_tracer_count(w));
     lua_pushinteger(L, (lua_Integer)tb_world_spring_count(w));
@@ -1320,7 +1347,7 @@ static const luaL_Reg world_methods[] = {
 
 /* ------------------------------------------------------------- module -- */
 
-static int integrators(lua_State *L)
+static int module_integrators(lua_State *L)
 {
     int i, n = tb_integrator_count();
     lua_createtable(L, n, 0);
@@ -1331,7 +1358,7 @@ static int integrators(lua_State *L)
     return 1;
 }
 
-static void new_metatable(lua_State *L, const char *name, const luaL_Reg *methods)
+static void create_metatable(lua_State *L, const char *name, const luaL_Reg *methods)
 {
     luaL_newmetatable(L, name);
     lua_newtable(L);
@@ -1343,13 +1370,15 @@ static void new_metatable(lua_State *L, const char *name, const luaL_Reg *method
 
 int luaopen_tumble(lua_State *L)
 {
-    static const luaL_Reg funcs[] = { { "world", world_new }, { "integrators", integrators }, { NULL, NULL } };
+    static const luaL_Reg funcs[] = {
+        { "world", module_world }, { "integrators", module_integrators }, { NULL, NULL }
+    };
     static const luaL_Reg *const kind_methods[H_KINDS] = {
         particle_methods, tracer_methods, plain_methods, plain_methods, plain_methods, body_methods,
         plain_methods
     };
     int k;
-    new_metatable(L, WORLD_MT, world_methods);
+    create_metatable(L, WORLD_MT, world_methods);
     lua_pushcfunction(L, world_gc);
     lua_setfield(L, -2, "__gc");
     lua_pushcfunction(L, world_close);
@@ -1358,7 +1387,7 @@ int luaopen_tumble(lua_State *L)
     lua_setfield(L, -2, "__tostring");
     lua_pop(L, 1);
     for (k = 0; k < H_KINDS; ++k) {
-        new_metatable(L, handle_mt[k], kind_methods[k]);
+        create_metatable(L, handle_mt[k], kind_methods[k]);
         lua_pushcfunction(L, handle_tostring);
         lua_setfield(L, -2, "__tostring");
         lua_pushcfunction(L, handle_eq);
@@ -1375,25 +1404,25 @@ int luaopen_tumble(lua_State *L)
 
 tb_world *tb_lua_check_world(lua_State *L, int idx)
 {
-    return to_world(L, idx)->world;
+    return check_world(L, idx)->world;
 }
 
 tb_world *tb_lua_to_world(lua_State *L, int idx)
 {
-    lua_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
     return lw ? lw->world : NULL;
 }
 
 double tb_lua_world_dt(lua_State *L, int idx)
 {
-    lua_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
     return lw && lw->world ? lw->dt : 0;
 }
 
 /* Run a core call with the world's Lua callbacks pointed at (L, idx). */
-static tb_status with_callbacks(lua_State *L, int idx, double h, double *velocities)
+static tb_status run_with_callbacks(lua_State *L, int idx, double h, double *velocities)
 {
-    lua_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
     tb_status st;
     if (!lw || !lw->world)
         return TB_ERR_ARGUMENT;
@@ -1408,10 +1437,10 @@ static tb_status with_callbacks(lua_State *L, int idx, double h, double *velocit
 
 tb_status tb_lua_step(lua_State *L, int idx, double h)
 {
-    return with_callbacks(L, idx, h, NULL);
+    return run_with_callbacks(L, idx, h, NULL);
 }
 
 tb_status tb_lua_tracer_velocities(lua_State *L, int idx, double *velocities)
 {
-    return with_callbacks(L, idx, 0, velocities);
+    return run_with_callbacks(L, idx, 0, velocities);
 }

@@ -1,6 +1,7 @@
 /* tumble_main.c: the `tumble` command. Runs a Lua scene script and writes
    its trajectory as CSV. Errors are one line on stderr and a non-zero exit;
-   the output file appears only when the whole run succeeded. */
+   the output file appears only when the whole run succeeded. Static
+   functions are named as in tumble_lua.c: each starts with a verb. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include "tumble_lua.h"
 
@@ -96,7 +97,7 @@ static int parse_number(const char *flag, const char *text, double *out, int all
     return 0;
 }
 
-static int parse(int argc, char **argv, options *o)
+static int parse_arguments(int argc, char **argv, options *o)
 {
     int i, rc;
     memset(o, 0, sizeof *o);
@@ -156,7 +157,7 @@ static int parse(int argc, char **argv, options *o)
     return 0;
 }
 
-static int message_handler(lua_State *L)
+static int add_traceback(lua_State *L)
 {
     const char *msg = lua_tostring(L, 1);
     if (!msg)
@@ -166,7 +167,7 @@ static int message_handler(lua_State *L)
 }
 
 /* Print the first line of the Lua error on top of the stack. */
-static int lua_die(lua_State *L, const char *prefix)
+static int die_with_lua_error(lua_State *L, const char *prefix)
 {
     const char *msg = lua_tostring(L, -1);
     size_t n = strcspn(msg ? msg : "", "\n");
@@ -175,7 +176,7 @@ static int lua_die(lua_State *L, const char *prefix)
 }
 
 /* Read the whole file: scenes load as text, never as bytecode. */
-static char *slurp(const char *path, size_t *size)
+static char *read_file(const char *path, size_t *size)
 {
     FILE *f = fopen(path, "rb");
     char *buf = NULL;
@@ -205,7 +206,7 @@ static char *slurp(const char *path, size_t *size)
     return buf;
 }
 
-static double now(void)
+static double read_clock(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -213,7 +214,7 @@ static double now(void)
 }
 
 /* Rows for every object at the current time. Returns rows written or -1. */
-static long record(FILE *f, lua_State *L, int world_idx, tb_world *w, double **tracer_vel, size_t *cap)
+static long record_rows(FILE *f, lua_State *L, int world_idx, tb_world *w, double **tracer_vel, size_t *cap)
 {
     const double t = tb_world_time(w);
     size_t i, n = tb_world_tracer_count(w);
@@ -261,7 +262,7 @@ static long record(FILE *f, lua_State *L, int world_idx, tb_world *w, double **t
 }
 
 /* The scene's name without directory and extension, plus ".csv". */
-static void default_out(const char *scene, char *out, size_t size)
+static void make_out_path(const char *scene, char *out, size_t size)
 {
     const char *base = strrchr(scene, '/'), *dot;
     size_t n;
@@ -271,7 +272,7 @@ static void default_out(const char *scene, char *out, size_t size)
     snprintf(out, size, "%.*s.csv", (int)n, base);
 }
 
-static double scene_number(lua_State *L, int idx, const char *key, double fallback, int *bad)
+static double read_scene_number(lua_State *L, int idx, const char *key, double fallback, int *bad)
 {
     double v = fallback;
     int isnum = 1;
@@ -283,7 +284,7 @@ static double scene_number(lua_State *L, int idx, const char *key, double fallba
     return v;
 }
 
-static int run(lua_State *L, const options *o)
+static int run_scene(lua_State *L, const options *o)
 {
     char out_path[4096], part_path[4200];
     size_t size, cap = 0;
@@ -296,18 +297,18 @@ static int run(lua_State *L, const options *o)
     tb_advice advice;
     FILE *f;
 
-    text = slurp(o->scene, &size);
+    text = read_file(o->scene, &size);
     if (!text)
         return die(1, "cannot read scene '%s'", o->scene);
-    lua_pushcfunction(L, message_handler);
+    lua_pushcfunction(L, add_traceback);
     lua_pushfstring(L, "@%s", o->scene);
     if (luaL_loadbufferx(L, text, size, lua_tostring(L, -1), "t") != LUA_OK) {
         free(text);
-        return lua_die(L, "");
+        return die_with_lua_error(L, "");
     }
     free(text);
     if (lua_pcall(L, 0, 1, 1) != LUA_OK)
-        return lua_die(L, "");
+        return die_with_lua_error(L, "");
     if (!lua_istable(L, -1))
         return die(1, "%s: the scene must return a table { world = w, duration = seconds }", o->scene);
     scene_idx = lua_gettop(L);
@@ -330,8 +331,8 @@ static int run(lua_State *L, const options *o)
         != TB_OK)
         return die(1, "%s", tb_world_message(w));
     dt = o->dt > 0 ? o->dt : tb_lua_world_dt(L, world_idx);
-    duration = o->until >= 0 ? o->until : scene_number(L, scene_idx, "duration", -1, &bad);
-    every = o->every >= 0 ? o->every : scene_number(L, scene_idx, "record_every", 1.0 / 60, &bad);
+    duration = o->until >= 0 ? o->until : read_scene_number(L, scene_idx, "duration", -1, &bad);
+    every = o->every >= 0 ? o->every : read_scene_number(L, scene_idx, "record_every", 1.0 / 60, &bad);
     if (bad || duration < 0)
         return die(1, "%s: the scene's table needs 'duration' (and 'record_every', if given) as seconds >= 0",
                    o->scene);
@@ -343,7 +344,7 @@ static int run(lua_State *L, const options *o)
     if (o->out)
         snprintf(out_path, sizeof out_path, "%s", o->out);
     else
-        default_out(o->scene, out_path, sizeof out_path);
+        make_out_path(o->scene, out_path, sizeof out_path);
     snprintf(part_path, sizeof part_path, "%s.part", out_path);
     /* Before running: would this step blow up? Warn, but run as asked. */
     have_advice = tb_world_advise(w, dt, &advice) == TB_OK;
@@ -355,8 +356,8 @@ static int run(lua_State *L, const options *o)
     fprintf(f, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n");
 
     e0 = tb_world_energy(w);
-    t0 = now();
-    r = record(f, L, world_idx, w, &tracer_vel, &cap);
+    t0 = read_clock();
+    r = record_rows(f, L, world_idx, w, &tracer_vel, &cap);
     for (step = 1; r >= 0 && step <= steps; ++step) {
         rows += r;
         r = 0;
@@ -365,9 +366,9 @@ static int run(lua_State *L, const options *o)
             break;
         }
         if (step % every_steps == 0 || step == steps)
-            r = record(f, L, world_idx, w, &tracer_vel, &cap);
+            r = record_rows(f, L, world_idx, w, &tracer_vel, &cap);
     }
-    wall = now() - t0;
+    wall = read_clock() - t0;
     free(tracer_vel);
     if (r < 0 || ferror(f) | fclose(f)) {
         remove(part_path);
@@ -410,7 +411,7 @@ int main(int argc, char **argv)
 {
     options o;
     lua_State *L;
-    int rc = parse(argc, argv, &o);
+    int rc = parse_arguments(argc, argv, &o);
     if (rc)
         return rc < 0 ? 0 : rc;
     L = luaL_newstate();
@@ -425,7 +426,7 @@ int main(int argc, char **argv)
     lua_pushinteger(L, 0);
     lua_call(L, 1, 0);
     lua_settop(L, 0);
-    rc = run(L, &o);
+    rc = run_scene(L, &o);
     lua_close(L);
     return rc;
 }

@@ -1,4 +1,6 @@
-/* tumble/base.h: export macro, version, status codes and allocator hooks. */
+/* tumble/base.h: what every other part of the API rests on: the export
+   macro, the version, status codes, the allocator hook and the size of a
+   message buffer. */
 #ifndef TUMBLE_BASE_H
 #define TUMBLE_BASE_H
 

@@ -1,7 +1,11 @@
-/* tumble/id.h: value ids. An id is an index into a per-world table plus a
-   generation counter: a removed object's id goes stale and every call that
-   gets it fails with TB_ERR_STALE_ID instead of touching another object.
-   The all-zero id is null. Ids are plain values: copy and compare freely. */
+/* tumble/id.h: value ids.
+
+   An id is an index into a per-world table plus a generation counter. A
+   removed object's id goes stale, and every call given a stale id fails with
+   TB_ERR_STALE_ID instead of touching another object. The all-zero id is
+   null ({0} in C, {} in C++). Ids are plain values: copy and compare them
+   freely; their fields are not part of the contract. This header needs
+   nothing else from tumble and may be included on its own. */
 #ifndef TUMBLE_ID_H
 #define TUMBLE_ID_H
 
@@ -12,7 +16,10 @@ typedef struct tb_particle_id { uint32_t index1; uint32_t generation; } tb_parti
 typedef struct tb_spring_id   { uint32_t index1; uint32_t generation; } tb_spring_id;
 typedef struct tb_body_id     { uint32_t index1; uint32_t generation; } tb_body_id;
 typedef struct tb_shape_id    { uint32_t index1; uint32_t generation; } tb_shape_id;
+typedef struct tb_field_id    { uint32_t index1; uint32_t generation; } tb_field_id;
+typedef struct tb_force_id    { uint32_t index1; uint32_t generation; } tb_force_id;
 
+/* Whether an id is null; whether two ids of one type name the same object. */
 #define TB_ID_IS_NULL(id) ((id).index1 == 0)
 #define TB_ID_EQUAL(a, b) ((a).index1 == (b).index1 && (a).generation == (b).generation)
 
