@@ -1,6 +1,6 @@
 /* bodies.c: rigid-body accuracy and throughput, tumble beside ODE.
 
-   Part 1, the intermediate-axis flip of NOTES.md: I = diag(1, 2, 3) kg m^2,
+   Part 1, the intermediate-axis flip of docs/notes.md: I = diag(1, 2, 3) kg m^2,
    w0 = (0.01, 5, 0.01) rad/s in the body frame, q0 = identity, no gravity,
    h = 1/60 s, 20 s. One line per tumble integrator and for ODE's
    dWorldStep (gyroscopic term on, its default):
@@ -286,7 +286,7 @@ static void part_flip(void)
                 any = 1;
             }
         printf("%s\n", any ? "" : " none");
-        printf("          %.2g times closer than ODE (%.2g rad); MuJoCo 4.0 RK4 (NOTES.md): |L| 1.7e-8, E 3.4e-8,\n"
+        printf("          %.2g times closer than ODE (%.2g rad); MuJoCo 4.0 RK4 (docs/notes.md): |L| 1.7e-8, E 3.4e-8,\n"
                "          2.3e-6 rad at ~1300 ns\n", err[METHOD_COUNT] / err[best], err[METHOD_COUNT]);
     }
     tumble_free(many[0].world);

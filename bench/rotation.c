@@ -1,5 +1,5 @@
 /* rotation.c: accuracy and cost of torque-free rotation on the
-   intermediate-axis flip (NOTES.md): I = diag(1, 2, 3) kg m^2,
+   intermediate-axis flip (docs/notes.md): I = diag(1, 2, 3) kg m^2,
    w0 = (0.01, 5, 0.01) rad/s in the body frame, q0 = identity, 20 s at
    h = 1/60 s.
 

@@ -1,5 +1,5 @@
 -- Reference scene "chain" of the work-precision benchmark
--- (bench/workprecision.c builds the same scene in C).
+-- (bench/workprecision/scenes.c builds the same scene in C).
 --
 -- A stiff chain: 20 beads of 10 g, 5 cm apart along x, joined by springs
 -- k = 2000 N/m (damping 0.05 N s/m, rest 5 cm), the first tied to an anchor

@@ -1,5 +1,5 @@
 -- Reference scene "cloth" of the work-precision benchmark
--- (bench/workprecision.c builds the same scene in C).
+-- (bench/workprecision/scenes.c builds the same scene in C).
 --
 -- A small cloth patch: 8 x 8 particles on a 0.5 m square (0.1 kg in all),
 -- lying flat 1.5 m up, held by the two corners of its first row,

@@ -1,5 +1,5 @@
 -- Reference scene "damped" of the work-precision benchmark
--- (bench/workprecision.c builds the same scene in C).
+-- (bench/workprecision/scenes.c builds the same scene in C).
 --
 -- The hanging oscillator of oscillator.lua (m = 0.5 kg, k = 50 N/m, rest
 -- 1 m, w = 10 rad/s, released A = 0.2 m below equilibrium) with a damped

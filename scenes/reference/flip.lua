@@ -1,7 +1,7 @@
 -- Reference scene "flip" of the work-precision benchmark
--- (bench/workprecision.c builds the same scene in C).
+-- (bench/workprecision/scenes.c builds the same scene in C).
 --
--- The intermediate-axis (Dzhanibekov) flip of ../shared/NOTES.md: a 1 kg
+-- The intermediate-axis (Dzhanibekov) flip of docs/notes.md: a 1 kg
 -- body with principal moments I = diag(1, 2, 3) kg m^2, spun at
 -- w0 = (0.01, 5, 0.01) rad/s (body frame, q0 = identity), torque-free and
 -- without gravity, for 20 s: it flips over and over about the middle axis.

@@ -1,5 +1,5 @@
 -- Reference scene "kepler" of the work-precision benchmark
--- (bench/workprecision.c builds the same scene in C).
+-- (bench/workprecision/scenes.c builds the same scene in C).
 --
 -- A 1 kg planet around a fixed centre at the origin, GM = 1 m^3/s^2, on an
 -- orbit of semi-major axis a = 1 m and eccentricity e = 0.5, started at

@@ -1,5 +1,5 @@
 -- Reference scene "oscillator" of the work-precision benchmark
--- (bench/workprecision.c builds the same scene in C).
+-- (bench/workprecision/scenes.c builds the same scene in C).
 --
 -- A 0.5 kg mass hanging from an anchor at the origin on a spring
 -- (k = 50 N/m, rest length 1 m), pulled A = 0.2 m below its equilibrium and

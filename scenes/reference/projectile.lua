@@ -1,5 +1,5 @@
 -- Reference scene "projectile" of the work-precision benchmark
--- (bench/workprecision.c builds the same scene in C).
+-- (bench/workprecision/scenes.c builds the same scene in C).
 --
 -- A 1 kg ball dropped from rest at the origin through air with quadratic
 -- drag f = -c |v| v, c = 0.1 N s^2/m^2: terminal speed vt = sqrt(m g / c) =

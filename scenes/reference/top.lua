@@ -1,5 +1,5 @@
 -- Reference scene "top" of the work-precision benchmark
--- (bench/workprecision.c builds the same scene in C).
+-- (bench/workprecision/scenes.c builds the same scene in C).
 --
 -- A torque-free symmetric top: a 1 kg body with principal moments
 -- I = diag(1, 1, 1.8) kg m^2, spun at w0 = (0.6, -0.2, 4) rad/s (body frame,

@@ -1,5 +1,5 @@
 -- Reference scene "vortex" of the work-precision benchmark
--- (bench/workprecision.c builds the same scene in C).
+-- (bench/workprecision/scenes.c builds the same scene in C).
 --
 -- A tracer 1 m from the axis of a rigid vortex v = omega x (x - c) about z,
 -- turning once every 4 s (omega = pi/2 rad/s).
