@@ -1,4 +1,4 @@
-/* rotation.c: torque-free rotation kernels (see rotation.h for the model).
+/* rotation.c: torque-free rotation kernels (see bodies.h for the model).
 
    The splitting kernels write the kinetic energy as
        T = a |L|^2 / 2 + c_A L_A^2 / 2 + c_B L_B^2 / 2,   c_i = invI_i - a,
@@ -12,18 +12,20 @@
    A symmetric composition of the two axis flows is a Poisson map (bounded
    energy error, no drift), time-reversible, keeps |L_b| to rounding, and is
    exact whenever c_A or c_B vanishes: for every symmetric top and isotropic
-   body. Fasso (2003) found this splitting more accurate than splitting into
-   three axis rotations; on the flip of NOTES.md at h = 1/60 its Strang step
-   is 4 times closer to the exact orientation than the best order of
-   R1 R2 R3 R2 R1 (1.7e-4 against 6.7e-4 rad), with 3 axis turns a step
-   instead of 5. The outer axis with the larger |c| is A, the one turned
-   more often: better than the other way round on every body tried (about 2
-   times for the 4th-order compositions).
+   body. This splitting is more accurate than splitting into three axis
+   rotations (Fasso 2003): on the flip of docs/notes.md at h = 1/60 its
+   Strang step is 4 times closer to the exact orientation than the best
+   order of R1 R2 R3 R2 R1 (1.7e-4 against 6.7e-4 rad), with 3 axis turns a
+   step instead of 5. The outer axis with the larger |c| is A, the one
+   turned more often: better than the other way round on every body tried
+   (about 2 times for the 4th-order compositions).
 
-   Choosing the accurate method: measured on the flip (h = 1/60, 20 s;
-   orientation error after 20 s, worst relative energy error over the run,
-   ns per step over 1024 bodies on this project's 2-core x86-64, gcc -O2,
-   +-15% run to run), all built from the same exact pieces:
+   The accurate method is Blanes and Moan's S6, the cheapest composition of
+   these pieces that meets the flip's targets (1e-6 rad, energy 1e-9)
+   without a projection. The comparison (h = 1/60, 20 s; orientation error
+   after 20 s, worst relative energy error over the run, ns per step of one
+   body per call over 1024 bodies on this project's 2-core x86-64, gcc -O2,
+   +-15% run to run):
        composition                      order turns  orientation  energy   ns
        Strang A(h/2) B(h) A(h/2)          2     3     1.7e-4     6.0e-5    55
        Strang, two half steps             2     5     4.2e-5     1.5e-5    85
@@ -39,17 +41,17 @@
    1.0e-4 rad at 80 ns; Magnus 4th order with a Taylor L_b and energy
    projection, 2e-8 rad on the flip but up to 1.5e-4 rad on other bodies
    and 5e-6 on near-symmetric ones, where the splittings are nearly exact.
-   (The ns column is for one body alone, then latency-bound.) For one body
-   the cost is the chain of turns: each needs the momentum the previous one
-   left, about 16 ns a turn here. In lanes (below) the turns of 32 bodies
-   overlap and a turn costs about 4 ns a body with SSE2 (S6 about 55 ns, a
-   body's floor at about 47 floating-point operations a turn, two per
-   instruction), under 2 ns with AVX-512 (S6 about 22 ns). Yoshida +
-   projection meets the flip's targets (1e-6 rad, energy 1e-9) at 2/3 of
-   S6's cost but with a margin of 2 and errors up to 1.4e-4
-   rad on other bodies; S6 meets them with margins of 1300 and 9, stays
-   within 2.7e-7 rad on every other body tried (12 random bodies at up to 9
-   rad/s), and unlike a projected method it stays symplectic and
+   The code holds the first row (split2) and S6 (accurate): bench/rotation.c
+   measures both, and test_rotation.split2_on_the_flip and
+   test_rotation.accurate_kernel_on_the_flip hold them to their figures.
+   Called for one body, a composition costs its chain of turns, each
+   needing the momentum the previous one left; in lanes (below) the turns of
+   32 bodies overlap, and with AVX-512 S6 costs a body about a tenth as much
+   (bodies.h has each kernel's cost). Yoshida + projection meets the
+   targets at 2/3 of S6's cost but with a margin of 2 and errors up to
+   1.4e-4 rad on other bodies; S6 meets them with margins of 1300 and 9,
+   stays within 2.7e-7 rad on every other body tried (12 random bodies at up
+   to 9 rad/s), and unlike a projected method it stays symplectic and
    time-reversible.
 
    The kernels relabel the body axes so that A, the middle axis and B become
@@ -83,8 +85,8 @@
    Evaluated in double, both are within 1.5 units in the last place of
    cos x on a dense grid, like the Taylor series (and as good as a
    correctly rounded libm's after the rounding of u). (At 1/8 two terms
-   fewer would do, but then the lanes sent a body spinning at 45 rad/s
-   about a thin axis down the slow general path at every step.) */
+   fewer would do, but a body spinning at 45 rad/s about a thin axis would
+   then leave the lanes for the slow general path at every step.) */
 #define TB__SMALL 0.25
 #define TB__COS2 0.04166666666666468       /* 1/24 - 2.0e-15 */
 #define TB__COS3 (-0.0013888888885387693)  /* -1/720 + 3.5e-13 */
@@ -97,8 +99,8 @@
 
 TB__LANE double cos_poly(double u, double u2, double u4)
 {
-    /* Estrin's scheme: Horner's chain of dependent operations was the
-       critical path of the lanes */
+    /* Estrin's scheme: Horner's chain of dependent operations would be
+       the critical path of the lanes */
     return fma(u4, fma(u, TB__COS5, TB__COS4), fma(u2, fma(u, TB__COS3, TB__COS2), fma(u, -1.0 / 2, 1)));
 }
 
@@ -206,7 +208,7 @@ TB__LANE void normalize(const double in[4], double q[4])
 }
 
 /* The lanes take the Newton step without looking: they only hold unit q
-   (rotation.h), which the exact turns keep within a few rounding errors, so
+   (bodies.h), which the exact turns keep within a few rounding errors, so
    normalize would take it too. */
 
 TB__LANE void newton(const double in[4], double q[4])
@@ -230,7 +232,7 @@ TB__LANE double frozen_turn(const double q[4], const double L[3], const double i
 }
 
 /* The one-body kernels are templates as the lanes are, compiled for each
-   instruction set (below): with fma() in their arithmetic (rotation.h),
+   instruction set (below): with fma() in their arithmetic (bodies.h),
    the portable build calls the C library for every one. */
 TB__LANE void frozen_one(double q[4], const double L[3], const double invI[3], double h)
 {
@@ -378,10 +380,10 @@ TB__LANE void frozen_lanes_t(double *restrict q, const double *restrict L, const
    cyclically (up_a: then det P = -1) or the one before, and the rates.
    Minima, maxima and selects, no branches or indices, so that the loops
    over lanes vectorise it. The world keeps it for each body as the lanes
-   read it, four numbers in four arrays (frame_put): loaded so, it
-   costs less than working it out at every step (about 30 operations per
-   8 lanes with AVX-512, and the transposition of invI), where the old
-   tb__split_frame, one struct per body, cost more than that. */
+   read it, four numbers in four arrays (frame_put): loaded so, it costs
+   less than working it out at every step (about 30 operations per 8 lanes
+   with AVX-512, and the transposition of invI) or than reading it from a
+   tb__split_frame, one struct per body. */
 typedef struct tb__relabel {
     int mid0, mid1, up_a, isotropic;
     double a, ca, cb;
@@ -545,7 +547,7 @@ typedef struct tb__spin_lanes {
    processor to look past. Between pieces the lanes stay in L1. A partial
    block of a multiple of TB__GROUP lanes runs in groups of that fixed
    length, which GCC vectorises too (a block of any other size is padded
-   to one: tb__split_padded). */
+   to one: split_block). */
 #define TB__GROUP 8
 #define TB__EACH_LANE(i, n, lane)                                          \
     do {                                                                   \
@@ -618,7 +620,7 @@ TB__LANE void lane_load(tb__spin_lanes *lanes, int i, const double *q, const dou
 }
 
 /* Then T = the turn about L_b by the angle a h |L|: a loop of its own, as
-   one with the piece above held too many numbers for the registers. A turn
+   one with the piece above holds too many numbers for the registers. A turn
    beyond the polynomial (or not finite) has marked the lane to be redone
    (big). */
 TB__LANE void lane_begin(tb__spin_lanes *lanes, int i)
@@ -876,8 +878,9 @@ TB__LANE void split_block(double *restrict q, const double *restrict L, const do
 /* The lanes kernels are compiled once for each instruction set (the same C
    through the templates above) and chosen at run time. Contraction stays
    off (-ffp-contract=off, and C99 mode's default): every variant does the
-   same IEEE operations in the same order, so all give the same bits, and
-   the wider ones only do more lanes per instruction. */
+   same IEEE operations in the same order, so all give the same bits
+   (test_rotation.lanes_give_the_one_body_bits), and the wider ones only do
+   more lanes per instruction. */
 #define TB__KERNELS(isa, attr, id)                                                                    \
     attr static void isotropic_##isa(double *q, const double *L, const double *invI, double h, int n) \
     {                                                                                                 \
