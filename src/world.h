@@ -1,6 +1,13 @@
 /* world.h: the world struct, which every tier of the core reads and
    writes, and the interface every tier offers the step (not public).
 
+   Names: what a header declares carries a prefix, tb_ (TB_ for macros)
+   when public in include/, tb__ (TB__) when private to the library, so no
+   name of the library can meet a user's. A function private to one .c
+   file (static, static inline or TB__LANE, and the per-instruction-set
+   variants a file generates with TB__FOR_EACH_ISA) carries none: without a
+   prefix a name says that nothing outside its file calls it.
+
    The state vector y and its layout are in core/core.h; each tier's own
    functions are in its folder's header (particles/, bodies/, forces/,
    collision/, contacts/, stepping/). Tiers depend downwards only:

@@ -10,7 +10,8 @@
 /* L = I w for body s at its orientation. A zero comes out as +0, as it
    does in P: every update keeps it so (x + y is -0 only when both are),
    which lets the kicks leave alone the components no force reaches and
-   still give the bits of P + h 0 and L + h 0. */
+   still give the bits of P + h 0 and L + h 0
+   (test_rotation.fast_paths_give_the_general_bits). */
 static void set_spin(tb_world *w, uint32_t s, const double omega[3])
 {
     double *L = w->y + w->off[TB__BODY_ANG] + 3 * s;

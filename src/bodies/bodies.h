@@ -15,13 +15,14 @@
 
    Torque-free rotation of rigid bodies over one step, as pure kernels.
 
-   The model is docs/design.md, section 2 (docs/rotation.md has the rest): q is a unit quaternion (w, x, y, z)
-   taking the body's principal axes to the world (R = R(q)); L is the angular
-   momentum about the centre of mass in the WORLD frame, kg m^2/s; invI holds
-   the inverse principal moments 1/I1, 1/I2, 1/I3 in 1/(kg m^2), in the order
-   of the body axes (any order of size; finite and >= 0). The body-frame
-   momentum is L_b = R^T L, the angular velocity w = R diag(invI) L_b, the
-   kinetic energy E = 1/2 sum invI_i L_b,i^2.
+   The model is docs/design.md, section 2 (docs/rotation.md has the rest):
+   q is a unit quaternion (w, x, y, z) taking the body's principal axes to
+   the world (R = R(q)); L is the angular momentum about the centre of mass
+   in the WORLD frame, kg m^2/s; invI holds the inverse principal moments
+   1/I1, 1/I2, 1/I3 in 1/(kg m^2), in the order of the body axes (any order
+   of size; finite and >= 0). The body-frame momentum is L_b = R^T L, the
+   angular velocity w = R diag(invI) L_b, the kinetic energy
+   E = 1/2 sum invI_i L_b,i^2.
 
    With no torque the world L is constant, so each kernel only advances q
    over a time h (either sign: -h undoes h for the splitting kernels) and
@@ -37,26 +38,30 @@
    side ("lanes", one array per quantity) in loops of fixed length that GCC
    vectorises at -O2 (two lanes per SSE2 instruction, eight per AVX-512
    one: see tb__isa), where the turns of different bodies also overlap
-   instead of each waiting for the last. A
-   lane does the arithmetic of the one-body kernel in the same order, so a
-   body gets the same bits alone or in lanes, whatever its neighbours
-   (tests/test_rotation.c checks it). The world steps its bodies in lanes.
+   instead of each waiting for the last. A lane does the arithmetic of the
+   one-body kernel in the same order, so a body gets the same bits alone or
+   in lanes, whatever its neighbours
+   (test_rotation.lanes_give_the_one_body_bits). The world steps its bodies
+   in lanes.
 
    Where a product meets a sum the kernels call fma(): one rounding, the
    same on every instruction set, so the variants still give the same bits
    (with -ffp-contract=off nothing else is fused). AVX2 and AVX-512 do it
-   in one instruction, which took a fifth off the splitting kernels (1000
-   boxes under "verlet": 9.8 to 7.9 ns a body-step); without them the C
-   library does, exactly, a call each, which makes the portable lanes 8 to
-   80 times slower. Processors without AVX2 (before 2013) pay that.
+   in one instruction; without them the C library does, exactly, a call
+   each, which makes the portable lanes 20 to 80 times slower than the
+   widest (the costs below). Processors without AVX2 (before 2013) pay
+   that.
 
-   Costs: per body-step on this project's 2-core x86-64 (gcc -O2, no
-   -march), in lanes over 1024 bodies (what a world pays) with AVX-512 and
-   with portable C (SSE2, fma() through the C library), then for one body
-   stepped alone (each step waiting for the last; the one-body kernels
-   run on the widest instruction set too), +-20% run to run.
-   Accuracy: on the intermediate-axis flip of docs/notes.md at h = 1/60 s over
-   20 s (bench/rotation.c). */
+   Costs, as bench/rotation.c measures them: per body-step on this
+   project's 2-core x86-64 (gcc -O2, no -march), in lanes over 1024 bodies
+   (what a world pays) with AVX-512 and with portable C (SSE2, fma()
+   through the C library), then for one body stepped alone (each step
+   waiting for the last; the one-body kernels run on the widest instruction
+   set too), +-20% run to run. Accuracy: on the intermediate-axis flip of
+   docs/notes.md at h = 1/60 s over 20 s, as bench/rotation.c measures it
+   (test_rotation.split2_on_the_flip and
+   test_rotation.accurate_kernel_on_the_flip hold split2 and accurate to
+   it). */
 
 /* q <- exp(h w / 2) q with w frozen at the start of the step: one exact turn
    about the start's angular velocity. Order 1 for an asymmetric body (it
@@ -89,9 +94,8 @@ void tb__rotation_accurate(double q[4], const double L[3], const double invI[3],
 /* ---- bodies in lanes ----------------------------------------------------- */
 
 /* 32: with eight lanes an AVX-512 instruction, four independent chains of
-   turns per piece keep the units busy (at 8 lanes the turns were
-   latency-bound: 57 ns for accurate against 22 at 32; 64 and 128 were
-   no faster). */
+   turns per piece keep the units busy; at 8 lanes the turns are
+   latency-bound, and 64 or 128 lanes are no faster. */
 #define TB__LANES 32
 
 /* Lanes hold unit q only (within 5e-9, as the world keeps them): they
@@ -197,7 +201,7 @@ static inline void tb__normalise(double q[4])
    1 / |q| from 1 are exact to rounding (7e-18) while |q|^2 is within 1e-2
    of 1, which it is after any step a method keeps stable, and they
    vectorise, where sqrt (which may set errno) does not; a q further off is
-   divided by its root. newton_scale returns the factor and |q|^2. */
+   divided by its root. tb__newton_scale returns the factor and |q|^2. */
 TB__LANE double tb__newton_scale(const double q[4], double *n2)
 {
     double f;

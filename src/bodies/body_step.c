@@ -1,6 +1,6 @@
 /* body_step.c: the body tier's part of the stepping primitives: derive,
    kick and drift, projection, callback motion, and RK4 fused per block of
-   bodies. The hot loops run over TB__LANES bodies at a time (rotation.h),
+   bodies. The hot loops run over TB__LANES bodies at a time (bodies.h),
    written so that GCC -O2 vectorises them. */
 #include "bodies/bodies.h"
 
@@ -85,7 +85,8 @@ static int gravity_only(tb_world *w);
    while it sits in L1: one loop over the lanes per stage, which GCC
    vectorises, takes the slope and at once adds it to the sum and makes the
    next stage. Each lane does what the generic method does to its body, in
-   the same order: the same bits. */
+   the same order: the same bits
+   (test_rotation.fast_paths_give_the_general_bits). */
 enum { RK_X = 0, RK_Q = 3, RK_P = 7, RK_L = 10, RK_N = 13 };
 
 typedef struct rk_block {
@@ -169,7 +170,7 @@ TB__LANE void rk_stage(const rk_params *c, rk_block *r, int i, int isotropic, in
     } while (0)
 
 TB__LANE void rk_stages(const rk_params *c, rk_block *restrict r, const tb__split_frame *frame, int kind, int local,
-                      int m, double a, double b, int mode)
+                       int m, double a, double b, int mode)
 {
     int i;
     if (m < TB__LANES || kind < 0)
@@ -216,8 +217,8 @@ TB__LANE void rk_put(rk_block *r, int i, double *x, double *q, double *P, double
 }
 
 TB__LANE void rk_load(rk_block *restrict r, const double *restrict x, const double *restrict q,
-                    const double *restrict P, const double *restrict L, const double *restrict held,
-                    const rk_params *c, const double *restrict inv_inertia, int m, int local)
+                      const double *restrict P, const double *restrict L, const double *restrict held,
+                      const rk_params *c, const double *restrict inv_inertia, int m, int local)
 {
     const double *restrict mass = c->mass;
     int i, k;
@@ -233,7 +234,7 @@ TB__LANE void rk_load(rk_block *restrict r, const double *restrict x, const doub
 }
 
 TB__LANE void rk_store(rk_block *restrict r, double *restrict x, double *restrict q, double *restrict P,
-                     double *restrict L, int m, int local)
+                       double *restrict L, int m, int local)
 {
     int i, k;
     if (m == TB__LANES && local)
@@ -278,8 +279,8 @@ TB__LANE void rk4_block(tb_world *w, size_t b, int m, double h, int local)
     rk_store(&r, x, q, P, L, m, local);
 }
 
-/* The blocks, compiled for each instruction set (rotation.h); all give the
-   same bits. */
+/* The blocks, compiled for each instruction set (core/core.h); all give
+   the same bits. */
 #define RK4_BLOCKS(isa, attr, id)                                                                             \
     attr static void rk4_##isa(tb_world *w, double h, int local)                                            \
     {                                                                                                       \
@@ -330,7 +331,7 @@ static void turn(tb_world *w, size_t b, size_t m, const tb__split_op *op, int is
 /* A block's per-body numbers spread to the layout of its 3-vectors:
    out[3 i + k] = in[i]. The loops over the block's vectors can then run
    straight over 3 TB__LANES numbers, instead of gathering each component
-   at a stride of 3 (which took a shuffle per number). */
+   at a stride of 3 (a shuffle per number). */
 TB__LANE void spread3(const double *restrict in, double *restrict out)
 {
     int i;
@@ -428,7 +429,7 @@ static int gravity_only(tb_world *w)
 /* The sweep goes over blocks of TB__LANES consecutive bodies, applying the
    ops in order to each block while it sits in L1: kicks and drifts in
    loops of fixed length over the block, which GCC vectorises, and turns by
-   the kernels in lanes (rotation.h), which take the block as it is stored. */
+   the kernels in lanes (bodies.h), which take the block as it is stored. */
 TB__LANE void sweep_blocks(tb_world *w, const tb__split_op *ops, int n, int only_gravity, int isa)
 {
     double *x = w->y + w->off[TB__BODY_POS], *P = w->y + w->off[TB__BODY_MOM], g3[3 * TB__LANES];

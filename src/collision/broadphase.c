@@ -1,4 +1,4 @@
-/* broadphase.c: sweep and prune over axis-aligned boxes (broadphase.h). */
+/* broadphase.c: sweep and prune over axis-aligned boxes (collision.h). */
 #include "collision/collision.h"
 
 #include <math.h>

@@ -1,4 +1,4 @@
-/* collide.c: narrowphase (see collide.h for the contract).
+/* collide.c: narrowphase (see collision.h for the contract).
 
    Each pair is computed once, with the kinds in the order sphere, capsule,
    box, plane (a pair given the other way round is computed swapped and its
@@ -89,7 +89,8 @@ static double sign_of(double x) { return x < 0 ? -1.0 : 1.0; }
 
 /* The separating axis tests keep a face axis unless another axis is clearly
    better, so that rounding noise in a resting stack does not flip the
-   reference face (and the features with it) from step to step. */
+   reference face (and the features with it) from step to step
+   (test_collide.small_moves_keep_the_features). */
 static int clearly_better(double sep, double than, double size)
 {
     return sep > than + 0.05 * fabs(than) + 1e-5 * size;
@@ -378,10 +379,9 @@ static void box_corner(const tb__geom *g, int i, double out[3])
    margin, deepest first. That face holds the deepest corner and spans the
    box's widest support: a box lying flat keeps its bottom face even when
    it is thinner than the margin, and a long thin box buried in the plane
-   (every corner below it) keeps both its ends. (The 4 deepest of all 8
-   corners were one end of such a box, top and bottom: the push at that
-   end only turned it, and a plate 4 m long with a heavy core sank through
-   the plane for good.) */
+   (every corner below it) keeps both its ends. The 4 deepest of all 8
+   corners can be one end of such a box, top and bottom, and a push there
+   only turns it (test_collide.buried_plank_keeps_both_ends). */
 static void box_plane(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
 {
     tb__candidate c[4];
@@ -658,7 +658,8 @@ typedef struct tb__vertex {
    dot(pn, x) <= off; plane `id` names the new edge. A vertex less than tol
    outside is kept as it is: identical boxes stacked flush then keep their
    4 corners (and features) under rounding and jitter, instead of trading
-   each corner for a cluster of nearby intersections. */
+   each corner for a cluster of nearby intersections
+   (test_collide.flush_stack_keeps_four_corners). */
 static int clip(const tb__vertex *v, int n, const double pn[3], double off, double tol, int id, tb__vertex *out)
 {
     int i, count = 0;

@@ -124,7 +124,8 @@ tb_status tb__check_busy(tb_world *w, const char *what);
    (SSE2 on x86-64, two lanes an instruction), AVX2 (four) and AVX-512
    (eight), on x86-64 with GCC or Clang. Every variant does the same
    operations in the same order, so all give the same bits
-   (tests/contacts/test_contact_lanes.c, every_instruction_set_gives_the_same_bits).
+   (test_contact_lanes.every_instruction_set_gives_the_same_bits,
+   test_rotation.lanes_give_the_one_body_bits).
 
    TB__FOR_EACH_ISA(GEN) expands GEN(suffix, attribute, isa) once per
    instruction set this build can dispatch to; a file defines its variants

@@ -227,8 +227,8 @@ int tb__particle_velocity_dependent(const tb_world *w)
    the velocity being kicked: one pass that kicks and drifts each particle
    while its velocity is in registers. The same arithmetic as accelerate()
    (so the same bits) without its per-particle branches; `restrict` lets
-   GCC -O2 pack pairs of doubles. Streaming 10^6 particles it runs at the
-   memory-bandwidth limit, where the general blocked sweep is 1.7x slower. */
+   GCC -O2 pack pairs of doubles. Streaming 10^6 particles it runs near the
+   memory-bandwidth limit (bench/particles.c prints the ratio). */
 static void kick_drift_local(double *restrict x, double *restrict v, const double *restrict m,
                              const double *restrict im, size_t n, double hk, double hd,
                              const double g[3], double c1, int drift)

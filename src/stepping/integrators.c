@@ -29,11 +29,10 @@ static tb_status euler(tb_world *w, double h)
    projects it (unit quaternions). Stage states are not projected: the
    quaternion equation q' = (0, w) q / 2, with w computed from q / |q|, keeps
    |q| by itself, and projecting stages perturbs them by O(h^2), which costs
-   RK4 its order (measured on the flip: 4.5e-4 rad with stage projection,
-   see test_bodies for the figure without). When nothing couples objects,
-   the world steps them one block at a time through all four stages
-   (tb__fused_rk4), with these very operations: the same bits, without the
-   passes over the whole state. */
+   RK4 its order. When nothing couples objects, the world steps them one
+   block at a time through all four stages (tb__fused_rk4), with these very
+   operations: the same bits (test_rotation.fast_paths_give_the_general_bits),
+   without the passes over the whole state. */
 static tb_status rk4(tb_world *w, double h)
 {
     const double t = w->time;
