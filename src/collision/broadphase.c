@@ -84,24 +84,6 @@ static int sap_layout_of(size_t n, tb__sap_layout *l)
     return 1;
 }
 
-static tb_status sap_reserve(tb_world *w, tb__sap *sap, size_t units)
-{
-    size_t want;
-    void *block;
-    if (units <= sap->cap)
-        return TB_OK;
-    /* headroom, so a world adding shapes one at a time does not realloc at
-       every call */
-    want = units <= SIZE_MAX / 8 ? units + units / 2 : units;
-    block = tb__alloc(w, sap->order, sap->cap * sizeof(uint32_t), want * sizeof(uint32_t));
-    if (!block)
-        return tb__fail(w, TB_ERR_MEMORY, "broadphase: out of memory for %zu bytes of sort state",
-                        want * sizeof(uint32_t));
-    sap->order = block;
-    sap->cap = want;
-    return TB_OK;
-}
-
 /* The axis along which the box centres spread most (variance), or the
    current one unless another beats it clearly. Infinite boxes (planes) have
    no centre and are left out. */
@@ -293,7 +275,7 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
         sap->count = 0;
         return TB_OK;
     }
-    status = sap_reserve(w, sap, layout.units);
+    status = tb__reserve(w, (void **)&sap->order, &sap->cap, layout.units, sizeof(uint32_t));
     if (status != TB_OK)
         return status;
     order = sap->order;
