@@ -1,49 +1,42 @@
-/* cold_start.c: a first guess for a step whose contacts start at rest
-   without last step's impulses (a scene built touching).
+/* cold_start.c: the normal rows (press and tilts) of many lanes solved
+   together before the sweeps, where the sweeps pass loads too slowly.
 
    Sequential impulses pass a load down a chain of contacts a pair at a
    time: the moments that hold an offset stack up must travel from the
-   top box to the ground through every patch, and 20 sweeps a step (or
-   the few hundred a cold step may take) leave them far short. A
-   staircase of 8 boxes 5 cm apart got 4% of the moment its ground patch
-   needed from its first step, rocked onto edges and fell; given the
-   right moments it stands, because the warm starts then carry them.
+   top box to the ground through every patch, and the sweeps of a step
+   leave them far short. Given the right moments from its first step, such
+   a stack stands, because the warm starts then carry them.
 
-   So before the sweeps, the press of every pair at rest and its tilts
-   that have a range of levers are solved as equalities, A x = b with A =
-   J M^-1 J^T, by conjugate gradients preconditioned by the rows' own
-   masses (Jacobi): a resting scene's answer is that system's (every
-   contact pressed, each centre of pressure inside its points, no friction
-   needed), which they reach in some sqrt(cond A) iterations where
-   Gauss-Seidel takes cond A. The result is clamped to what the rows allow
-   (press >= 0, tilts within the press times their levers' range) and
-   pushed on the velocities, where it met the rows and the clamp left it
-   sound; the sweeps then take friction, and whatever is left, from there.
-
-   A few iterations of it may also run before the sweeps of every step
-   (stack_iterations; none by default). Stacks of boxes each offset from
-   the one below lean slowly as a whole, which the sweeps reduce slowest:
-   kept awake, 3 of 40 random offset stacks leaned by 1% more a step and
-   fell; 4 iterations a step hold all 40, for about 9% of a resting
-   pyramid's step and 16% of a falling pile's. (Before the lanes at rest
-   were told apart, its pushes and pulls on a body shared with a struck
-   lane cancelled in speed but not in position, and in random heaps of
-   bodies from 1 mm to 3 m across a body was moved 1.6 km in one step.)
-
-   And it runs where a body lands on one TB__MASS_RATIO times lighter or
-   heavier, in that step and the next, or rests on one
-   TB__MASS_RATIO_RESTING times lighter or heavier, on the lanes near it,
-   landing ones too (tb__heavy_landings). The sweeps pass a box 100 times
-   heavier landing at 3 m/s on a light one resting on the ground about 1%
-   of its speed a sweep: it was still falling at 0.7 m/s after the landing
-   step, pressed the light box 8 mm into the ground, and the warm starts
-   of the landing's impulses then threw it back up at 1.6 m/s (with
-   restitution 0); it bounced a few times, sank, and went through the
-   light box (at 10 times, it bounced back at 1.2 m/s). Solved together,
-   the landing stops both (to their gap), and the next step sheds the
-   landing's impulses from the warm starts again. Such a solve is taken
-   only where it met its rows, leaves none further from what it may do,
-   and takes kinetic energy out (met, it does; clamped, it need not). */
+   So the press of every lane concerned and its tilts that have a range of
+   levers are solved as equalities, A x = b with A = J M^-1 J^T, by
+   conjugate gradients preconditioned by the rows' own masses (Jacobi): a
+   resting scene's answer is that system's (every contact pressed, each
+   centre of pressure inside its points, no friction needed), which they
+   reach in some sqrt(cond A) iterations where Gauss-Seidel takes cond A.
+   The result is clamped to what the rows allow (press >= 0, tilts within
+   the press times their levers' range) and pushed on the velocities,
+   where it met the rows and the clamp left it sound; the sweeps then take
+   friction, and whatever is left, from there. It runs on:
+   - the lanes at rest, in a step where many contacts start at rest
+     without last step's impulses (a scene built touching;
+     staircases_stand_still, random_offset_stacks_stand);
+   - the lanes at rest, stack_iterations iterations before the sweeps of
+     every step that runs neither of the others (none by default): stacks
+     of boxes each offset from the one below, kept awake, lean slowly as a
+     whole, which the sweeps reduce slowest. 8 hold them
+     (awake_offset_stacks_stay_up_with_stack_iterations), for about 40%
+     more of an awake pyramid's step (the setting, include/tumble/types.h);
+   - the lanes near a body landing on one TB__MASS_RATIO times lighter or
+     heavier, in that step and the next, or resting on one
+     TB__MASS_RATIO_RESTING times lighter or heavier, landing ones too
+     (tb__heavy_landings). The sweeps pass the landing to the light body
+     about one mass ratio's part a sweep, so they stop the heavy one late,
+     and the landing's warm starts then throw it back up; solved together,
+     the landing stops both, and the next step sheds the landing's
+     impulses from the warm starts again (heavy_box_lands_on_light_ones).
+     Such a solve is taken only where it met its rows, leaves none further
+     from what it may do, and takes kinetic energy out (met, it does;
+     clamped, it need not). */
 #include "contacts/contacts.h"
 
 #include <math.h>
@@ -78,14 +71,13 @@ static int reached(const tb__batch *bt, int k, const uint64_t *ring)
    the Jacobi preconditioner, and the mask of the rows taking part: the
    press of every lane at rest (landings: every lane reached), and its
    tilts that have a range of levers. (Outside the heavy landings, a lane
-   that struck or landed this step is left to the sweeps: its
-   speed and its lever differ from those of the lanes at rest on the same
-   body, and solved with them, the iterates grew pushes and pulls that
-   cancelled in speed but not in position: a body of a random heap was
-   moved 60 m in one step. Nor a lane with a point deeper than the slop,
-   or a new one whose sides move faster than the sleep speed: bodies
-   built overlapping, or thrown together, are not at rest, and solved as
-   if they were, one of a random heap was thrown at 140 m/s.) */
+   that struck or landed this step is left to the sweeps: its speed and
+   its lever differ from those of the lanes at rest on the same body, and
+   solved with them, the iterates grow pushes and pulls that cancel in
+   speed but not in position. So is a lane with a point deeper than the
+   slop, or a new one whose sides move faster than the sleep speed:
+   bodies built overlapping, or thrown together, are not at rest, and
+   solved as if they were, they can be thrown off.) */
 static void row_masses(tb__contacts *c, double *mass, int landings)
 {
     const uint64_t *ring = c->colours;
@@ -111,13 +103,13 @@ static void row_masses(tb__contacts *c, double *mass, int landings)
    in c->colours (free in the solve), ring 1 for a heavy lane's bodies and
    r + 1 for those a landing lane joins to one of ring r, ring by ring for
    as long as the batches they reach stay within a budget: the load of a
-   body landing on a light one goes down whatever is under it (one 100
-   times heavier landing on a column of four light boxes sank through it
-   with two rings, and stays on it with all), but a crowd is not solved
-   whole for one landing in it (a falling pile of 1000 bodies, whole, cost
-   40% more a step). The solve's cost goes by batches: a lane's
-   neighbours are in other batches (they share a body), so a few hundred
-   lanes can reach every batch. */
+   body landing on a light one goes down whatever is under it, so the
+   rings reach as far as the budget lets them
+   (heavy_box_lands_on_light_ones: its column of four), but a crowd is not
+   solved whole for one landing in it (each step of a falling pile would
+   pay for a solve of the whole pile). The solve's cost goes by batches: a
+   lane's neighbours are in other batches (they share a body), so a few
+   hundred lanes can reach every batch. */
 #define TB__HEAVY_BATCHES 32 /* the budget: this many batches, or an eighth of the step's */
 static size_t batches_reached(const tb__contacts *c)
 {
@@ -281,8 +273,9 @@ static void copy_normal(tb__contacts *c, double *rows, int back)
    does: on positions it acts from then on, for the landing lanes' lever.
    The rows' totals are pushed on positions with their own levers after
    the sweeps; the difference for x is pushed on c->motion here (rows:
-   scratch). A box 100 times heavier landing on a column of four light
-   ones pushed them 0.6 m into each other and the ground without it. */
+   scratch). Without it, a heavy box landing on a column of light ones
+   pushes them into each other and the ground
+   (heavy_box_lands_on_light_ones). */
 static void impact_levers(tb__contacts *c, const double *x, double *rows)
 {
     double sum = 0;
@@ -318,10 +311,9 @@ static int solve(tb__contacts *c, int most, double tolerance, int whole, int lan
        M^-1 J^T reaches, and conjugate gradients preconditioned by D (the
        rows' masses) give the solution nearest 0 in D^-1's measure. Rows
        asking for speeds that do not fit together (two patches on one
-       body) put a part of b where A cannot reach, which the iterates
-       then grow without bound, as pushes and pulls that cancel in speed;
-       the warm starts carried them on, and a body of a random heap sped
-       up step after step to 100 m/s. */
+       body) would put a part of b where A cannot reach, which the
+       iterates grow without bound, as pushes and pulls that cancel in
+       speed and that the warm starts carry on from step to step. */
     EACH_ROW(c, b, i)
     r[i] = mass[i] > 0 ? -rate[i] : 0;
     EACH_ROW(c, b, i) {
@@ -330,16 +322,16 @@ static int solve(tb__contacts *c, int most, double tolerance, int whole, int lan
     }
     rz = dot(c, r, z);
     /* past rounding's reach the directions lose their meaning and the
-       steps grow without bound (with tolerance 0, 320 iterations threw a
-       pyramid 1e12 m): no further than 1e-13 of where the misses began.
+       steps grow without bound: no further than 1e-13 of where the misses
+       began, and not once the largest miss has grown a thousandfold.
        Rows that cannot all be met (two patches on one body asking for
        different speeds) leave a miss that does not shrink, and the
        iterates drift along what A cannot change: 20 iterations without a
-       smaller largest miss end the search (60 bodies built overlapping
-       took the whole 320 iterations in 6 steps of their first 2 s, to no
-       use). The last iterate is taken: conjugate gradients shrink the
-       error in A's norm, not the largest miss, and the iterate with the
-       smallest miss held 38 of 40 offset stacks where the last held all. */
+       smaller largest miss end the search (bodies built overlapping would
+       otherwise take every iteration, to no use). The last iterate is
+       taken: conjugate gradients shrink the error in A's norm, not the
+       largest miss, so an earlier iterate that misses less is not the
+       better guess. */
     start = least = miss = worst(c, r, mass);
     tolerance = fmax(tolerance, 1e-13 * miss);
     for (it = 0; it < most && miss > tolerance && it - found <= 20 && miss <= 1e3 * start; ++it) {
@@ -375,13 +367,12 @@ static int solve(tb__contacts *c, int most, double tolerance, int whole, int lan
     /* Met, each row's speed changes by what it missed. Clamped, a row the
        solve had pull instead of push changes by less, and a body may then
        be thrown off: rows that share bodies can pull and push by amounts
-       that cancel (a random heap of bodies built overlapping threw one at
-       70 m/s from a solve met to 1e-7). The clamped guess is tried on the
-       scratch motion first, and not taken where it leaves some row more
-       than twice as far from what it may do as the warm starts left the
-       farthest: the thrown body's row missed by 9.5 times as far; the
-       210-box pyramid's clamped guess, 1.2 times, leaves its top box
-       within 0.06 mm over 10 s where the sweeps alone let it move 0.9 mm. */
+       that cancel, however closely the solve met them. The clamped guess
+       is tried on the scratch motion first, and not taken where it leaves
+       some row more than twice as far from what it may do as the warm
+       starts left the farthest: a thrown body's row is left several times
+       as far off, a resting scene's little more than the warm starts left
+       it. */
     was = violation(c, rate, mass);
     copy_normal(c, z, 0);
     clamp_into(c, x);
@@ -391,9 +382,9 @@ static int solve(tb__contacts *c, int most, double tolerance, int whole, int lan
     q[i] += rate[i];
     /* Landings are held to more: no row further off than before, and no
        kinetic energy gained (met, the solve only takes it away; clamped,
-       it may not). In random heaps of bodies 1 mm to 3 m across, solves
-       met to 1e-3 that left a row twice as far off, or gave energy, threw
-       bodies at 100 to 8000 m/s. */
+       it may not): a landing's solve that met its rows to a thousandth
+       of its start can still leave a row twice as far off, or give
+       energy, and throw bodies off. */
     if (!(violation(c, q, mass) <= (landings ? 1 : 2) * was) || (landings && !(gain <= 0))) {
         copy_normal(c, z, 1); /* (as they were, to the bit) */
         return -it;

@@ -1,5 +1,9 @@
-/* contact.c: finding contacts at the start of a step and solving them after
-   the integrator's free motion (the model is in docs/contacts.md). */
+/* contact.c: a step's contacts. Found at the start positions (proxies,
+   the broadphase's pairs, manifolds kept or collided afresh, warm starts
+   matched, batches coloured); solved after the integrator's free motion
+   (each lane's targets and levers, the solves of cold_start.c, the
+   sweeps of contact_lanes.c, the bounce, the position pass); then stored,
+   with the step's begin and end events. The model is in docs/contacts.md. */
 #include "contacts/contacts.h"
 
 #include <math.h>
@@ -178,9 +182,8 @@ static uint64_t key_of(uint32_t key_a, uint32_t key_b)
     return (uint64_t)key_a << 32 | key_b;
 }
 
-/* keys[n] in key order, by bytes from the lowest (a radix sort: a
-   comparison sort took a fiftieth of an awake pyramid's step), skipping
-   the bytes every key shares; scratch holds n as well. */
+/* keys[n] in key order, by bytes from the lowest (a radix sort, linear
+   in n), skipping the bytes every key shares; scratch holds n as well. */
 static void sort_keys(tb__key *keys, tb__key *scratch, size_t n)
 {
     tb__key *const out = keys;
@@ -225,10 +228,9 @@ static const tb__entry *previous_entry(const tb__contacts *c, uint32_t key_a, ui
 }
 
 /* Two unit tangents with (t1, t2, n) right-handed, for a unit n: Duff et
-   al.'s branch-free basis (JCGT 2017), one division and no square root
-   (the cross product with the axis least along n took a root, three
-   divisions and a branch on which axis: 2.5% of a resting pyramid's
-   step, once per manifold). */
+   al.'s branch-free basis (JCGT 2017), one division and no square root,
+   once per manifold each step (the cross product with the axis least
+   along n takes a root, three divisions and a branch on which axis). */
 static void tangents(const double n[3], double t1[3], double t2[3])
 {
     const double sign = n[2] >= 0 ? 1 : -1, a = -1 / (sign + n[2]), b = n[0] * n[1] * a;
@@ -297,7 +299,7 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
     if ((st = tb__reserve(w, (void **)&c->entries, &c->entry_cap, c->entry_count + 1, sizeof *e)) != TB_OK)
         return st;
     /* every field set here or by collide_pair (no memset: an entry is
-       about a kilobyte, and zeroing it stalled the reads that follow) */
+       about a kilobyte, and zeroing it stalls the reads that follow) */
     e = &c->entries[c->entry_count++];
     e->key_a = a.key, e->key_b = b.key;
     e->body_a = a.body, e->body_b = b.body;
@@ -455,9 +457,9 @@ static void from_shape(const tb__geom *g, const double l[3], double out[3])
    the other shape): r + sep / 2; 0 for others. A manifold kept from step to
    step carries the core point on a round shape, not a material point of
    its surface: a rolling ball's contact stays under its centre (a carried
-   surface point rolled up its side, up to the 0.5 mm the reuse allows, and
-   the press then turned the ball: a ball rolling down a slope took 2% too
-   little friction in such a step). */
+   surface point would roll up its side, as far as the reuse allows, and
+   the press would turn the ball:
+   incline_slides_holds_and_rolls_to_closed_forms). */
 static double round_reach(const tb__geom *g, double sep)
 {
     return g->kind == TB__SHAPE_SPHERE || g->kind == TB__SHAPE_CAPSULE ? g->radius + 0.5 * sep : 0;
@@ -825,7 +827,7 @@ static void load_bodies(tb_world *w, tb__contacts *c)
 /* ---- batches ----------------------------------------------------------------- */
 
 /* The highest and the lowest set bit of x != 0 (one instruction each where
-   the compiler has them: the colouring scanned 64 bits an entry). */
+   the compiler has them, where a loop scans up to 64 bits an entry). */
 static int highest_bit(uint64_t x)
 {
 #if defined(__GNUC__)
@@ -1016,40 +1018,37 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
            static ground that touched last step and is within a fifth of
            the slop of it is landing again, not striking: it keeps its warm
            start, and its friction holds as at rest. (Held at target 0 from
-           the start of the step, such a point rested on its gap: a dropped
-           box could stay 0.3 mm above the plane. Between two moving bodies
-           this timing, which sees their free motion alone, let a pyramid
-           of 210 boxes sway 10 cm; such a point lands again only from
-           TB__REGAP of the slop, as below.) */
+           the start of the step instead, such a point would rest on its
+           gap: dropped_boxes_lie_on_the_plane. Between two moving bodies
+           this timing sees their free motion alone and would let a pyramid
+           sway, pyramid_stands_and_sleeps: such a point lands again only
+           from TB__REGAP of the slop, as below.) */
         u = approach_of(c, e, p);
         a = (lane_rate(bt, lp, k, c->velocity) - u) / h;
         /* Two bodies fall together in their free motion, so between them
            a gap closes only by their approach; but the one below is
            mostly held up, and the one above then falls onto it. A body
-           that landed on another ended its landing step about g h^2 / 16
-           above it (1 mm: the part of the landing impulse that holds it
-           up acts over the whole rest of the step, on positions, where
-           for the static ground it acts for half of it), and rested on
-           that gap: a box dropped on a box hovered up to 0.96 mm above
-           it, a ball 0.93 mm. Timed again as falling under gravity across
-           the normal, such a gap closes in the next step: all within
-           0.05 mm (the fraction of the slop left alone below). A fresh
-           contact is not timed so (a stack built at rest has gaps of a
-           rounding's size: landing, it lost its warm starts and fell),
-           nor one within that fraction (a resting pyramid's rows swayed),
-           nor one between bodies TB__MASS_RATIO times apart: the body
-           under passes its part of the load on with the resting lever,
-           and the difference moved it by the mass ratio times as much (a
-           light box under one 1000 times heavier rose and fell 0.7 mm
-           every other step). */
+           that lands on another ends its landing step a little above it
+           (the part of the landing impulse that holds it up acts on
+           positions over the whole rest of the step, where for the static
+           ground it acts for half of it). Timed again as falling under
+           gravity across the normal, such a gap closes in the next step
+           (bodies_dropped_on_bodies_rest_on_them: within 0.05 mm, the
+           fraction of the slop left alone below). Not so a fresh contact
+           (a stack built at rest has gaps of a rounding's size: landing,
+           it would lose its warm starts), one within that fraction (a
+           resting pyramid's rows would sway), nor one between bodies
+           TB__MASS_RATIO times apart: the body under passes its part of
+           the load on with the resting lever, and the difference would
+           move it by the mass ratio times as much. */
         if (regap)
             a = held_up(c, e, a);
         /* the first root, as 2 s / (-u + sqrt(u^2 - 2 a s)): the usual
            (-u - sqrt(u^2 - 2 a s)) / a takes two nearly equal numbers
            apart and divides by a, and between two bodies falling together
-           a is a rounding error (a box 100 times heavier landing at 1.3
-           m/s on a light one was timed at the end of the step, and pushed
-           it 1 cm into the ground) */
+           a is a rounding error (a heavy box's landing on a light one
+           would be timed late and press it into the ground:
+           heavy_box_lands_on_light_ones) */
         disc = u * u - 2 * a * p->separation;
         den = disc >= 0 ? -u + sqrt(disc) : 0;
         if (den > 0)
@@ -1069,15 +1068,15 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
         /* a velocity change at tau moves positions over the rest of the
            step, as far as the method lets velocity changes within a step
            act (explicit Euler's positions move with the start velocity:
-           not at all; its ball rolling down a slope, pushed h^2 g cos a
-           up on its first step, ran on 1.6 mm above the slope). A bounce
-           is that change alone ((1 + e) vi: the target is its rebound
-           carried on by the free motion's acceleration); a landing also
-           holds the body up for the rest of the step, which is a force
-           acting through it (share c of the time, as at rest). With the
-           whole landing impulse over h - tau, a body set down at rest
-           (tau 0) rose g h^2 / 2, 1.4 mm at 60 Hz, and rested on that gap
-           (a rolling capsule then slipped 0.2%). */
+           not at all; incline_slides_holds_and_rolls_to_closed_forms). A
+           bounce is that change alone ((1 + e) vi: the target is its
+           rebound carried on by the free motion's acceleration); a landing
+           also holds the body up for the rest of the step, which is a
+           force acting through it (its share of the time, as at rest).
+           With the whole landing impulse over h - tau, a body set down at
+           rest (tau 0) would rise g h^2 / 2 and rest on that gap
+           (incline_slides_holds_and_rolls_to_closed_forms,
+           box_rests_without_drift). */
         *lever = rest * fmin(1, 2 * share);
         if (vi > s->restitution_threshold && e->restitution > 0) {
             *target = e->restitution * vi + a * rest;
@@ -1088,10 +1087,9 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
                part of it that holds the landed body up is its weight
                across the normal, as on the ground, where a, from their
                free motions falling together, is about 0: taken from a,
-               it acted for the whole rest of the step and left the body
-               up to 1 mm above the one under it, to rest on that gap or
-               to fall and land again on it without a lane to carry it
-               (a light box went 2.5 mm into the ground). */
+               it would act for the whole rest of the step and leave the
+               body above the one under it, to rest on that gap or to fall
+               and land on it again without a lane to carry it. */
             const double fall = mismatched(c, e, TB__MASS_RATIO) ? held_up(c, e, a) : a;
             const double jump = vi > 0 ? vi : 0, held = fall < 0 ? -fall * rest : 0;
             if (jump + held > 0)
@@ -1100,12 +1098,10 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
                mass, the next step starts from the part of the impulse
                that held the landed body up, as a force through a whole
                step, not from the part that stopped it: pushed again at
-               the next step's start, that part went on through the body
-               under, which the sweeps carry slowly, and a box 3 to 9
-               times the mass of the one it landed on bounced back at 0.3
-               to 2 m/s with restitution 0. (So kept for every landing,
-               random heaps of bodies built overlapping threw twice as
-               many at over 100 m/s.) */
+               the next step's start, that part would go on through the
+               body under, which the sweeps carry slowly, and throw the
+               landed body back up (heavy_box_lands_on_light_ones: its
+               box 3 times heavier). */
             if (strikes && jump + held > 0 && mismatched(c, e, TB__REKEEP_RATIO))
                 *keep = rest > 0 ? fmin(1, held / (jump + held) * h / rest) : 0;
             *target = 0;
@@ -1119,19 +1115,18 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
         /* a contact force acting through the step, which moves positions
            as the method moves them under any constant force: then the
            free motion's fall and the push back cancel, and a body at rest
-           stays put whatever the integrator (with h / 2 for all, symplectic
-           Euler's bodies sank g h^2 / 2 a step for the position pass to
-           take back, which it did not for a thin plate 4 m long: 4 cm
-           deep). So is a gap of a rounding's size that the free motion does
-           not close this step (two boxes built 1e-16 m apart fall
-           together): timed, its impulse acted for no time, and a stack of
-           8 built at rest rose and sank by 1 cm box by box in its first
-           step. (A real gap that does not close is still timed: resting
-           on it, a ball set down on a box hovered 0.7 mm above it.) */
+           stays put whatever the integrator
+           (every_integrator_keeps_a_resting_box_still). So is a gap of a
+           rounding's size that the free motion does not close this step
+           (two boxes built 1e-16 m apart fall together): timed, its
+           impulse would act for no time, and a stack built at rest would
+           rise and sink box by box (staircases_stand_still). (A real gap
+           that does not close is still timed: resting on it, a body would
+           hover above what it rests on.) */
         /* (a gap between two moving bodies held this way, touching last
            step and within TB__REGAP of the slop, is rested on; closing
-           every such gap by half a step kept a resting pyramid's rows
-           from settling) */
+           every such gap by half a step would keep a resting pyramid's
+           sweeps from settling: resting_pyramid_sweeps_stop_early) */
         *lever = *side_lever = c->rest_lever;
         *target = 0;
     }
@@ -1146,7 +1141,8 @@ static int set_up_point(tb__contacts *c, const tb__entry *e, tb__point *p, tb__b
    lever ranges bound the points' own rectangle, where along tangents at
    45 degrees to a square's sides they would bound one twice as wide
    across them, and a cube pushed over across a face would stand twice
-   the push it should. (Friction is the same in any tangents.) */
+   the push it should (box_pushed_at_the_top_tips_at_half_its_weight).
+   (Friction is the same in any tangents.) */
 static void side_tangents(tb__entry *e)
 {
     const double *at[TB__MANIFOLD_POINTS];
@@ -1251,10 +1247,9 @@ static void place_lane(tb__contacts *c, tb__entry *e, tb__batch *bt, int k)
        point has no range of its own). The press acts where last step's
        force was centred (its tilts' moment over its force), and the
        tilts' ranges are taken from there: they then carry what changed,
-       not the whole moment. With the press at the points' centre, a box
-       resting off-centre on another needed the tilts to carry its weight
-       times the offset anew through every sweep, and a staircase of 5
-       boxes 10 cm apart rocked and fell in 20 sweeps a step. (One point:
+       not the whole moment, which with the press at the points' centre
+       they would carry anew through every sweep (for a box resting
+       off-centre on another, its weight times the offset). (One point:
        its rolling resistance is a moment about it, the press stays put.) */
     for (i = 0; i < e->count; ++i)
         if (e->point[i].active)
@@ -1335,9 +1330,7 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
 {
     tb__entry *e = bt->source[k];
     /* last step's impulses were a force times its step: the same force
-       over this one (a step of a third kept last step's impulses, three
-       times the force, and a column of 10 boxes stepped alternately at
-       0.1 and 0.033 s fell 0.3 m) */
+       over this one (column_stands_under_changing_steps) */
     const double scale = c->kept_h > 0 ? h / c->kept_h : 1;
     double lever = 0, side_lever = 0, target = 0, force = 0, keep = 0;
     int j, d, impacts = 0, moving = 0, flying = 0;
@@ -1369,8 +1362,8 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
        this step. One point has no twist, nor tilts without rolling
        resistance: their rows may not be solved at all then (a batch of
        one-point lanes skips them), and what they started from would be
-       pushed on every step unchanged. A capsule spun lying down and stood
-       on its end turned the other way ever faster, by 10 rad/s a step. */
+       pushed on every step unchanged
+       (capsule_stood_on_end_keeps_its_spin). */
     bt->resting[k] = !moving;
     bt->landing[k] = !flying;
     e->struck = impacts > 0;
@@ -1380,13 +1373,12 @@ static void set_up_lane(tb__contacts *c, tb__batch *bt, int k, double h, double 
     bt->keep[k] = keep / j;
     bt->side_lever[k] = side_lever / j;
     /* A lane that bounces (its points' mean target > 0) is solved to
-       stop first, then bounced by its press alone (tb__bounce), at the
-       centre no faster than the centre came after the free motion, plus
-       what gravity adds through the step: more would give the bodies
-       energy. The points' mean asks for more where a body spins: one end
-       of its patch strikes while the other leaves, and the centre hardly
-       moves (dense_heaps_never_gain_energy: heaps gained as much as
-       lifting every body 191 m). */
+       stop first, then bounced by its press alone (tb__bounce), where the
+       press acts no faster than it came after the free motion, plus
+       twice what gravity adds across the normal in the step: more would
+       give the bodies energy. The points' mean asks for more where a body
+       spins: one end of its patch strikes while the other leaves, and the
+       centre hardly moves (dense_heaps_never_gain_energy). */
     bt->press_target[k] = target < 0 ? target / j : 0;
     bt->bounce[k] = 0;
     if (target > 0) {
@@ -1427,8 +1419,8 @@ static size_t bucket_of(const tb__entry *e)
 
 /* Whether the batch that starts at c->bucket[i] (of n) is full, with as
    many points in every lane: then the lanes set every field of it, and it
-   needs no zeroing first (a batch is some 11 kB: zeroing every one of them
-   was 2% of a resting pyramid's step). */
+   needs no zeroing first (a batch is some 12 kB, which the lanes write
+   whole anyway). */
 static int full_batch(const tb__contacts *c, size_t i, size_t n)
 {
     const tb__entry *first = &c->entries[c->bucket[i]], *last;
@@ -1486,8 +1478,7 @@ static void set_up_batches(tb__contacts *c, double h, size_t *points, size_t col
             /* a new batch: its first lane has the most points; empty lanes
                are on the static world. The last one is finished first,
                while its entries are still in cache (finished after every
-               batch was placed, they had to be fetched again: 11% of the
-               set-up's time went to that one load) */
+               batch is placed, they would be fetched again) */
             if (bt)
                 finish_batch(c, bt, h, fraction, cold);
             bt = &c->batches[c->batch_count++];
@@ -1693,11 +1684,11 @@ static int settled(const tb__contacts *c, double tolerance)
 /* The velocity sweeps, in pairs (a forward and a backward), up to most;
    they stop once a pair changed no enforced velocity by more than
    tolerance (0: never), looked at after sweeps 4, 8, 12 and so on (each
-   look copies every impulse first: where nothing settles, as in a falling
-   pile, a look after every pair cost 2% of a step). A resting pyramid of
-   210 boxes then takes 6.6 sweeps a step on average, not 20, to the same
-   motion (its top box within 1.7 mm over 60 s either way; at 1e-5 m/s it
-   crept 1 cm in 10 s). Returns how many sweeps ran. */
+   look copies every impulse first, a cost wasted where nothing settles,
+   as in a falling pile). A resting pyramid of 210 boxes then takes 6.63
+   sweeps a step on average, not 20 (resting_pyramid_sweeps_stop_early),
+   and moves as with every sweep done (pyramid_stands_and_sleeps). Returns
+   how many sweeps ran. */
 static int sweep_until_settled(tb__contacts *c, int most, double tolerance)
 {
     const size_t per_batch = TB__PATCH_ROWS * TB__BATCH_LANES;
@@ -1735,36 +1726,33 @@ void tb__contacts_solve(tb_world *w, double h, double force_lever)
     set_up_batches(c, h, &points, cold);
     tb__push_impulses(c->batches, c->batch_count, c->velocity, TB__PUSH_VELOCITY, c->isa);
     iterations = c->settings.velocity_iterations;
-    /* many contacts that start at rest without last step's impulses (a
-       scene built touching): the normal rows solved together first
-       (cold_start.c). Landings are left to the sweeps, they strike and the
-       next step starts warm (none of the pile's 80 cold steps is at rest;
-       taken whole, 75 of them took 127 iterations each), but for a body
-       landing on one of a very different mass: those lanes and the ones
-       near them are solved together (tb__heavy_landings) */
+    /* more than one in eight of the touching points new and at rest (a
+       scene built touching): the normal rows of the lanes at rest solved
+       together first (cold_start.c). Landings are left to the sweeps: they
+       strike, and the next step starts warm (a falling pile's cold steps
+       are landings, and solved whole they cost many iterations for
+       nothing), but for a body landing on one of a very different mass:
+       those lanes and the ones near them are solved together
+       (tb__heavy_landings) */
     if (8 * cold[1] > points)
         tb__cold_start(c, TB__COLD_TIMES * iterations, c->settings.velocity_tolerance, 1);
     else if (c->heavy_lanes)
         tb__heavy_landings(c, iterations, c->settings.velocity_tolerance);
     else if (c->settings.stack_iterations > 0)
-        /* all of them, whatever the warm starts left: a stack at rest
-           leaves every row within velocity_tolerance, and skipped there
-           they left it to the sweeps, which let its lean grow */
+        /* every step, whatever the warm starts left (tolerance 0): a
+           stack at rest leaves every row within velocity_tolerance, and
+           its lean grows below it
+           (awake_offset_stacks_stay_up_with_stack_iterations) */
         tb__cold_start(c, c->settings.stack_iterations, 0, 0);
     it = sweep_until_settled(c, iterations, c->settings.velocity_tolerance);
     if (8 * cold[0] > points) {
-        /* contacts without last step's impulses to start from (a scene
-           just built, a crowd landing) need more sweeps to reach them: a
-           stack built at rest would otherwise sink in its first steps. In
-           pairs, until the total normal impulse changes by less than
-           TB__COLD_SETTLED of itself in a pair, or TB__COLD_TIMES times
-           the sweeps. The 210-box pyramid's first step takes 288 sweeps
-           and its top box then moves 1.7 mm in 10 s (at 80 sweeps, all a
-           cold step had before, it sank 1.4 cm in its first 7 steps); the
-           1000-shape pile's 88 cold steps take 52 sweeps each on average
-           (they took 80). After the cold start above, the pyramid's first
-           step needs none of them: its 73 iterations leave every row
-           within 1e-6 m/s, and its top box moves 0.01 mm in 10 s. */
+        /* more than one in eight of the touching points without last
+           step's impulses to start from (a scene just built, a crowd or a
+           body landing) need more sweeps to reach them: in pairs, until
+           the total normal impulse changes by less than TB__COLD_SETTLED
+           of itself in a pair, or TB__COLD_TIMES times the sweeps. A box
+           landing on a light one would otherwise press it into the ground
+           (heavy_box_lands_on_light_ones: its box 3 times heavier). */
         double before = total_press(c), after;
         for (; it + 1 < TB__COLD_TIMES * iterations; it += 2) {
             tb__sweep_velocities(c->batches, c->batch_count, c->velocity, it & 1, c->isa);

@@ -1,10 +1,11 @@
 /* contact_lanes.c: the contact solver's sweeps, a batch of manifolds at a
-   time (contact.h, tb__batch). The manifolds of a batch share no moving
+   time (contacts.h, tb__batch). The manifolds of a batch share no moving
    body, so its lanes are independent: each lane runs the same sequence of
    IEEE operations a one-manifold loop would, and the batches run in order.
    The result is the Gauss-Seidel sweep of the order the batches give,
    whatever the instruction set: the loops over lanes are compiled portable,
-   AVX2 and AVX-512 (rotation.h) and all give the same bits. */
+   AVX2 and AVX-512 (core/core.h, TB__FOR_EACH_ISA) and all give the same
+   bits. */
 #include "contacts/contacts.h"
 
 #include <math.h>
@@ -24,10 +25,10 @@ typedef struct sides {
    by lane waits for those stores: store forwarding fails). With AVX-512
    they move a side's eight bodies as eight rows of TB__MOTION = 8 doubles
    (a cache line each) turned into columns by a transpose: 24 shuffles
-   where lane by lane took some 200 loads, inserts and extracts, most of
-   the cost of a batch of one-point manifolds (14% of the pile's sweep,
-   8% of the pyramid's). With narrower vectors the shuffles cost more than
-   they save. Slot 7 of a row is unused and comes back 0. */
+   where lane by lane takes some 200 loads, inserts and extracts, most of
+   the cost of a batch of one-point manifolds. With narrower vectors the
+   shuffles cost more than they save. Slot 7 of a row is unused and comes
+   back 0. */
 #if (defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12)) && TB__BATCH_LANES == 8 && TB__MOTION == 8
 #define TB__ROWS 1
 typedef double tb__lanes __attribute__((vector_size(8 * sizeof(double))));
@@ -40,7 +41,7 @@ TB__LANE void pick(const double *const *from, int i, double *out)
 }
 
 /* rows to columns (and back: it is its own inverse); written out, as
-   loops kept the halfway steps in memory */
+   loops keep the halfway steps in memory */
 #define TB__EVEN(x, y) __builtin_shufflevector(x, y, 0, 8, 2, 10, 4, 12, 6, 14)
 #define TB__ODD(x, y) __builtin_shufflevector(x, y, 1, 9, 3, 11, 5, 13, 7, 15)
 #define TB__LOW_PAIRS(x, y) __builtin_shufflevector(x, y, 0, 1, 8, 9, 4, 5, 12, 13)
@@ -248,10 +249,11 @@ TB__LANE void friction_patch(tb__batch *restrict bt, sides *restrict s, int one)
         }
 }
 
-/* Every lane's press row: the normal velocity at the centre of its
-   points >= target[k] (only: in the lanes whose target > 0, the others
-   keep their impulse); the sweeps' target is the mean of the points'.
-   An empty lane has zero masses, so its impulse stays 0. */
+/* Every lane's press row: the normal velocity where the press acts
+   (tb__batch.shift) >= target[k] (only: in the lanes whose target > 0,
+   the others keep their impulse); the sweeps' target is the mean of the
+   points' (0 for a lane that bounces: tb__bounce). An empty lane has zero
+   masses, so its impulse stays 0. */
 TB__LANE void press_toward(tb__batch *restrict bt, sides *restrict s, const double *target, int only, int one)
 {
     enum { P = TB__ROW_PRESS };
@@ -337,9 +339,8 @@ TB__LANE void position_point(const tb__batch *restrict bt, tb__lane_point *restr
    toward the mean of what the points need, then the tilts toward the
    turns that level them, within what non-negative forces at the points
    can give (the press impulse times the levers' range). Rows per point
-   alone met a long body's ends in turn: a push at one end turned it and
-   sank the other, and a plank 4 m long with a heavy core came out of the
-   ground by 1% of its depth a step. */
+   alone meet a long body's ends in turn, each push turning it and sinking
+   the other end (heavy_plank_comes_out_whole). */
 TB__LANE void position_patch(tb__batch *restrict bt, sides *restrict s, int one)
 {
     enum { P = TB__ROW_PRESS };

@@ -4,7 +4,7 @@
    conjugate-gradient solves in cold_start.c), and sleep (sleep.c). The
    model is described in docs/contacts.md.
    A world holds a pointer to one tb__contacts, allocated with its first
-   shape: a world without shapes pays nothing. */
+   shape or contact settings: a world without shapes pays nothing. */
 #ifndef TB_CONTACTS_H
 #define TB_CONTACTS_H
 
@@ -49,21 +49,21 @@ typedef struct tb__point {
    lane by lane so that one instruction serves every lane
    (contact_lanes.c). A manifold is a lane, solved as one patch at the
    centre of its touching points, in six rows:
-   - the normal: a force row at the centre (>= 0), and a tilt about each
-     tangent (the first along a side of the points), within that force
-     times the range of the points' levers about the centre (the centre of
-     pressure stays within the points' bounding rectangle along the
-     tangents: their own rectangle for a box's face);
+   - the normal: a force row (>= 0) where last step's normal force was
+     centred (shift), and a tilt about each tangent (the first along a
+     side of the points), within that force times the range of the
+     points' levers about that point (the centre of pressure stays within
+     the points' bounding rectangle along the tangents: their own
+     rectangle for a box's face);
    - friction (as Bepu and PhysX's patch friction): two tangent rows within
      the circle mu times the normal force, and a twist about the normal
      within that times the points' mean distance from the centre.
-   Rows per point met the weight of a tall stack in turn, which left how
-   it is shared between the points unconverged at 20 sweeps: a column of
-   10 boxes wandered 4 cm in 10 s and one of 20 fell; the patch holds them
-   to 2 mm and 11 cm. The position pass meets the patch too (the press
-   and tilts toward the plane that best levels what the points need), then
-   each point's own normal row for what is left. A row holds r x d at each
-   anchor and I^-1 (r x d).
+   The patch shares a tall stack's weight between a pair's points within
+   the sweeps, where rows per point, met in turn, leave that share
+   unconverged (stack_of_ten_stands). The position pass meets the patch
+   too (the press and tilts toward the plane that best levels what the
+   points need), then each point's own normal row for what is left. A row
+   holds r x d at each anchor and I^-1 (r x d).
    Bodies are indices into the velocity arrays, where 0 is the static
    world (no motion, no inverse mass), so the sweeps never branch on which
    side moves; an empty lane, or a lane without a given point, is all zeros
@@ -140,18 +140,18 @@ typedef struct tb__batch {
 
 /* contact_lanes.c: a sweep over the batches on the velocity array m, and
    a position sweep (normal rows only) on the position-change array;
-   backwards: the forward sweep's rows in reverse order. isa: tb__isa() or
-   below, the same bits each. */
+   backwards: the batches last to first, each one's rows reversed (the
+   position sweep: its points, after the patch). isa: tb__isa() or below,
+   the same bits each. */
 void tb__sweep_velocities(tb__batch *batches, size_t n, double *m, int backwards, int isa);
 void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards, int isa);
 
 /* Restitution, after the velocity sweeps: the press row of every lane
    that bounces, once, toward its bounce target, with friction and tilts
    left as the sweeps left them (as Box2D v3 bounces after its solve).
-   Reached together with the sweeps' targets, a sticking friction row
-   took part of the bounce through the body's turn into its motion: a
-   plate spinning into the ground left with 30% more energy than it came
-   with. */
+   Bounced within the sweeps, a sticking friction row would carry part of
+   the bounce through the body's turn into its motion and give it energy
+   (spinning_plate_bounces_without_gaining_energy). */
 void tb__bounce(tb__batch *batches, size_t n, double *m, int isa);
 
 /* The rows of every batch from its lanes' anchors: on entry each point's
@@ -182,10 +182,9 @@ void tb__normal_rates(const tb__batch *batches, size_t n, const double *m, doubl
    least-squares solution of S phi = b with S = [s00 s01; s01 s11] the
    sums of the points' lever products: by S's pseudo-inverse, a direction
    whose spread is under 1e-9 of the largest left unturned. (A test of
-   det against s00 s11 let points all but on a line, their levers across
-   it of a rounding's size, be turned by millions of radians: 4 of 240
-   random heaps of bodies 5 cm to 0.75 m across dropped one through the
-   plane, by 11 to 245 m.) */
+   det against s00 s11 would let points all but on a line, their levers
+   across it of a rounding's size, be turned by millions of radians:
+   patch_turns_are_least_squares.) */
 void tb__level_turns(double s00, double s01, double s11, double b0, double b1, double turn[2]);
 
 /* cold_start.c: the normal rows of the lanes at rest solved as
@@ -198,17 +197,21 @@ void tb__level_turns(double s00, double s01, double s11, double b0, double b1, d
 int tb__cold_start(tb__contacts *c, int most, double tolerance, int whole);
 
 /* The same for the lanes landing near the heavy ones (tb__batch), where
-   their solve met every row and takes no kinetic energy into the step:
-   a heavy body landing on a light one, and the step after. */
+   their solve met every row, leaves none further off and takes no
+   kinetic energy into the step: a heavy body landing on a light one, and
+   the step after. */
 int tb__heavy_landings(tb__contacts *c, int most, double tolerance);
 
 /* Sequential impulses pass a load between bodies of very different masses
    slowly: a light body under a heavy one needs about as many sweeps as
-   the ratio of their masses to carry it (cold_start.c). */
+   the ratio of their masses to carry it. A landing between bodies this
+   many times apart in mass is solved with the lanes near it (cold_start.c,
+   heavy_box_lands_on_light_ones). */
 #define TB__MASS_RATIO 10
 /* ... and resting, from this ratio on: where a step's sweeps take out
-   less than a fifth of what knocked the pair off (one body 1000 times
-   the other's mass, after it landed, sank 5 cm in 10 s). */
+   less than a fifth of what knocked the pair off, and a heavy body left
+   to them sinks through a light one (heavy_box_lands_on_light_ones, its
+   10000 times heavier box with sleep off). */
 #define TB__MASS_RATIO_RESTING 100
 
 /* The points between two shapes (or a shape and a particle). */
@@ -311,7 +314,8 @@ struct tb__contacts {
     uint32_t *bucket;          /* [entry_cap]: entries by colour, then points */
     size_t bucket_cap;
     int isa;                   /* the sweeps' instruction set (tb__isa) */
-    int sweeps;                /* velocity sweeps the last step took (for tests) */
+    int sweeps;                /* velocity sweeps the last step took (for tests; of a cold
+                                  step's extra sweeps, the pair that settled is not counted) */
     size_t heavy_lanes;        /* lanes of this step that are heavy (tb__batch) */
     size_t bounces;            /* lanes of this step that bounce */
     double kept_h;             /* s: the step the kept impulses were solved for (0: none) */
@@ -351,9 +355,9 @@ int tb__contacts_active(const tb_world *w);
 tb_status tb__contacts_prepare(tb_world *w, double h);
 /* After the integrator's free motion: solve the contacts. force_lever is
    how far the step's method moves positions under a constant force, as a
-   share of h (stepping/stepping.h, tb__method.force_lever): a resting
-   contact's impulse moves positions by that lever, so a body at rest stays
-   put under every method. */
+   share of h (tb__force_lever, stepping/stepping.h; tb__method in
+   world.h): a resting contact's impulse moves positions by that lever, so
+   a body at rest stays put under every method. */
 void tb__contacts_solve(tb_world *w, double h, double force_lever);
 void tb__contacts_free(tb_world *w);
 

@@ -1,5 +1,6 @@
-/* shapes.c: shapes attached to bodies or static, the contact settings and
-   the events of the last step: the public side of the collision tier. */
+/* shapes.c: shapes attached to bodies or static, the contact settings,
+   and the last step's events and touching points: the public side of the
+   contacts tier, whose tb__contacts it allocates and frees. */
 #include "contacts/contacts.h"
 
 #include <math.h>

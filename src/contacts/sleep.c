@@ -1,14 +1,16 @@
 /* sleep.c: islands of resting bodies fall asleep, and wake when something
-   reaches them (the rules are in tumble.h, "Sleep").
+   reaches them (the rules: include/tumble.h, "Sleep", and docs/contacts.md).
 
    Each step, after the solve, a body with shapes that is slower than
-   sleep_speed adds the step to its rest time (any faster step resets it).
-   Bodies joined by touching contacts form islands (union-find over this
-   step's entries); an island whose every body has rested sleep_time falls
-   asleep under one tag, with zero momenta. While it sleeps its pairs are
-   not collided but carried from step to step (so no end events, and warm
-   starts ready for when it wakes), the solver leaves it out, and its pose
-   is put back after the integrator's free motion. */
+   sleep_speed (|v| + |w| times its shapes' reach) and moved less than
+   sleep_speed times the step adds the step to its rest time (any other
+   step resets it). Bodies joined by touching contacts form islands
+   (union-find over this step's entries); an island whose every body has
+   rested sleep_time falls asleep under one tag, with zero momenta. While
+   it sleeps its pairs are not collided but carried from step to step (so
+   no end events, and warm starts ready for when it wakes), the solver
+   leaves it out, and its pose is put back after the integrator's free
+   motion. Worlds with force callbacks never sleep. */
 #include "contacts/contacts.h"
 
 #include <math.h>
@@ -118,8 +120,8 @@ void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
         w->body_rest[i] = tb__norm3(v) + tb__norm3(omega) * reach[i] < c->settings.sleep_speed ? w->body_rest[i] + h : 0;
     }
     /* ... and that moved slower than that over the step: the position pass
-       moves a body out of an overlap without giving it speed (a plate
-       buried in the plane fell asleep 0.4 m deep, pushed up at 3 m/s) */
+       moves a body out of an overlap without giving it speed
+       (buried_plank_comes_out_before_it_sleeps) */
     for (i = 0; i < c->body_count; ++i) {
         const tb__solver_body *b = &c->bodies[i];
         const double *x, *q;
