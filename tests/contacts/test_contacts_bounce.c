@@ -66,11 +66,13 @@ static void ball_bounces_to_e_squared(void **state)
    dropped, strikes the ground with an edge while the edge sweeps down at
    up to 15 m/s and across it at as much. Restitution at most 1 cannot give
    it energy, and no more is allowed than lifting it by 0.1 mm (as for
-   random_heaps_never_gain_energy). Bounced together with friction that
-   held the edge still, the bounce went partly into its motion through
-   its turn: it rose with 20 to 48% more energy than it was dropped with
-   (the 2 by 2 contact mass of normal and friction couple; Newton's
-   restitution with sticking friction is known to make energy so). */
+   random_heaps_never_gain_energy in test_contacts_heaps.c). The bounce is
+   solved apart from friction: bounced together with friction that holds
+   the edge still, it goes partly into the plate's motion through its
+   turn, and the plate rises with 20 to 48% more energy than it was
+   dropped with (the 2 by 2 contact mass of normal and friction couple;
+   Newton's restitution with sticking friction is known to make energy
+   so). */
 static void spinning_plate_bounces_without_gaining_energy(void **state)
 {
     static const double cases[][3] = { /* spin (rad/s), restitution, height (m) */

@@ -203,9 +203,10 @@ static void rolling_ball_stops_at_its_rolling_resistance(void **state)
    Then it is stood on its end, spinning at 5 rad/s about its own axis,
    now vertical. Its one point lies on that axis, where neither the normal
    force nor friction (the point does not slip) has a lever about it: the
-   spin must stay 5 rad/s. A lane of one point has no twist row, and the
-   twist started from lying down was pushed unchanged on every step: the
-   capsule turned the other way ever faster, by 10 rad/s a step. */
+   spin must stay 5 rad/s. A lane of one point has no twist row, so the
+   twist impulse kept from lying down must go: pushed unchanged on every
+   step, it turns the capsule the other way ever faster, by 10 rad/s a
+   step. */
 static void capsule_stood_on_end_keeps_its_spin(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -266,10 +267,11 @@ static double steps_under(const char *method, double a, double h, int n)
      patch;
    - with mu 0.5 friction holds the cube: under 10 um (it settles 1.4 um
      into the plane).
-   Measured: to the last printed digit. The ball once rolled 3e-5 too far
-   and the capsule 2e-3: a body set down at rest was lifted g h^2 / 2 by its
-   first contact and rolled on that gap (longer arms), and a kept manifold
-   carried the contact point on the slope while the ball rolled off it. */
+   Measured: to the last printed digit. This guards two faults that make
+   the ball roll 3e-5 too far and the capsule 2e-3: a body set down at rest
+   lifted g h^2 / 2 by its first contact, which then rolls on that gap
+   (longer arms), and a kept manifold that carries the contact point along
+   the slope while the ball rolls off it. */
 static double down_the_slope(const char *method, double friction, int ball) /* ball: 1, capsule: 2 */
 {
     const double slope = 20 * 3.14159265358979323846 / 180, r = ball ? 0.1 : 0.5;

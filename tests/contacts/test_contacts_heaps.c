@@ -44,10 +44,11 @@ static void mass_of_shape(double rho, const tb_shape_def *s, tb_mass *mass)
    out of their starting overlaps, by less than 1 m each, so the heap may
    never hold more energy than at its start plus lifting everything 1 m.
    (In 100 heaps it never held more than at its start less lifting
-   everything 1.95 m.) Bounced at their points' mean target, patches of a
-   spinning body whose one end struck while the other left asked its
-   centre, hardly moving, for the striking end's rebound: heaps 22 and 52
-   gained as much as lifting everything 147 and 191 m. */
+   everything 1.95 m.) A bounce leaves a patch's centre no faster than the
+   centre came: bounced at their points' mean target, patches of a
+   spinning body whose one end strikes while the other leaves ask its
+   centre, hardly moving, for the striking end's rebound, and heaps 22 and
+   52 gain as much as lifting everything 147 and 191 m. */
 static double heap_size(uint64_t *rng)
 {
     const double r = uniform(rng);
@@ -185,8 +186,8 @@ static void crowds_built_overlapping_stay_calm(void **state)
    what an overlap cost, which speculative points keep to rounding: the
    total energy must never exceed its start by more than lifting every
    body 0.1 mm (measured at most 1e-8 m, verlet). A twist impulse pushed on
-   every step from nowhere (capsule_stood_on_end_keeps_its_spin) is the
-   kind of fault this watches for. */
+   every step from nowhere (capsule_stood_on_end_keeps_its_spin in
+   test_contacts_friction.c) is the kind of fault this watches for. */
 static void random_heaps_never_gain_energy(void **state)
 {
     int m, heap, i, t;

@@ -31,10 +31,10 @@ static void corner_heights(tb_world *w, tb_body_id id, const double half[3], dou
 /* 40 unit cubes dropped on the plane one at a time, from up to 0.5 m,
    turned up to 0.8 rad about a tilted axis, restitution 0, 0.2 or 0.4,
    sleep off: after 5 s each lies on the plane, its lowest corner within
-   1 um of it (measured at most 4.7e-11 m). A point that touched last
-   step with a gap under a fifth of the slop was held at the gap: 2 of
-   these cubes rested 0.33 mm up. Now, against static ground, it lands
-   again within the step (its friction holding as at rest). */
+   1 um of it (measured at most 4.7e-11 m). Against static ground, a point
+   that touched last step with a gap under a fifth of the slop lands again
+   within the step (its friction holding as at rest): held at the gap
+   instead, 2 of these cubes rest 0.33 mm up. */
 static void dropped_boxes_lie_on_the_plane(void **state)
 {
     double worst = 0;
@@ -118,24 +118,24 @@ static void heavy_landing(double ratio, int under, double gap, int sleep, double
 }
 
 /* Sequential impulses pass a load between bodies of very different masses
-   about one mass ratio's part a sweep: a box 100 times heavier dropped
-   0.5 m onto a light box on the ground was still falling at 0.7 m/s after
-   the landing step, and the landing's warm starts then threw it back up
-   at 1.6 m/s (restitution 0); it went through the light box (ODE's
-   QuickStep, bench_contacts: sank 8 cm; 1000 times heavier, through). With restitution 0
-   it may not rise (bound: the sleep speed, 0.05 m/s), must end on the
-   column within a fifth of the slop (1 mm, the gap a resting contact
-   holds as touching; it ended 0.9 mm above until the part of the landing
-   that holds it up acted as on the ground), and no box under it may go
-   below its place by more than that (dropped 0.1 m, landing at 1.3 m/s,
-   it was timed at the end of its step and pressed the light box 1 cm
-   into the ground, then bounced back at 1.2 m/s); at the end
-   no box may jitter (moving faster than 1 mm/s, the resting box's bound;
-   a light box under one 1000 times heavier once rose and fell 0.7 mm
-   every other step). Mass ratios 10 to 10000 on one box from 0.1, 0.5
-   and 2 m, 100 and 1000 on a column of four, sleep on (the default) and
-   off; and 3 and 5 times, left to the sweeps, where the landing's warm
-   starts threw the box back up at 0.35 and 1 m/s from 2 m. */
+   about one mass ratio's part a sweep: left to them, a box 100 times
+   heavier dropped 0.5 m onto a light box on the ground is still falling
+   at 0.7 m/s after the landing step, the landing's warm starts then throw
+   it back up at 1.6 m/s (restitution 0), and it goes through the light
+   box (ODE's QuickStep, bench_contacts: sinks 8 cm; 1000 times heavier,
+   through). With restitution 0 it may not rise (bound: the sleep speed,
+   0.05 m/s), must end on the column within a fifth of the slop (1 mm, the
+   gap a resting contact holds as touching; the part of the landing that
+   holds it up acts as on the ground, or it ends 0.9 mm above), and no box
+   under it may go below its place by more than that (dropped 0.1 m,
+   landing at 1.3 m/s, a landing timed at the end of its step presses the
+   light box 1 cm into the ground, then bounces back at 1.2 m/s); at the
+   end no box may jitter (moving faster than 1 mm/s, the resting box's
+   bound; a light box under one 1000 times heavier can rise and fall
+   0.7 mm every other step). Mass ratios 10 to 10000 on one box from 0.1,
+   0.5 and 2 m, 100 and 1000 on a column of four, sleep on (the default)
+   and off; and 3 and 5 times, left to the sweeps, where the landing's
+   warm starts can throw the box back up at 0.35 and 1 m/s from 2 m. */
 static void heavy_box_lands_on_light_ones(void **state)
 {
     static const struct {
@@ -185,12 +185,12 @@ static double dropped_on_a_box(double gap, int ball)
 /* The landing step leaves a body that lands on another a little above
    it: the part of the landing impulse that holds it up acts on positions
    over the whole rest of the step, where on the static ground it acts
-   for half of it (g h^2 / 16 at most, 1 mm at 60 Hz). Touching last step
-   and within a fifth of the slop, such a gap was rested on: boxes and
-   balls dropped on a box hovered up to 0.96 mm above it. Now a gap of
-   more than 1% of the slop between two bodies lands again, as under
-   gravity; what is left must be under that, 0.05 mm, and an overlap
-   within the slop. */
+   for half of it (g h^2 / 16 at most, 1 mm at 60 Hz). A gap of more than
+   1% of the slop between two bodies lands again, as under gravity; what
+   is left must be under that, 0.05 mm, and an overlap within the slop.
+   Rested on instead (touching last step and within a fifth of the slop),
+   such a gap leaves boxes and balls dropped on a box hovering up to
+   0.96 mm above it. */
 static void bodies_dropped_on_bodies_rest_on_them(void **state)
 {
     static const double gaps[] = { 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 2 };
@@ -215,8 +215,8 @@ static void bodies_dropped_on_bodies_rest_on_them(void **state)
    tilted onto the plane, end first, must move to the bit the same with or
    without a box resting far away. The solver lays such manifolds side by
    side in one batch, the box's four points first; the capsule's lane then
-   has rows for points it lacks, which must be empty (once they held the
-   inverse masses, and stopped the capsule's centre at its first touch). */
+   has rows for points it lacks, which must be empty (rows that hold the
+   inverse masses stop the capsule's centre at its first touch). */
 static tb_body_id drop_capsule(tb_world *w)
 {
     tb_body_def b = tb_default_body_def();
@@ -300,11 +300,11 @@ static void plank_heights(tb_world *w, tb_body_id id, double *low, double *high)
 /* The plank buried half a metre deep and 5 degrees off level, every
    corner under the surface, default settings: the contact pass pushes it
    out (at most max_push, 3 m/s) and it comes to lie flat on the plane.
-   Sleep looked at speed alone, which the position pass leaves at zero
-   while it lifts a body, and the plank fell asleep with a corner 6.6 mm
-   deep (a heavier one 0.4 m deep). So it must not sleep while any corner
-   is deeper than the slop (5 mm), and after 5 s it lies asleep on the
-   surface, within 0.1 mm of flat. */
+   Speed alone does not show that it rests: the position pass leaves it at
+   zero while it lifts a body, and judged by speed alone the plank falls
+   asleep with a corner 6.6 mm deep (a heavier one 0.4 m deep). So it must
+   not sleep while any corner is deeper than the slop (5 mm), and after
+   5 s it lies asleep on the surface, within 0.1 mm of flat. */
 static void buried_plank_comes_out_before_it_sleeps(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -331,9 +331,9 @@ static void buried_plank_comes_out_before_it_sleeps(void **state)
    pushing its centre and turning it toward the plane that levels what its
    points need, so the plank comes out whole, as fast as the push allows
    (max_push, 3 m/s: 10 steps), and lies flat on the surface within 0.1 mm
-   after 2 s. Rows per point alone met its ends in turn, each push turning
-   it and sinking the other end: it came out by about 1% of its depth a
-   step, and was still 15 cm deep after 2 s. */
+   after 2 s. Rows per point alone meet its ends in turn, each push turning
+   it and sinking the other end: it comes out by about 1% of its depth a
+   step, and is still 15 cm deep after 2 s. */
 static void heavy_plank_comes_out_whole(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -356,12 +356,12 @@ static void heavy_plank_comes_out_whole(void **state)
    (tb__method's force_lever), so a body at rest stays put under every
    integrator: a cube set on the plane keeps its height within 0.1 mm and
    its speed under 1 mm/s for 2 s, and the plank laid flat 5 cm under the
-   plane comes out to lie on it within 0.1 mm in 3 s. With one lever for
-   all (h / 2), explicit Euler's cube hovered 1.7 mm up, bouncing at 0.16
-   m/s, and under symplectic and implicit Euler the plank stayed 0.9 mm
-   deep (a plank with a heavy core 4 cm): the position pass took back the
-   g h^2 / 2 they fall too far each step only as far as it converged.
-   (Sleep off: the solver's own resting.) */
+   plane comes out to lie on it within 0.1 mm in 3 s. One lever for all
+   (h / 2) does not do: explicit Euler's cube hovers 1.7 mm up, bouncing
+   at 0.16 m/s, and under symplectic and implicit Euler the plank stays
+   0.9 mm deep (a plank with a heavy core 4 cm), the position pass taking
+   back the g h^2 / 2 they fall too far each step only as far as it
+   converges. (Sleep off: the solver's own resting.) */
 static void every_integrator_keeps_a_resting_box_still(void **state)
 {
     int m;

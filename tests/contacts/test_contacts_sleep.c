@@ -116,9 +116,10 @@ static void islands_wake_together(void **state)
 /* Everything asleep, then woken all at once: a box asleep on a static box
    (a plane 5 m lower) must fall when the static box is removed, and a box
    asleep on the plane must slide when gravity turns 8 m/s^2 sideways
-   (friction 0.6 holds up to 5.9). The sleeping poses, put back after each
-   step's free motion, were kept from the step before the wake when nothing
-   was left asleep: both hung where they slept, for good. */
+   (friction 0.6 holds up to 5.9). The sleeping poses are put back after
+   each step's free motion, so the wake must drop them even when nothing is
+   left asleep: kept from the step before the wake, they hold both boxes
+   where they slept, for good. */
 static void woken_world_moves_again(void **state)
 {
     tb_world_def def = tb_default_world_def();

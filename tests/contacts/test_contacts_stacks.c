@@ -80,9 +80,9 @@ static double column_after(double h, int changing)
    times might come, must stand as still as stepped at 1/30 s throughout:
    both within 1 um of where they were put (measured 6e-17 and 0 m).
    Last step's impulses are a force times last step's h, so they start
-   this step scaled to its h (as Box2D's dtRatio): kept as they were, a
-   step of a third started from three times the force, and the column
-   ended 6.1e-4 m off (stepped at 0.1 and 0.033 s, 0.3 m). */
+   this step scaled to its h (as Box2D's dtRatio): kept as they are, a
+   step of a third starts from three times the force, and the column ends
+   6.1e-4 m off (stepped at 0.1 and 0.033 s, 0.3 m). */
 static void column_stands_under_changing_steps(void **state)
 {
     const double steady = column_after(1.0 / 30, 0), changing = column_after(1.0 / 30, 1);
@@ -152,22 +152,23 @@ static double offset_stack(int n, const double (*half)[3], const double (*at)[2]
 /* Staircases of boxes 0.6 x 0.6 x 0.4 m, sleep off, 10 s: 5 boxes each
    10 cm along x from the one under it, and 8 each 5 cm along x and y.
    Statically they stand (by 5 and 10 cm), so the truth is still: every
-   box within 1 mm of where it was put (measured 2e-18 and 3e-17 m). Two
-   faults made them fall:
+   box within 1 mm of where it was put (measured 2e-18 and 3e-17 m). What
+   holds them up:
    - sequential impulses carry the moments that hold an offset stack up
      from the top box to the ground patch by patch, and a cold first step
-     gave the staircase of 8 along x 4% of the moment its ground needed:
-     it rocked onto edges and fell. The first step's normal rows are now
+     gives the staircase of 8 along x 4% of the moment its ground needs:
+     it rocks onto edges and falls. So the first step's normal rows are
      solved together (cold_start.c);
    - boxes built 1e-16 m apart fall together in the free motion, so their
-     gap never closes within the step: timed as a landing, such a point
-     acted on positions for no time, and in the first step each box of
-     the diagonal staircase rose or sank by up to 1 cm. Now it rests.
-   With the press at the points' centre, the staircase of 5 fell 2.7 m;
-   with it where last step's force was centred, it rocked by 3.8 cm. The
-   staircase of 8 again with every sweep done (velocity_tolerance 0),
-   which once took the first step's conjugate gradients past rounding and
-   threw it 1e12 m. */
+     gap never closes within the step: such a point rests. Timed as a
+     landing, it would act on positions for no time, and in the first step
+     each box of the diagonal staircase would rise or sink by up to 1 cm;
+   - the press sits neither at the points' centre (the staircase of 5
+     falls 2.7 m) nor where last step's force was centred (it rocks by
+     3.8 cm).
+   The staircase of 8 runs again with every sweep done (velocity_tolerance
+   0): the first step's conjugate gradients must stop at rounding there,
+   since run past it they throw the staircase 1e12 m. */
 static void staircases_stand_still(void **state)
 {
     double half[STACK_MOST][3], at[STACK_MOST][2], margin, five, eight, every;
@@ -227,8 +228,8 @@ static double random_stacks(uint64_t seed, int count, int sleep, int stack, int 
 
 /* 12 random stacks of 8 (random_stack), each standing statically by 5 cm
    at the least, with the default settings (sleep on), 10 s: every box
-   within 1 mm of where it was put (measured 2e-11 m). Before the cold
-   start (cold_start.c), 9 of the 12 fell. */
+   within 1 mm of where it was put (measured 2e-11 m). The cold start
+   (cold_start.c) holds them: without it 9 of the 12 fall. */
 static void random_offset_stacks_stand(void **state)
 {
     double least;
@@ -247,11 +248,12 @@ static void random_offset_stacks_stand(void **state)
    lean of a whole stack grows from rounding, by 2 to 3% a step (the
    sweeps reduce it slowest), until the stack falls: 3 of the 40 from 10 s
    or so on; one of them at 40 s even with every sweep of 20 done. The
-   stack iterations were skipped where the warm starts left every row
-   within velocity_tolerance, as a stack at rest always does: boxes moved
-   up to 7.4e-5 m, growing (with 4 iterations, one stack fell at 38 s
-   under other rounding). They now run at every step; 4 of them still let
-   a lean grow, 80-fold in 6 s up to 1.4e-4 m in 60 s. */
+   stack iterations run at every step, even where the warm starts leave
+   every row within velocity_tolerance, as a stack at rest always does:
+   skipping them there lets boxes move up to 7.4e-5 m, growing (with 4
+   iterations one stack can fall, at 38 s under some rounding). Run at
+   every step, 4 still let a lean grow, 80-fold in 6 s up to 1.4e-4 m in
+   60 s; 8 hold it. */
 static void awake_offset_stacks_stay_up_with_stack_iterations(void **state)
 {
     double least;
@@ -262,17 +264,17 @@ static void awake_offset_stacks_stay_up_with_stack_iterations(void **state)
     assert_below(worst, 1e-6);
 }
 
-/* The issue's pyramid (tests/ode_contacts.c's layout: 20 levels, 210 unit
-   cubes 1 cm apart, mu 0.6), default settings, 10 s at 60 Hz. Standing
-   means no cube sinks 1 cm (ODE's top cube sinks 5 cm) and the top cube
-   ends within 1 cm of where it started (the issue's bound; measured 1.8e-5
-   m, 1.1 mm before the first step's normal rows were solved together), no
-   cube 2 cm; the pyramid must also fall asleep. (With rows per contact
-   point the wall, 20 m high and one cube deep, rocked out of its plane as
-   it settled: the top cube ended 7 mm to 4 cm away, depending on
-   rounding.) Again with every sweep done (velocity_tolerance 0), which
-   once took the first step's conjugate gradients past rounding and threw
-   the pyramid 1e12 m. */
+/* The issue's pyramid (reference/ode_contacts.h's layout: 20 levels, 210
+   unit cubes 1 cm apart, mu 0.6), default settings, 10 s at 60 Hz.
+   Standing means no cube sinks 1 cm (ODE's top cube sinks 5 cm) and the
+   top cube ends within 1 cm of where it started (the issue's bound;
+   measured 1.8e-5 m, 1.1 mm unless the first step's normal rows are solved
+   together), no cube 2 cm; the pyramid must also fall asleep. (With rows
+   per contact point the wall, 20 m high and one cube deep, rocks out of
+   its plane as it settles: the top cube ends 7 mm to 4 cm away, depending
+   on rounding.) Again with every sweep done (velocity_tolerance 0): the
+   first step's conjugate gradients must stop at rounding there, since run
+   past it they throw the pyramid 1e12 m. */
 static void pyramid_stands_and_sleeps(void **state)
 {
     const ode_pyramid_def d = ode_default_pyramid_def();
