@@ -167,7 +167,7 @@ static inline void qmul(const double a[4], const double b[4], double out[4])
 
 /* Angle of a^-1 b for unit quaternions, 2 atan2(|vector part|, |scalar
    part|): acos of the dot product loses everything below 1e-7 rad
-   (NOTES.md), and these errors go down to 1e-13. */
+   (docs/notes.md), and these errors go down to 1e-13. */
 static inline double angle_between(const double a[4], const double b[4])
 {
     const double s = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];

@@ -1,5 +1,5 @@
 /* contacts.c: contact throughput and stacking, tumble beside ODE on the
-   reference scenes of tests/ode_contacts.h (built there for ODE, here for
+   reference scenes of reference/ode_contacts.h (built there for ODE, here for
    tumble from the same layouts).
 
    - pyramid: 210 unit cubes of 1 kg in 20 levels, 1 cm apart in a level, on

@@ -387,10 +387,11 @@ static void blow_up_is_stopped_and_auto_plans(void **state)
 
 
 /* Scenes with contacts: the slide stops at v^2 / (2 mu g) = 2.548 m (its
-   last row; to mu g h^2 / 2 = 0.68 mm at 60 Hz, see test_contacts), the balls of the bounce scene never sink below the plane by
-   more than the slop, the heavy crate ends on its column of three within
-   a fifth of the slop (its centre at 3.5 m; by the sweeps alone it went
-   through them), and the other three run. */
+   last row; to mu g h^2 / 2 = 0.68 mm at 60 Hz, see test_contacts_friction),
+   the balls of the bounce scene never sink below the plane by more than
+   the slop, the heavy crate ends on its column of three within a fifth of
+   the slop (its centre at 3.5 m; by the sweeps alone it goes through
+   them), and the other three run. */
 static void contact_scenes(void **state)
 {
     double last[15];

@@ -105,7 +105,7 @@ static void sort3(double v[3])
 }
 
 /* A result from a diagonalised tensor: moments ascending, frame a unit
-   quaternion with w >= 0 (both as src/mass.c documents). The norm is a sum
+   quaternion with w >= 0 (both as src/bodies/mass.c documents). The norm is a sum
    of four squares, good to a few eps. */
 static void assert_principal_form(const tb_mass *m)
 {
@@ -164,7 +164,7 @@ static void cylinder_matches_closed_form(void **state)
     assert_identity_frame(&out);
 }
 
-/* The capsule in expanded form, derived independently of src/mass.c's
+/* The capsule in expanded form, derived independently of src/bodies/mass.c's
    cap-by-cap parallel-axis sum: with the cylinder mass mc and the two caps'
    mass ms,
      I_perp = mc (3 r^2 + l^2) / 12 + ms (2/5 r^2 + 3/8 r l + 1/4 l^2),

@@ -1,4 +1,4 @@
-/* test_ode.c: ODE reference runs (DESIGN.md section 5, third kind of truth).
+/* test_ode.c: ODE reference runs (docs/design.md section 5, third kind of truth).
 
    Scene: one point mass m under gravity g with linear drag f = -c v, from
    x0 with velocity v0, for T = 10 s at h = 1/60 s. In ODE it is one body

@@ -298,7 +298,7 @@ static void bodies_from_lua(void **state)
     expect_error(L, "w:body{ points = {{0, 0, 0, 1}, {1, 0, 0, 1}} }", "points");
     expect_error(L, "w:body{ mesh = { vertices = {0,0,0, 1,0,0, 0,1,0}, triangles = {1,2,3} } }", "mesh");
     expect_error(L, "w:body{ shape = 'box' }", "unknown option 'shape'");
-    /* a string where a table goes was read as a table (a crash) */
+    /* a string where a table goes is not read as a table (that crashes) */
     expect_error(L, "w:body{ cylinder = 'long' }", "'cylinder' must be a table");
     expect_error(L, "w:body{ capsule = 2 }", "'capsule' must be a table");
     expect_error(L, "w:body{ points = 'x' }", "'points' must be a table");
@@ -380,9 +380,9 @@ static void shapes_and_events(void **state)
    functions; the first often a table of one option), with bodies, shapes
    and particles made and removed between steps: each call returns or
    raises a Lua error, and nothing crashes (the suite runs under
-   AddressSanitizer in CI too). A string given where the mass needed a
-   table (world:body{cylinder = 'x'}) was read as a table, through a null
-   pointer: this crashes on that code under AddressSanitizer. */
+   AddressSanitizer in CI too). It guards, among others, a string given
+   where the mass needs a table (world:body{cylinder = 'x'}) read as a
+   table through a null pointer, which crashes under AddressSanitizer. */
 static const char *fuzz_script =
     "local seed = ...\n"
     "local state = seed\n"

@@ -1,4 +1,4 @@
-/* test_collide.c: the narrowphase (src/collide.c) against closed-form
+/* test_collide.c: the narrowphase (src/collision/collide.c) against closed-form
    contacts for every pair of shapes, then its promises: the normal flips
    and the points stay when a and b swap, features survive a small move,
    and, over random configurations, depths agree with brute-force distances,
@@ -575,8 +575,8 @@ static void box_lying_on_plane_gives_four_corners(void **state)
 /* A plank 4 m long and 1.8 cm thick, buried in the plane with its length
    5 degrees off level, every corner under the surface: the points are its
    bottom face's, so they span both ends. The 4 deepest of all 8 corners
-   were the low end's, top and bottom, and the push there only turned the
-   plank: one with a heavy core sank through the plane for good. */
+   are the low end's, top and bottom, and a push there only turns the
+   plank: one with a heavy core would sink through the plane for good. */
 static void buried_plank_keeps_both_ends(void **state)
 {
     (void)state;

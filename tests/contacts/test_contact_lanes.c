@@ -258,9 +258,10 @@ static void moving_pairs_are_collided_afresh(void **state)
    pair of sweeps soon changes no velocity by more than 1e-6 m/s, and the
    velocity pass stops early: at most 10 sweeps a step on average
    (measured 6.6; the first step, solved by the cold start, takes none of
-   the cold sweeps). A target that moved every step (closing gaps of a
-   few um between boxes by half a step) kept the sweeps from settling:
-   all 20 every step, the whole solve at twice its cost. */
+   the cold sweeps). The target stays put while the pyramid rests: one
+   that moves every step (closing gaps of a few um between boxes by half a
+   step) keeps the sweeps from settling, all 20 every step, the whole
+   solve at twice its cost. */
 static void resting_pyramid_sweeps_stop_early(void **state)
 {
     tb_world *w = world_on_plane(0);

@@ -1,4 +1,4 @@
-/* test_rotation.c: the torque-free rotation kernels (src/rotation.c) against
+/* test_rotation.c: the torque-free rotation kernels (src/bodies/rotation.c) against
    closed forms (isotropic body, symmetric top), against a converged
    reference on the intermediate-axis flip that this file checks for its own
    convergence, and for the orders, invariants and symmetries they claim;
@@ -177,7 +177,7 @@ static void rk4_reference(const double q0[4], const double L[3], const double in
     }
 }
 
-/* The flip of NOTES.md: I = diag(1, 2, 3) kg m^2, w0 = (0.01, 5, 0.01) rad/s
+/* The flip of docs/notes.md: I = diag(1, 2, 3) kg m^2, w0 = (0.01, 5, 0.01) rad/s
    in the body frame, q0 = identity, 20 s at h = 1/60. */
 static const double FLIP_I[3] = { 1, 2, 3 };
 static const double FLIP_W[3] = { 0.01, 5, 0.01 };

@@ -1,5 +1,5 @@
-/* test_ode_bodies.c: ODE reference runs for rigid bodies (DESIGN.md section
-   5, third kind of truth), the bodies' counterpart of test_ode.c.
+/* test_ode_bodies.c: ODE reference runs for rigid bodies (docs/design.md
+   section 5, third kind of truth), the bodies' counterpart of test_ode.c.
 
    Cases:
    - ode_centre_of_mass_matches_dworldstep: several bodies under gravity,
@@ -7,7 +7,7 @@
      dWorldStep and with tumble's "symplectic_euler" at h = 1/60 s for 10 s:
      the centres of mass follow the same trajectory to 1e-12 relative;
    - ode_flip_verlet_exact_beats_dworldstep: on the intermediate-axis flip
-     (NOTES.md) tumble's "verlet_exact" ends at least 1000 times closer to a
+     (docs/notes.md) tumble's "verlet_exact" ends at least 1000 times closer to a
      converged reference orientation than dWorldStep; with its gyroscopic
      term switched off ODE keeps the energy but never flips.
 
@@ -41,7 +41,7 @@ static double dist3(const double a[3], const double b[3])
 }
 
 /* Angle of a^-1 b for unit quaternions (w, x, y, z), robust for tiny
-   angles: 2 atan2(|vector part|, |scalar part|) (NOTES.md). */
+   angles: 2 atan2(|vector part|, |scalar part|) (docs/notes.md). */
 static double angle_between(const double a[4], const double b[4])
 {
     const double s = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
@@ -386,7 +386,7 @@ static void ode_centre_of_mass_matches_dworldstep(void **state)
 
 /* ============================================ case 2: the flip ====== */
 
-/* NOTES.md: I = diag(1, 2, 3) kg m^2, w0 = (0.01, 5, 0.01) rad/s in the
+/* docs/notes.md: I = diag(1, 2, 3) kg m^2, w0 = (0.01, 5, 0.01) rad/s in the
    body frame (the world frame too: q0 = identity), 20 s at h = 1/60 s, no
    gravity, no torque. */
 #define FLIP_STEPS 1200
@@ -502,7 +502,7 @@ static void run_tumble_flip(const char *integrator, double h, int steps, flip_ru
    Bounds:
    - err_ode >= 1000 err(verlet_exact): the issue's ratio. ODE's rotation
      is first order (an explicit quaternion step and Lacoursiere's implicit
-     gyroscopic torque, which also bleeds off energy), NOTES.md measured
+     gyroscopic torque, which also bleeds off energy), docs/notes.md measured
      1.6 rad; verlet_exact's fourth-order kernel lands near 1e-9 rad, so the
      ratio is about 1e9 and the bound fails only if ODE became second order
      or tumble's best method lost its order.
@@ -542,7 +542,7 @@ static void ode_flip_verlet_exact_beats_dworldstep(void **state)
     print_message("after %g s: dWorldStep %.4g rad, verlet_exact %.4g rad: ratio %.3g\n", FLIP_STEPS * H, err_ode,
                   err_best, err_ode / err_best);
     print_message("dWorldStep (gyroscopic on):  |L| drift %.3g (worst %.3g), energy drift %.3g (worst %.3g); "
-                  "NOTES.md: 8.9e-2, 2.1e-1, 1.6 rad\n", ode.l_end, ode.l_worst, ode.e_end, ode.e_worst);
+                  "docs/notes.md: 8.9e-2, 2.1e-1, 1.6 rad\n", ode.l_end, ode.l_worst, ode.e_end, ode.e_worst);
     print_message("dWorldStep (gyroscopic off): |L| drift %.3g, energy drift %.3g (worst %.3g, %.3g), "
                   "y axis within %.3g rad of its start (reference: %.4g rad), orientation error %.4g rad\n",
                   ode_free.l_end, ode_free.e_end, ode_free.l_worst, ode_free.e_worst, ode_free.axis_angle,

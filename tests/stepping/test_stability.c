@@ -294,7 +294,7 @@ static void advisor_refuses_bad_steps(void **state)
 
 /* On a linear spring, linearised backward Euler is backward Euler, which
    multiplies v^2 + w^2 x^2 by exactly 1 / (1 + (h w)^2) per step: at
-   h w = 0.1 the energy falls to 0.535 of itself in a period (NOTES.md), and
+   h w = 0.1 the energy falls to 0.535 of itself in a period (docs/notes.md), and
    at h w = 100 it is still stable, only strongly damped. */
 static void implicit_euler_damps_as_predicted(void **state)
 {

@@ -1,5 +1,5 @@
 /* ode_contacts.h: ODE 0.16.2 reference runs of scenes with contacts, for
-   tumble's tests and benchmarks to compare against (DESIGN.md section 5,
+   tumble's tests and benchmarks to compare against (docs/design.md section 5,
    third kind of truth). Not a cmocka file: a plain C library over ODE.
 
    Common to every scene: SI units; z is up; a static plane z = 0 (ODE plane
@@ -157,7 +157,7 @@ typedef struct ode_timing {
    ODE reports side contacts or not by round-off (1673 contacts a step on
    average, up to 2340, against a steady 1545 to 1580 with 0.01 m); the top
    cube sinks the same 0.050 m in 10 s for any gap from 0 to 0.05 m. The
-   sink is robust; the top cube's drift is not: it went from 0.012 to
+   sink is robust; the top cube's drift is not: it goes from 0.012 to
    0.097 m between ODE random seeds (see dRandSetSeed above), so compare
    drift only loosely. */
 

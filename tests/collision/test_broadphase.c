@@ -1,4 +1,4 @@
-/* test_broadphase.c: the sweep and prune (src/broadphase.c) against a
+/* test_broadphase.c: the sweep and prune (src/collision/broadphase.c) against a
    brute-force O(n^2) pair list, exactly, through the paths its kept order
    takes: first sort, small moves (insertion sort), large moves and axis
    changes (full sort), proxies removed by swap-remove and added; then the

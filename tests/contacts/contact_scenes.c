@@ -1,0 +1,66 @@
+/* contact_scenes.c: the scene helpers of contact_scenes.h. */
+#include "test_main.h"
+#include "contact_scenes.h"
+
+#include <math.h>
+#include <string.h>
+
+tb_world *world_on_plane(double friction, double restitution)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_shape_def plane = tb_default_shape_def();
+    tb_world *w;
+    def.gravity[2] = -G;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    plane.type = TB_SHAPE_PLANE;
+    plane.friction = friction;
+    plane.restitution = restitution;
+    assert_int_equal(tb_world_add_shape(w, &plane, NULL), TB_OK);
+    return w;
+}
+
+tb_body_id add_box(tb_world *w, const double centre[3], double edge, double friction)
+{
+    tb_body_def b = tb_default_body_def();
+    tb_shape_def s = tb_default_shape_def();
+    const double size[3] = { edge, edge, edge };
+    tb_body_id id;
+    assert_int_equal(tb_mass_box(1 / (edge * edge * edge), size, &b.mass, NULL), TB_OK); /* 1 kg */
+    memcpy(b.position, centre, sizeof b.position);
+    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
+    s.type = TB_SHAPE_BOX;
+    s.body = id;
+    s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = edge / 2;
+    s.friction = friction;
+    assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
+    return id;
+}
+
+tb_body_id add_ball(tb_world *w, const double centre[3], double radius, double restitution)
+{
+    tb_body_def b = tb_default_body_def();
+    tb_shape_def s = tb_default_shape_def();
+    tb_body_id id;
+    assert_int_equal(tb_mass_sphere(1 / (4.0 / 3 * 3.14159265358979323846 * radius * radius * radius), radius,
+                                    &b.mass, NULL), TB_OK);
+    memcpy(b.position, centre, sizeof b.position);
+    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
+    s.body = id;
+    s.radius = radius;
+    s.restitution = restitution;
+    assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
+    return id;
+}
+
+double uniform(uint64_t *state)
+{
+    *state = *state * 6364136223846793005u + 1442695040888963407u;
+    return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+void awake(tb_world *w)
+{
+    tb_contact_settings s = tb_world_contact_settings(w);
+    s.sleep_time = INFINITY;
+    assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
+}

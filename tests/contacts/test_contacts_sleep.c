@@ -1,0 +1,205 @@
+/* test_contacts_sleep.c: sleep. A resting box falls asleep and stays
+   put, sleeping bodies wake when something lands on them, is removed from
+   under them or changes their motion, islands wake together, and the
+   sleep settings are checked. */
+#include "test_main.h"
+#include "tumble.h"
+#include "contact_scenes.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Steps until body id sleeps, at most `limit` steps; returns the steps taken. */
+static int steps_to_sleep(tb_world *w, tb_body_id id, int limit)
+{
+    int n, asleep = 0;
+    for (n = 0; n < limit && !asleep; ++n) {
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        assert_int_equal(tb_body_asleep(w, id, &asleep), TB_OK);
+    }
+    return n;
+}
+
+/* A box set down on the plane rests at once (its speed after a step is
+   gravity's kick undone to rounding), so it sleeps after sleep_time, 0.5 s:
+   30 steps at 60 Hz, plus the one that starts the count. Asleep, its pose
+   must not change by a bit over 5 s, its momenta are zero, and its 4
+   contact points are still reported. */
+static void resting_box_falls_asleep_and_stays_put(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double at[3] = { 0, 0, 0.5 };
+    tb_body_id id = add_box(w, at, 1, 0.6);
+    double x0[3], q0[4], x[3], q[4], P[3], L[3];
+    int n, i;
+    (void)state;
+    n = steps_to_sleep(w, id, 120);
+    print_message("resting box asleep after %d steps\n", n);
+    assert_in_range(n, 30, 32);
+    assert_int_equal(tb_world_sleeping_count(w), 1);
+    tb_body_position(w, id, x0);
+    tb_body_orientation(w, id, q0);
+    for (i = 0; i < 300; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_position(w, id, x);
+    tb_body_orientation(w, id, q);
+    tb_body_momentum(w, id, P, L);
+    assert_memory_equal(x, x0, sizeof x);
+    assert_memory_equal(q, q0, sizeof q);
+    assert_true(P[0] == 0 && P[1] == 0 && P[2] == 0 && L[0] == 0 && L[1] == 0 && L[2] == 0);
+    assert_int_equal(tb_world_contact_count(w), 4);
+    assert_rel(x[2], 0.5, 1e-9);
+    tb_world_destroy(w);
+}
+
+/* A ball dropped on a sleeping box wakes it when its bounds reach the box,
+   and lands on it: it must come to rest on the top face (z = 1 + r within
+   the 5 mm slop), never inside the box; and rest on it, not on a gap:
+   within 0.1 mm (measured 2.8e-5 m). Then both sleep again. */
+static void sleeping_box_wakes_when_a_ball_lands(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double at[3] = { 0, 0, 0.5 }, drop[3] = { 0.2, 0, 2 };
+    tb_body_id box = add_box(w, at, 1, 0.6), ball;
+    double x[3], lowest = INFINITY;
+    int asleep, woke = 0, i;
+    (void)state;
+    steps_to_sleep(w, box, 120);
+    ball = add_ball(w, drop, 0.1, 0);
+    for (i = 0; i < 180; ++i) {
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        assert_int_equal(tb_body_asleep(w, box, &asleep), TB_OK);
+        woke |= !asleep;
+        tb_body_position(w, ball, x);
+        lowest = fmin(lowest, x[2]);
+    }
+    tb_body_position(w, ball, x);
+    print_message("ball on a sleeping box: box woke %d, ball's lowest centre %.5f m, last %.7f m (top face + r = "
+                  "1.1)\n", woke, lowest, x[2]);
+    assert_true(woke);
+    assert_true(lowest > 1.1 - 0.005);
+    assert_true(fabs(x[2] - 1.1) < 1e-4);
+    steps_to_sleep(w, ball, 120);
+    assert_int_equal(tb_world_sleeping_count(w), 2);
+    tb_world_destroy(w);
+}
+
+/* Two boxes stacked sleep as one island. Setting the lower one's velocity
+   wakes both; removing the lower one (asleep again) wakes the upper one,
+   which must then fall to the plane: centre at 0.5 within the slop. */
+static void islands_wake_together(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double at0[3] = { 0, 0, 0.5 }, at1[3] = { 0, 0, 1.5 }, push[3] = { 0.01, 0, 0 };
+    tb_body_id low = add_box(w, at0, 1, 0.6), high = add_box(w, at1, 1, 0.6);
+    double x[3];
+    int asleep, i;
+    (void)state;
+    steps_to_sleep(w, high, 240);
+    assert_int_equal(tb_world_sleeping_count(w), 2);
+    assert_int_equal(tb_body_set_velocity(w, low, push), TB_OK);
+    assert_int_equal(tb_body_asleep(w, high, &asleep), TB_OK);
+    assert_false(asleep);
+    assert_int_equal(tb_world_sleeping_count(w), 0);
+    steps_to_sleep(w, high, 240);
+    assert_int_equal(tb_world_sleeping_count(w), 2);
+    assert_int_equal(tb_world_remove_body(w, low), TB_OK);
+    assert_int_equal(tb_body_asleep(w, high, &asleep), TB_OK);
+    assert_false(asleep);
+    for (i = 0; i < 120; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_position(w, high, x);
+    assert_true(fabs(x[2] - 0.5) < 0.005);
+    tb_world_destroy(w);
+}
+
+/* Everything asleep, then woken all at once: a box asleep on a static box
+   (a plane 5 m lower) must fall when the static box is removed, and a box
+   asleep on the plane must slide when gravity turns 8 m/s^2 sideways
+   (friction 0.6 holds up to 5.9). The sleeping poses are put back after
+   each step's free motion, so the wake must drop them even when nothing is
+   left asleep: kept from the step before the wake, they hold both boxes
+   where they slept, for good. */
+static void woken_world_moves_again(void **state)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_shape_def floor = tb_default_shape_def(), plane = tb_default_shape_def();
+    const double at[3] = { 0, 0, 0.5 }, sideways[3] = { 8, 0, -G };
+    tb_shape_id under;
+    tb_world *w;
+    tb_body_id box;
+    double x[3];
+    int i;
+    (void)state;
+    def.gravity[2] = -G;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    plane.type = TB_SHAPE_PLANE, plane.offset = -5;
+    assert_int_equal(tb_world_add_shape(w, &plane, NULL), TB_OK);
+    floor.type = TB_SHAPE_BOX, floor.half_extents[0] = floor.half_extents[1] = floor.half_extents[2] = 1;
+    floor.position[2] = -1;
+    assert_int_equal(tb_world_add_shape(w, &floor, &under), TB_OK);
+    box = add_box(w, at, 1, 0.6);
+    assert_int_equal(steps_to_sleep(w, box, 120) < 120, 1);
+    for (i = 0; i < 10; ++i) /* asleep a while */
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    assert_int_equal(tb_world_remove_shape(w, under), TB_OK);
+    for (i = 0; i < 120; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_position(w, box, x);
+    assert_below(fabs(x[2] + 4.5), 1e-3); /* on the plane */
+    assert_int_equal(steps_to_sleep(w, box, 120) < 120, 1);
+    for (i = 0; i < 10; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    assert_int_equal(tb_world_set_gravity(w, sideways), TB_OK);
+    for (i = 0; i < 60; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_position(w, box, x);
+    /* 1 s of 8 - 0.6 g = 2.114 m/s^2 from rest: 1.057 m */
+    print_message("woken box: fell to %.4f m, slid %.6f m in 1 s (%.6f)\n", x[2], x[0], 0.5 * (8 - 0.6 * G));
+    assert_rel(x[0], 0.5 * (8 - 0.6 * G), 1e-3);
+    tb_world_destroy(w);
+}
+
+/* Sleep is off with sleep_time = INFINITY and in worlds with a force
+   callback; bad sleep settings are refused and the old ones kept. */
+static tb_status no_force(const tb_force_args *args, void *user)
+{
+    (void)args, (void)user;
+    return TB_OK;
+}
+
+static void sleep_settings(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double at[3] = { 0, 0, 0.5 };
+    tb_body_id id = add_box(w, at, 1, 0.6);
+    tb_contact_settings s = tb_default_contact_settings(), bad;
+    (void)state;
+    s.sleep_time = INFINITY;
+    assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
+    assert_int_equal(steps_to_sleep(w, id, 120), 120);
+    assert_int_equal(tb_world_sleeping_count(w), 0);
+    s.sleep_time = 0.5;
+    assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
+    assert_int_equal(tb_world_add_force(w, no_force, NULL, NULL), TB_OK);
+    assert_int_equal(steps_to_sleep(w, id, 120), 120);
+    bad = s, bad.sleep_time = 0;
+    assert_int_equal(tb_world_set_contact_settings(w, &bad), TB_ERR_ARGUMENT);
+    bad = s, bad.sleep_time = NAN;
+    assert_int_equal(tb_world_set_contact_settings(w, &bad), TB_ERR_ARGUMENT);
+    bad = s, bad.sleep_speed = -1;
+    assert_int_equal(tb_world_set_contact_settings(w, &bad), TB_ERR_ARGUMENT);
+    assert_non_null(strstr(tb_world_message(w), "sleep_time"));
+    assert_true(tb_world_contact_settings(w).sleep_speed == 0.05);
+    tb_world_destroy(w);
+}
+
+static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(resting_box_falls_asleep_and_stays_put),
+    cmocka_unit_test(sleeping_box_wakes_when_a_ball_lands),
+    cmocka_unit_test(islands_wake_together),
+    cmocka_unit_test(woken_world_moves_again),
+    cmocka_unit_test(sleep_settings),
+};
+
+TB_TEST_MAIN(tests)
