@@ -1,6 +1,6 @@
 -- Balls dropped from 1 m on a plane, restitution 0, 0.25, 0.5, 0.75 and 0.9:
 -- each bounces to e^2 of its previous height (impacts are timed within the
--- step, so this holds at 60 Hz; tests/test_contacts.c checks it).
+-- step, so this holds at 60 Hz; tests/contacts/test_contacts_bounce.c checks it).
 local tumble = require "tumble"
 
 local w = tumble.world{ gravity = {0, 0, -9.81}, dt = 1/60 }
