@@ -257,8 +257,8 @@ static void moving_pairs_are_collided_afresh(void **state)
 /* The 210-box pyramid kept awake (sleep off), 10 s: once it rests, a
    pair of sweeps soon changes no velocity by more than 1e-6 m/s, and the
    velocity pass stops early: at most 10 sweeps a step on average
-   (measured 6.6; the first step, solved by the cold start, takes none of
-   the cold sweeps). The target stays put while the pyramid rests: one
+   (measured 6.6; the count leaves out the pair of cold sweeps that finds
+   the first step settled). The target stays put while the pyramid rests: one
    that moves every step (closing gaps of a few um between boxes by half a
    step) keeps the sweeps from settling, all 20 every step, the whole
    solve at twice its cost. */

@@ -163,9 +163,8 @@ static double offset_stack(int n, const double (*half)[3], const double (*at)[2]
      gap never closes within the step: such a point rests. Timed as a
      landing, it would act on positions for no time, and in the first step
      each box of the diagonal staircase would rise or sink by up to 1 cm;
-   - the press sits neither at the points' centre (the staircase of 5
-     falls 2.7 m) nor where last step's force was centred (it rocks by
-     3.8 cm).
+   - the press acts where last step's normal force was centred (shift in
+     contacts.h), the tilts' ranges measured from there.
    The staircase of 8 runs again with every sweep done (velocity_tolerance
    0): the first step's conjugate gradients must stop at rounding there,
    since run past it they throw the staircase 1e12 m. */
