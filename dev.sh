@@ -55,6 +55,7 @@ bench)
     ./build/default/bench/bench_bodies
     ./build/default/bench/bench_rotation
     ./build/default/bench/bench_contacts
+    ./build/default/bench/bench_robustness
     ;;
 charts)
     install_missing

@@ -1,0 +1,417 @@
+/* robustness.c: contact scenes of the kinds game developers build and the
+   contact tests were not tuned on, run at 60 Hz with the default settings,
+   each printed beside the figure the contact redesign must reach (the
+   contacts issue of the tracker; docs/contacts.md, "Known limits"). Nothing
+   here asserts: it measures today's solver so that a new one is judged on
+   the same scenes.
+
+   - wall: 105 bricks (0.4 x 0.2 x 0.2 m, 2 kg) in 7 courses of 15, each
+     course shifted a quarter brick from the one under it, struck at the
+     middle of its second course by a 10 kg ball (r = 0.15 m) at 5 m/s;
+     bricks moved more than 5 cm at 2, 5 and 10 s (target: only the bricks
+     the blow reaches). Then the same ball at 0.52 m/s (1.35 J, far less
+     than tipping the wall needs): bricks moved and the largest energy above
+     the start over 10 s (target: standing, no energy gained).
+   - tower: 30 cubes (0.5 m, 1 kg), each placed up to 1 cm off the one below
+     and turned up to 3 degrees about the vertical (reproducible draws),
+     kept awake 20 s: the top box's horizontal drift at 5, 10 and 20 s
+     (target: under 1 cm at 20 s), with stack_iterations 0 and 8.
+   - lever: a beam (3 x 0.3 x 0.1 m) of 100 or 1000 kg laid across a 1 kg
+     plank (1 x 0.2 x 0.05 m) on the ground at one end and a static block
+     at the other, both tops at the same height: how deep the plank's lowest
+     corner is in the ground after 5 s (target: under 5 cm at 1000:1).
+   - plate: a 1 cm plate (0.5 x 0.5 x 0.01 m, 1 kg) falling at 30 m/s
+     tilted 20 degrees about a random horizontal axis and spun up to
+     20 rad/s about a random axis onto a 1 cm static slab: runs, of 20,
+     whose plate ends below the slab (target: none in 100).
+   - heap: 2000 spheres, boxes and capsules (0.1 to 0.3 m) dropped from a
+     grid onto the ground: when the last body falls asleep (target: within
+     20 s), the fastest body and any centre below the floor.
+   - cradle: 5 touching balls (1 kg, r = 0.1 m, restitution 1, no gravity,
+     no friction) struck end-on at 1 m/s: the last ball's speed and the
+     energy after 1 s, as shares of the striker's (target: >= 95% and
+     within 5%, never above).
+
+   Each scene prints its mean milliseconds per step too. */
+#define _POSIX_C_SOURCE 199309L
+#define BENCH_NAME "bench_robustness"
+#include "bench.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define H (1.0 / 60)
+#define G 9.81
+#define PI 3.14159265358979323846
+
+static tb_world *new_world(double gravity)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_world *w;
+    char message[TB_MESSAGE_SIZE];
+    def.gravity[2] = -gravity;
+    if (tb_world_create(&def, &w, message, sizeof message) != TB_OK) {
+        fprintf(stderr, BENCH_NAME ": %s\n", message);
+        exit(EXIT_FAILURE);
+    }
+    return w;
+}
+
+static void add_ground(tb_world *w)
+{
+    tb_shape_def plane = tb_default_shape_def();
+    plane.type = TB_SHAPE_PLANE;
+    check(tb_world_add_shape(w, &plane, NULL), w, "ground");
+}
+
+/* A box body of full sizes `size` and mass m at x, turned by q (NULL:
+   upright); a static box when m is 0. */
+static tb_body_id add_box(tb_world *w, const double size[3], double m, const double x[3], const double q[4],
+                          double restitution)
+{
+    tb_body_id id = { 0, 0 };
+    tb_shape_def s = tb_default_shape_def();
+    char message[TB_MESSAGE_SIZE];
+    s.type = TB_SHAPE_BOX;
+    s.half_extents[0] = size[0] / 2;
+    s.half_extents[1] = size[1] / 2;
+    s.half_extents[2] = size[2] / 2;
+    s.restitution = restitution;
+    if (m > 0) {
+        tb_body_def b = tb_default_body_def();
+        if (tb_mass_box(1000, size, &b.mass, message) != TB_OK || tb_mass_set_total(&b.mass, m, message) != TB_OK) {
+            fprintf(stderr, BENCH_NAME ": box mass: %s\n", message);
+            exit(EXIT_FAILURE);
+        }
+        memcpy(b.position, x, sizeof b.position);
+        if (q)
+            memcpy(b.orientation, q, sizeof b.orientation);
+        check(tb_world_add_body(w, &b, &id), w, "box");
+        s.body = id;
+    } else {
+        memcpy(s.position, x, sizeof s.position);
+        if (q)
+            memcpy(s.orientation, q, sizeof s.orientation);
+    }
+    check(tb_world_add_shape(w, &s, NULL), w, "box shape");
+    return id;
+}
+
+static tb_body_id add_ball(tb_world *w, double r, double m, const double x[3], const double v[3],
+                           double restitution, double friction)
+{
+    tb_body_id id;
+    tb_body_def b = tb_default_body_def();
+    tb_shape_def s = tb_default_shape_def();
+    char message[TB_MESSAGE_SIZE];
+    if (tb_mass_sphere(1000, r, &b.mass, message) != TB_OK || tb_mass_set_total(&b.mass, m, message) != TB_OK) {
+        fprintf(stderr, BENCH_NAME ": ball mass: %s\n", message);
+        exit(EXIT_FAILURE);
+    }
+    memcpy(b.position, x, sizeof b.position);
+    if (v)
+        memcpy(b.velocity, v, sizeof b.velocity);
+    check(tb_world_add_body(w, &b, &id), w, "ball");
+    s.type = TB_SHAPE_SPHERE;
+    s.body = id;
+    s.radius = r;
+    s.restitution = restitution;
+    s.friction = friction;
+    check(tb_world_add_shape(w, &s, NULL), w, "ball shape");
+    return id;
+}
+
+static void set_awake(tb_world *w, int stack_iterations)
+{
+    tb_contact_settings c = tb_world_contact_settings(w);
+    c.sleep_time = INFINITY;
+    c.stack_iterations = stack_iterations;
+    check(tb_world_set_contact_settings(w, &c), w, "settings");
+}
+
+/* Steps n times, adding the wall time to *ms (milliseconds) and the count
+   to *steps. */
+static void run(tb_world *w, int n, double *ms, long *steps)
+{
+    double t0 = seconds();
+    int i;
+    for (i = 0; i < n; ++i)
+        check(tb_world_step(w, H), w, "step");
+    *ms += 1e3 * (seconds() - t0);
+    *steps += n;
+}
+
+static void axis_turn(const double axis[3], double angle, double q[4])
+{
+    const double n = norm3(axis), s = sin(angle / 2) / n;
+    q[0] = cos(angle / 2);
+    q[1] = axis[0] * s;
+    q[2] = axis[1] * s;
+    q[3] = axis[2] * s;
+}
+
+/* ------------------------------------------------------------------ wall -- */
+
+#define COURSES 7
+#define PER_COURSE 15
+
+static void wall(double speed)
+{
+    static const double brick[3] = { 0.4, 0.2, 0.2 };
+    tb_body_id bricks[COURSES * PER_COURSE];
+    double start[COURSES * PER_COURSE][3], e0, gained = 0, ms = 0;
+    long steps = 0;
+    tb_world *w = new_world(G);
+    int c, i, k, second;
+    add_ground(w);
+    for (c = 0; c < COURSES; ++c)
+        for (i = 0; i < PER_COURSE; ++i) {
+            const double x[3] = { (i - (PER_COURSE - 1) / 2.0 + (c % 2 ? 0.25 : 0)) * brick[0], 0,
+                                  (c + 0.5) * brick[2] };
+            bricks[c * PER_COURSE + i] = add_box(w, brick, 2, x, NULL, 0);
+            memcpy(start[c * PER_COURSE + i], x, sizeof start[0]);
+        }
+    {
+        const double x[3] = { 0, -1.0, 1.5 * brick[2] }, v[3] = { 0, speed, 0 };
+        add_ball(w, 0.15, 10, x, v, 0, 0.6);
+    }
+    e0 = tb_world_energy(w).total;
+    printf("wall      105 bricks, 10 kg ball at %.2f m/s (%.2f J):", speed, 0.5 * 10 * speed * speed);
+    for (second = 1; second <= 10; ++second) {
+        int moved = 0;
+        for (k = 0; k < 60; ++k) {
+            run(w, 1, &ms, &steps);
+            gained = fmax(gained, tb_world_energy(w).total - e0);
+        }
+        if (second != 2 && second != 5 && second != 10)
+            continue;
+        for (k = 0; k < COURSES * PER_COURSE; ++k) {
+            double x[3], d[3];
+            check(tb_body_position(w, bricks[k], x), w, "brick");
+            d[0] = x[0] - start[k][0], d[1] = x[1] - start[k][1], d[2] = x[2] - start[k][2];
+            moved += norm3(d) > 0.05;
+        }
+        printf(" %2d s: %3d moved,", second, moved);
+    }
+    printf(" most energy above the start %.3g J, %.3f ms/step\n", gained, ms / (double)steps);
+    tb_world_destroy(w);
+}
+
+/* ----------------------------------------------------------------- tower -- */
+
+static void tower(int stack_iterations)
+{
+    static const double cube[3] = { 0.5, 0.5, 0.5 };
+    unsigned long long seed = 30;
+    tb_body_id top = { 0, 0 };
+    double placed[3] = { 0, 0, 0 }, ms = 0;
+    long steps = 0;
+    tb_world *w = new_world(G);
+    int i, second;
+    add_ground(w);
+    set_awake(w, stack_iterations);
+    for (i = 0; i < 30; ++i) {
+        const double r = 0.01 * sqrt(uniform(&seed)), a = 2 * PI * uniform(&seed);
+        const double yaw = (2 * uniform(&seed) - 1) * 3 * PI / 180, up[3] = { 0, 0, 1 };
+        double q[4];
+        if (i > 0)
+            placed[0] += r * cos(a), placed[1] += r * sin(a);
+        placed[2] = (i + 0.5) * cube[2];
+        axis_turn(up, yaw, q);
+        top = add_box(w, cube, 1, placed, q, 0);
+    }
+    printf("tower     30 cubes offset up to 1 cm and 3 deg, awake, stack_iterations %d: top drift", stack_iterations);
+    for (second = 1; second <= 20; ++second) {
+        run(w, 60, &ms, &steps);
+        if (second == 5 || second == 10 || second == 20) {
+            double x[3];
+            check(tb_body_position(w, top, x), w, "top");
+            printf(" %2d s %.4f m,", second, hypot(x[0] - placed[0], x[1] - placed[1]));
+        }
+    }
+    printf(" %.3f ms/step\n", ms / (double)steps);
+    tb_world_destroy(w);
+}
+
+/* ----------------------------------------------------------------- lever -- */
+
+static void lever(double ratio)
+{
+    static const double plank[3] = { 1.0, 0.2, 0.05 }, beam[3] = { 3.0, 0.3, 0.1 };
+    const double block[3] = { 0.4, 0.4, plank[2] };
+    double ms = 0, lowest = INFINITY;
+    long steps = 0;
+    tb_world *w = new_world(G);
+    tb_body_id light;
+    int k;
+    add_ground(w);
+    {
+        const double x[3] = { -1.2, 0, plank[2] / 2 }, b[3] = { 1.3, 0, block[2] / 2 };
+        const double y[3] = { 0, 0, plank[2] + beam[2] / 2 };
+        light = add_box(w, plank, 1, x, NULL, 0);
+        add_box(w, block, 0, b, NULL, 0);
+        add_box(w, beam, ratio, y, NULL, 0);
+    }
+    run(w, 300, &ms, &steps);
+    {
+        double x[3], q[4], R[9];
+        check(tb_body_position(w, light, x), w, "plank");
+        check(tb_body_orientation(w, light, q), w, "plank");
+        R[6] = 2 * (q[1] * q[3] - q[0] * q[2]);
+        R[7] = 2 * (q[2] * q[3] + q[0] * q[1]);
+        R[8] = 1 - 2 * (q[1] * q[1] + q[2] * q[2]);
+        for (k = 0; k < 8; ++k) {
+            const double c[3] = { (k & 1 ? 0.5 : -0.5) * plank[0], (k & 2 ? 0.5 : -0.5) * plank[1],
+                                  (k & 4 ? 0.5 : -0.5) * plank[2] };
+            lowest = fmin(lowest, x[2] + R[6] * c[0] + R[7] * c[1] + R[8] * c[2]);
+        }
+    }
+    printf("lever     beam %5.0f times the plank under it: the plank's lowest corner %.4f m into the ground "
+           "after 5 s, %.3f ms/step\n", ratio, fmax(0, -lowest), ms / (double)steps);
+    tb_world_destroy(w);
+}
+
+/* ----------------------------------------------------------------- plate -- */
+
+static void plate(int runs)
+{
+    static const double size[3] = { 0.5, 0.5, 0.01 }, slab[3] = { 3, 3, 0.01 };
+    unsigned long long seed = 7;
+    int r, through = 0;
+    double ms = 0;
+    long steps = 0;
+    for (r = 0; r < runs; ++r) {
+        tb_world *w = new_world(G);
+        tb_body_def b = tb_default_body_def();
+        tb_shape_def s = tb_default_shape_def();
+        const double slab_at[3] = { 0, 0, 1.0 }, a = 2 * PI * uniform(&seed);
+        const double tilt_axis[3] = { cos(a), sin(a), 0 };
+        double spin_axis[3], x[3], spin;
+        char message[TB_MESSAGE_SIZE];
+        tb_body_id id;
+        add_ground(w);
+        add_box(w, slab, 0, slab_at, NULL, 0);
+        if (tb_mass_box(1000, size, &b.mass, message) != TB_OK || tb_mass_set_total(&b.mass, 1, message) != TB_OK)
+            exit(EXIT_FAILURE);
+        b.position[2] = 1.5;
+        axis_turn(tilt_axis, 20 * PI / 180, b.orientation);
+        b.velocity[2] = -30;
+        spin_axis[0] = 2 * uniform(&seed) - 1, spin_axis[1] = 2 * uniform(&seed) - 1,
+        spin_axis[2] = 2 * uniform(&seed) - 1;
+        spin = 20 * uniform(&seed) / norm3(spin_axis);
+        b.angular_velocity[0] = spin * spin_axis[0], b.angular_velocity[1] = spin * spin_axis[1],
+        b.angular_velocity[2] = spin * spin_axis[2];
+        check(tb_world_add_body(w, &b, &id), w, "plate");
+        s.type = TB_SHAPE_BOX;
+        s.body = id;
+        s.half_extents[0] = size[0] / 2, s.half_extents[1] = size[1] / 2, s.half_extents[2] = size[2] / 2;
+        check(tb_world_add_shape(w, &s, NULL), w, "plate shape");
+        run(w, 60, &ms, &steps);
+        check(tb_body_position(w, id, x), w, "plate");
+        through += x[2] < slab_at[2] - slab[2] / 2;
+        tb_world_destroy(w);
+    }
+    printf("plate     1 cm plate at 30 m/s, tilted 20 deg, spun up to 20 rad/s onto a 1 cm slab: %d of %d "
+           "through, %.3f ms/step\n", through, runs, ms / (double)steps);
+}
+
+/* ------------------------------------------------------------------ heap -- */
+
+static void heap(int count)
+{
+    unsigned long long seed = 2000;
+    double ms = 0, fastest = 0, lowest = INFINITY;
+    long steps = 0;
+    tb_world *w = new_world(G);
+    int i, side = (int)ceil(sqrt(count / 10.0)), asleep_at = -1, second;
+    add_ground(w);
+    for (i = 0; i < count; ++i) {
+        const double x[3] = { 0.7 * (i % side - side / 2.0), 0.7 * ((i / side) % side - side / 2.0),
+                              0.5 + 0.7 * (i / (side * side)) };
+        const double r = 0.1 + 0.2 * uniform(&seed), kind = uniform(&seed);
+        if (kind < 0.4) {
+            add_ball(w, r, 1000 * 4.18879 * r * r * r, x, NULL, 0, 0.6);
+        } else if (kind < 0.8) {
+            const double size[3] = { 2 * r, 2 * (0.1 + 0.2 * uniform(&seed)), 2 * (0.1 + 0.2 * uniform(&seed)) };
+            add_box(w, size, 1000 * size[0] * size[1] * size[2], x, NULL, 0);
+        } else {
+            tb_body_def b = tb_default_body_def();
+            tb_shape_def s = tb_default_shape_def();
+            tb_body_id id;
+            char message[TB_MESSAGE_SIZE];
+            const double half = 0.05 + 0.15 * uniform(&seed), rc = 0.5 * r;
+            if (tb_mass_capsule(1000, rc, 2 * half, &b.mass, message) != TB_OK)
+                exit(EXIT_FAILURE);
+            memcpy(b.position, x, sizeof b.position);
+            check(tb_world_add_body(w, &b, &id), w, "capsule");
+            s.type = TB_SHAPE_CAPSULE;
+            s.body = id;
+            s.radius = rc;
+            s.half_length = half;
+            check(tb_world_add_shape(w, &s, NULL), w, "capsule shape");
+        }
+    }
+    for (second = 1; second <= 20 && asleep_at < 0; ++second) {
+        run(w, 60, &ms, &steps);
+        if (tb_world_sleeping_count(w) == tb_world_body_count(w))
+            asleep_at = second;
+    }
+    for (i = 0; i < (int)tb_world_body_count(w); ++i) {
+        double v[3], x[3];
+        const tb_body_id id = tb_world_body_at(w, (size_t)i);
+        check(tb_body_velocity(w, id, v), w, "body");
+        check(tb_body_position(w, id, x), w, "body");
+        fastest = fmax(fastest, norm3(v));
+        lowest = fmin(lowest, x[2]);
+    }
+    printf("heap      %d shapes: all asleep %s%d s, awake at the end %zu, fastest %.3g m/s, lowest centre %.3f m, "
+           "%.3f ms/step\n", count, asleep_at < 0 ? "not within " : "after ", asleep_at < 0 ? 20 : asleep_at,
+           tb_world_body_count(w) - tb_world_sleeping_count(w), fastest, lowest, ms / (double)steps);
+    tb_world_destroy(w);
+}
+
+/* ---------------------------------------------------------------- cradle -- */
+
+static void cradle(int balls)
+{
+    tb_body_id id[5];
+    double ms = 0, e0, v[3];
+    long steps = 0;
+    tb_world *w = new_world(0);
+    int i;
+    for (i = 0; i < balls; ++i) {
+        const double x[3] = { i == 0 ? -0.3 : 0.2 * i, 0, 1 }, u[3] = { i == 0 ? 1 : 0, 0, 0 };
+        id[i] = add_ball(w, 0.1, 1, x, u, 1, 0);
+    }
+    {
+        tb_contact_settings c = tb_world_contact_settings(w);
+        c.restitution_threshold = 0;
+        check(tb_world_set_contact_settings(w, &c), w, "settings");
+    }
+    e0 = tb_world_energy(w).total;
+    run(w, 60, &ms, &steps);
+    check(tb_body_velocity(w, id[balls - 1], v), w, "last ball");
+    printf("cradle    %d balls, e = 1, striker at 1 m/s: after 1 s the last ball at %.4f of the striker's speed, "
+           "energy %.4f of the start, %.3f ms/step\n", balls, v[0], tb_world_energy(w).total / e0,
+           ms / (double)steps);
+    tb_world_destroy(w);
+}
+
+int main(void)
+{
+    printf("bench_robustness: contact scenes at 60 Hz, default settings (targets in the source's header)\n");
+    bench_print_build();
+    wall(5.0);
+    wall(sqrt(2 * 1.35 / 10));
+    tower(0);
+    tower(8);
+    lever(100);
+    lever(1000);
+    plate(20);
+    cradle(2);
+    cradle(5);
+    heap(2000);
+    return 0;
+}
