@@ -185,6 +185,9 @@ typedef struct tb_contact_settings {
                                      without giving it speed), is resting; default 0.05 */
     double sleep_time;            /* s: an island of touching bodies that all rest this
                                      long falls asleep; default 0.5, INFINITY: never */
+    int substeps;                 /* > 0: the soft-step solver with that many substeps a
+                                     step (4 is a good start; docs/contacts.md); default
+                                     0: the sweeps and the position pass */
 } tb_contact_settings;
 
 typedef enum tb_contact_event_type { TB_CONTACT_BEGIN, TB_CONTACT_END } tb_contact_event_type;

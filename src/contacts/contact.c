@@ -96,6 +96,8 @@ static tb_status solver_body(tb_world *w, tb__contacts *c, enum tb__tier tier, u
         memcpy(b->x0, body_x(w, slot), sizeof b->x0);
         memcpy(b->q0, body_q(w, slot), sizeof b->q0);
         tb__body_velocity(w, slot, b->v0, b->w0);
+        memcpy(b->p0, w->y + w->off[TB__BODY_MOM] + 3 * slot, sizeof b->p0);
+        memcpy(b->l0, w->y + w->off[TB__BODY_ANG] + 3 * slot, sizeof b->l0);
     } else {
         b->inv_mass = w->particle_inv_mass[slot];
         b->inv_inertia[0] = b->inv_inertia[1] = b->inv_inertia[2] = 0;
@@ -320,6 +322,7 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
         int j;
         p->normal_impulse = p->speed = p->predicted = 0;
         p->active = p->matched = 0;
+        p->friction_impulse[0] = p->friction_impulse[1] = p->friction_impulse[2] = 0;
         p->feature = m->point[k].feature;
         p->separation = -m->point[k].depth;
         memcpy(p->point, at, sizeof p->point);
@@ -348,6 +351,7 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
             }
             if (best >= 0) {
                 p->normal_impulse = old->point[best].normal_impulse;
+                memcpy(p->friction_impulse, old->point[best].friction_impulse, sizeof p->friction_impulse);
                 p->matched = 1;
             }
         }
@@ -1719,6 +1723,16 @@ void tb__contacts_solve(tb_world *w, double h, double force_lever)
     if (!c->prepared)
         return;
     tb__sleep_restore(w, c);
+    if (c->settings.substeps > 0) {
+        /* the soft-step solver (soft_step.c); out of memory, the free
+           motion stands */
+        if (tb__soft_step(w, c, h) == TB_OK)
+            goto solved;
+        load_bodies(w, c);
+        memset(c->motion, 0, TB__MOTION * (c->body_count + 1) * sizeof *c->motion);
+        c->soft_row_count = 0;
+        goto solved;
+    }
     load_bodies(w, c);
     c->rest_lever = force_lever * h;
     memcpy(c->gravity, w->gravity, sizeof c->gravity);
@@ -1775,6 +1789,7 @@ void tb__contacts_solve(tb_world *w, double h, double force_lever)
     for (it = 0; it < c->settings.position_iterations; ++it)
         tb__sweep_positions(c->batches, c->batch_count, c->motion, it & 1, c->isa);
     store_bodies(w, c);
+solved:
     if (make_events(w, c) != TB_OK)
         c->event_count = 0; /* out of memory for events: the step itself stands */
     tb__sleep_update(w, c, h);

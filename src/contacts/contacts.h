@@ -42,6 +42,8 @@ typedef struct tb__point {
     double separation0;        /* its separation, when the shapes last collided */
     int active;                /* touching after the free motion: solved */
     int matched;               /* it touched last step too (warm started) */
+    double friction_impulse[3];/* N s, world: its friction over the step, kept from step to
+                                  step (the soft-step solver's; soft_step.c) */
 } tb__point;
 
 /* The solver works on batches of up to TB__BATCH_LANES manifolds that
@@ -249,6 +251,7 @@ typedef struct tb__solver_body {
     double inv_world[9];       /* R diag(inv_inertia) R^T, after the free motion */
     double x0[3], q0[4];       /* pose at the start of the step */
     double v0[3], w0[3];       /* velocities at the start of the step */
+    double p0[3], l0[3];       /* N s, N m s: a body's momenta at the start of the step */
     double x[3];               /* position after the free motion */
     double turn[3];            /* the free motion's rotation over the step (vector) */
 } tb__solver_body;
@@ -344,6 +347,11 @@ struct tb__contacts {
     size_t pose_count, pose_cap;
     double *island_scratch;
     size_t island_scratch_cap;
+    /* soft_step.c: the soft-step solver's rows and bodies */
+    struct tb__soft_row *soft_rows;
+    size_t soft_row_count, soft_row_cap;
+    struct tb__soft_body *soft_bodies;
+    size_t soft_body_cap;
     int prepared;              /* entries hold this step's contacts, to solve */
     int solved;                /* entries hold the last step's solved contacts */
 };
@@ -360,6 +368,13 @@ tb_status tb__contacts_prepare(tb_world *w, double h);
    a body at rest stays put under every method. */
 void tb__contacts_solve(tb_world *w, double h, double force_lever);
 void tb__contacts_free(tb_world *w);
+
+/* soft_step.c: the step's contacts solved by the soft-step solver
+   (settings.substeps > 0) instead of the sweeps: the bodies and particles
+   in them moved again from the start of the step in substeps, then
+   stored. Events and sleep stay with tb__contacts_solve. */
+tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h);
+void tb__soft_free(tb_world *w, tb__contacts *c);
 
 /* sleep.c: the sleep tag of proxy k's body (0: awake, static, particle);
    before the narrowphase, wake what moving proxies reach and keep the

@@ -107,6 +107,7 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->body_map, c->body_map_cap * sizeof(int32_t), 0);
     tb__alloc(w, c->particle_map, c->particle_map_cap * sizeof(int32_t), 0);
     tb__alloc(w, c->events, c->event_cap * sizeof *c->events, 0);
+    tb__soft_free(w, c);
     tb__alloc(w, c, sizeof *c, 0);
     w->contacts = NULL;
 }
@@ -267,7 +268,7 @@ tb_status tb_world_set_contact_settings(tb_world *w, const tb_contact_settings *
     if (!s || !positive(s->hertz) || !(isfinite(s->damping_ratio) && s->damping_ratio >= 0) ||
         !positive(s->max_push) || !(isfinite(s->restitution_threshold) && s->restitution_threshold >= 0) ||
         !(isfinite(s->slop) && s->slop >= 0) || s->velocity_iterations < 1 || s->position_iterations < 0 ||
-        s->stack_iterations < 0 ||
+        s->stack_iterations < 0 || s->substeps < 0 ||
         !(isfinite(s->velocity_tolerance) && s->velocity_tolerance >= 0) ||
         !isfinite(s->particle_radius) || !(isfinite(s->particle_friction) && s->particle_friction >= 0) ||
         !(s->particle_restitution >= 0 && s->particle_restitution <= 1) ||
@@ -275,7 +276,7 @@ tb_status tb_world_set_contact_settings(tb_world *w, const tb_contact_settings *
         return tb__fail(w, TB_ERR_ARGUMENT,
                         "contact settings: hertz and max_push must be > 0, damping_ratio, threshold, slop and "
                         "particle friction >= 0, at least 1 velocity iteration, position and stack iterations "
-                        ">= 0, velocity_tolerance finite and >= 0, restitution in [0, 1], "
+                        ">= 0, substeps >= 0, velocity_tolerance finite and >= 0, restitution in [0, 1], "
                         "sleep_speed finite and >= 0, sleep_time > 0 (INFINITY: never sleep)");
     if ((st = contacts_of(w, &c)) != TB_OK)
         return st;
