@@ -151,7 +151,7 @@ static void column_of_ten_stands(void **state)
    (the tower falls within 5 s: docs/contacts.md), so the bound is only
    that no cube ends inside the ground (centre above a quarter of its
    edge less the slop). */
-static void offset_tower_stands(void **state)
+static void offset_tower_keeps_above_the_ground(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
     tb_body_def b = tb_default_body_def();
@@ -287,7 +287,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(ball_bounces_near_e_squared),
     cmocka_unit_test(box_rests_still),
     cmocka_unit_test(column_of_ten_stands),
-    cmocka_unit_test(offset_tower_stands),
+    cmocka_unit_test(offset_tower_keeps_above_the_ground),
     cmocka_unit_test(random_heap_never_gains_energy),
     cmocka_unit_test(newtons_cradle),
 };
