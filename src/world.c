@@ -54,6 +54,7 @@ tb_status tb_world_create(const tb_world_def *def, tb_world **world, char *messa
         } else {
             memset(w, 0, sizeof *w);
             w->allocator = def->allocator;
+            w->id_tag = tb__ids_new_tag();
             w->method = tb__method_find(def->integrator ? def->integrator : "verlet");
             memcpy(w->gravity, def->gravity, sizeof w->gravity);
             w->linear_drag = def->linear_drag;

@@ -194,7 +194,7 @@ tb_status tb_world_add_body(tb_world *w, const tb_body_def *def, tb_body_id *id)
     memset(w->body_applied + 6 * s, 0, 6 * sizeof(double));
     w->body_rest[s] = 0;
     w->body_island[s] = 0;
-    tb__ids_acquire(&w->body_ids, s, &made.index1, &made.generation);
+    tb__ids_acquire(&w->body_ids, w->id_tag, s, &made.index1, &made.generation);
     if (id)
         *id = made;
     return TB_OK;

@@ -211,7 +211,7 @@ tb_status tb_world_add_shape(tb_world *w, const tb_shape_def *def, tb_shape_id *
                                                 s->half[2] * s->half[2])
                                          : s->radius + s->half[2]);
     c->planes += s->kind == TB__SHAPE_PLANE;
-    tb__ids_acquire(&c->ids, (uint32_t)c->shape_count, &made.index1, &made.generation);
+    tb__ids_acquire(&c->ids, w->id_tag, (uint32_t)c->shape_count, &made.index1, &made.generation);
     c->shape_count++;
     tb__wake_all(w); /* it may reach into what sleeps */
     if (id)

@@ -64,10 +64,19 @@ void tb__state_scale(const tb_world *w, double *out, double a, const double *in)
    absolute near zero and relative for large values. <= 1 means accept. */
 double tb__state_error_norm(const tb_world *w, const double *err, const double *y0, const double *y1, double tol);
 
-/* ---- ids (ids.c): generation-checked id tables, one per kind of object ---- */
+/* ---- ids (ids.c): generation-checked id tables, one per kind of object ----
+   A generation holds the world's tag in its top TB__ID_TAG_BITS bits and a
+   counter of the entry's lives below: 2^12 worlds created one after another
+   have distinct tags, and an entry's live generation comes back after 2^19
+   reuses (live counters are odd). */
+#define TB__ID_TAG_BITS 12
+#define TB__ID_COUNTER_BITS (32 - TB__ID_TAG_BITS)
+#define TB__ID_COUNTER_MASK ((1u << TB__ID_COUNTER_BITS) - 1u)
+
 typedef struct tb__ids {
     uint32_t *slot;        /* [capacity] per id: its slot, or the next free id */
-    uint32_t *generation;  /* [capacity] per id: bumped on release, never 0 */
+    uint32_t *generation;  /* [capacity] per id: the world's tag | a counter bumped
+                              on acquire and release, never 0 */
     uint32_t *owner;       /* [capacity] per slot: the id index living there */
     uint32_t capacity;     /* ids and slots allocated */
     uint32_t used;         /* ids ever handed out (high-water mark) */
@@ -76,9 +85,13 @@ typedef struct tb__ids {
 
 tb_status tb__ids_reserve(tb_world *w, tb__ids *ids, size_t capacity);
 void tb__ids_free(tb_world *w, tb__ids *ids);
-/* Hand out an id for `slot`; capacity must have been reserved. */
-void tb__ids_acquire(tb__ids *ids, uint32_t slot, uint32_t *index1, uint32_t *generation);
-/* 1 and the slot when the id is live. */
+/* A new world's tag (already shifted into the generation's top bits);
+   safe to call from several threads at once. */
+uint32_t tb__ids_new_tag(void);
+/* Hand out an id for `slot` in the world with tag `tag` (w->id_tag);
+   capacity must have been reserved. */
+void tb__ids_acquire(tb__ids *ids, uint32_t tag, uint32_t slot, uint32_t *index1, uint32_t *generation);
+/* 1 and the slot when the id is live (and of this table's world). */
 int tb__ids_lookup(const tb__ids *ids, uint32_t index1, uint32_t generation, uint32_t *slot);
 void tb__ids_release(tb__ids *ids, uint32_t index1);
 /* The object in slot `from` moved to slot `to` (swap-remove). */

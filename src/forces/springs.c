@@ -79,7 +79,7 @@ tb_status tb_world_add_spring(tb_world *w, const tb_spring_def *def, tb_spring_i
     w->spring_c[s] = def->damping;
     w->spring_damped += def->damping != 0;
     w->spring_rest[s] = def->rest_length >= 0 ? def->rest_length : distance(pos + 3 * a, pb);
-    tb__ids_acquire(&w->spring_ids, s, &made.index1, &made.generation);
+    tb__ids_acquire(&w->spring_ids, w->id_tag, s, &made.index1, &made.generation);
     if (id)
         *id = made;
     return TB_OK;

@@ -67,7 +67,7 @@ tb_status tb_world_add_particle(tb_world *w, const tb_particle_def *def, tb_part
     memcpy(w->y + w->off[TB__PARTICLE_VEL] + 3 * slot, def->velocity, 3 * sizeof(double));
     w->particle_mass[slot] = def->pinned ? 0 : def->mass;
     w->particle_inv_mass[slot] = def->pinned ? 0 : 1 / def->mass;
-    tb__ids_acquire(&w->particle_ids, slot, &made.index1, &made.generation);
+    tb__ids_acquire(&w->particle_ids, w->id_tag, slot, &made.index1, &made.generation);
     if (id)
         *id = made;
     return TB_OK;

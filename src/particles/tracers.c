@@ -42,7 +42,7 @@ tb_status tb_world_add_tracer(tb_world *w, const tb_tracer_def *def, tb_tracer_i
     memcpy(w->y + w->off[TB__TRACER_POS] + 3 * slot, def->position, 3 * sizeof(double));
     {
         tb_tracer_id made;
-        tb__ids_acquire(&w->tracer_ids, slot, &made.index1, &made.generation);
+        tb__ids_acquire(&w->tracer_ids, w->id_tag, slot, &made.index1, &made.generation);
         if (id)
             *id = made;
     }
