@@ -125,6 +125,32 @@ void tb__free_arrays(tb_world *w, void **arrays[], const size_t elem_size[], int
 /* Record a message and return status (for `return tb__fail(...)`). */
 tb_status tb__fail(tb_world *w, tb_status status, const char *fmt, ...);
 int tb__finite3(const double v[3]);
+
+/* ---- the input rule (memory.c; TB_LIMIT in tumble/base.h) -------------------
+   Each check returns TB_OK, or TB_ERR_ARGUMENT with a message naming `what`
+   and the value. */
+/* finite and |x| <= TB_LIMIT */
+int tb__bounded(double x);
+int tb__bounded_n(const double *v, size_t n);
+/* n values (NULL refused), each finite and within TB_LIMIT */
+tb_status tb__check_values(tb_world *w, const double *v, size_t n, const char *what);
+/* a value tumble divides by: finite and in [1 / TB_LIMIT, TB_LIMIT] */
+int tb__in_scale(double x);
+tb_status tb__check_scale(tb_world *w, double x, const char *what);
+/* a coefficient: finite and in [0, TB_LIMIT] */
+tb_status tb__check_coefficient(tb_world *w, double x, const char *what);
+/* a derived quantity (momentum, energy, ...) of magnitude x, with its unit */
+tb_status tb__check_derived(tb_world *w, double x, const char *what, const char *unit);
+/* TB_ERR_ARGUMENT naming the function when a pointer it needs is NULL. */
+tb_status tb__null(tb_world *w, const char *function, const char *what);
+/* A NULL world has no message to write: the call returns `value` at once
+   (TB_ERR_ARGUMENT for a call that returns a status, the documented
+   neutral value otherwise), and tb_world_message(NULL) says why. */
+#define TB__NEED_WORLD(w, value) \
+    do {                         \
+        if (!(w))                \
+            return (value);      \
+    } while (0)
 /* sum a_i b_i over n, in order */
 double tb__dot(const double *a, const double *b, size_t n);
 /* TB_ERR_BUSY with a message while the world is stepping (inside a callback). */

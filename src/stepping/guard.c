@@ -138,7 +138,9 @@ tb_status tb__guard_check(tb_world *w, const double *before, double h)
 
 tb_status tb_world_set_guard(tb_world *w, double energy_growth)
 {
-    tb_status st = tb__check_busy(w, "change the guard");
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    st = tb__check_busy(w, "change the guard");
     if (st != TB_OK)
         return st;
     if (!(energy_growth == 0 || energy_growth > 1)) /* NaN fails both */
@@ -151,5 +153,6 @@ tb_status tb_world_set_guard(tb_world *w, double energy_growth)
 
 double tb_world_guard(const tb_world *w)
 {
+    TB__NEED_WORLD(w, 0);
     return w->guard;
 }
