@@ -58,8 +58,9 @@ static unsigned id_of(const tb_world *w, enum tb__tier tier, size_t slot)
 #define UNIT_SLACK 1e-6
 
 /* The first number of state y that is not finite or past RUNAWAY, or the
-   first orientation that is not a unit quaternion, as "particle 17's
-   velocity is not finite". 0 when the state is sound. */
+   first body whose orientation is not a unit quaternion or whose velocity
+   or angular velocity is past RUNAWAY, as "particle 17's velocity is not
+   finite". 0 when the state is sound. */
 static int find_unsound(const tb_world *w, const double *y, char *out, size_t size)
 {
     int q;
@@ -83,10 +84,32 @@ static int find_unsound(const tb_world *w, const double *y, char *out, size_t si
     for (s = 0; s < w->body_count; ++s) {
         const double *r = y + w->off[TB__BODY_ROT] + 4 * s;
         const double n2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3];
+        const double *P = y + w->off[TB__BODY_MOM] + 3 * s, *L = y + w->off[TB__BODY_ANG] + 3 * s;
+        const double *inv = w->body_inv_inertia + 3 * s;
+        const double p = fmax(fabs(P[0]), fmax(fabs(P[1]), fabs(P[2])));
+        const double l = fmax(fabs(L[0]), fmax(fabs(L[1]), fabs(L[2])));
         if (!(fabs(n2 - 1) <= UNIT_SLACK)) {
             snprintf(out, size, "body %u's orientation is no longer a unit quaternion (|q| = %g)",
                      id_of(w, TB__BODIES, s), sqrt(n2));
             return 1;
+        }
+        /* the rates a light body gets from bounded momenta: v = P / m, and
+           w = R diag(1/I) R^T L, worked out only when its bound
+           |w| <= sqrt(3) |L|_max max(1/I) could pass RUNAWAY */
+        if (!(p * w->body_inv_mass[s] <= RUNAWAY)) {
+            snprintf(out, size, "body %u's velocity is %g m/s, past %g (a runaway)", id_of(w, TB__BODIES, s),
+                     p * w->body_inv_mass[s], RUNAWAY);
+            return 1;
+        }
+        if (!(1.7320508075688772 * l * fmax(inv[0], fmax(inv[1], inv[2])) <= RUNAWAY)) {
+            double omega[3], fastest;
+            tb__through_inertia(r, inv, L, omega);
+            fastest = fmax(fabs(omega[0]), fmax(fabs(omega[1]), fabs(omega[2])));
+            if (!(fastest <= RUNAWAY)) {
+                snprintf(out, size, "body %u's angular velocity is %g rad/s, past %g (a runaway)",
+                         id_of(w, TB__BODIES, s), fastest, RUNAWAY);
+                return 1;
+            }
         }
     }
     return 0;
