@@ -611,7 +611,228 @@ static void overflowing_inputs_are_refused_or_stay_finite(void **state)
                   (int)(sizeof integrators / sizeof integrators[0]), refused, accepted, step_refused);
 }
 
+/* ---- NULL pointers ------------------------------------------------------------ */
+
+static tb_status no_field(const tb_field_args *args, void *user)
+{
+    (void)args, (void)user;
+    return TB_OK;
+}
+
+static tb_status no_force(const tb_force_args *args, void *user)
+{
+    (void)args, (void)user;
+    return TB_OK;
+}
+
+/* A refusal for a NULL the header does not allow: TB_ERR_ARGUMENT, a
+   message that says what was NULL (when there is a world to hold it). */
+#define assert_null_refused(w, call)                                                   \
+    do {                                                                               \
+        assert_int_equal((call), TB_ERR_ARGUMENT);                                     \
+        if (w)                                                                         \
+            assert_non_null(strstr(tb_world_message(w), "NULL"));                      \
+    } while (0)
+
+/* Every public function that takes a pointer, given NULL for each one in
+   turn: a NULL world and each other argument the header does not allow to
+   be NULL are refused, and nothing changes; the ones it allows work. */
+static void null_pointers_are_refused(void **state)
+{
+    scene s;
+    tb_world *const none = NULL;
+    const tb_world_def wd = tb_default_world_def();
+    const tb_tracer_def td = tb_default_tracer_def();
+    const tb_particle_def pd = tb_default_particle_def();
+    const tb_body_def bd = tb_default_body_def();
+    const tb_shape_def sd = tb_default_shape_def();
+    const tb_contact_settings cs = tb_default_contact_settings();
+    tb_spring_def spd = tb_default_spring_def();
+    const double v[3] = { 0, 0, 1 }, q[4] = { 1, 0, 0, 0 }, tensor[9] = { 1, 0, 0, 0, 1, 0, 0, 0, 1 };
+    const double points[9] = { 0, 0, 0, 1, 0, 0, 0, 1, 0 }, masses[3] = { 1, 1, 1 };
+    const uint32_t tri[3] = { 0, 1, 2 };
+    const tb_tracer_id tracer = { 1, 1 };
+    const tb_field_id field = { 1, 1 };
+    const tb_force_id force = { 1, 1 };
+    const tb_shape_id shape = { 1, 1 };
+    double out[4], seen_before[SEEN], seen_after[SEEN], m;
+    int flag;
+    long substeps = 7;
+    size_t count = 7, n;
+    tb_world *made = (tb_world *)&count;
+    tb_mass mass;
+    tb_advice advice;
+    tb_energy e;
+    (void)state;
+    build(&s, "verlet");
+    spd.a = s.p;
+    n = look(s.w, seen_before);
+
+    /* the world */
+    assert_null_refused(none, tb_world_create(NULL, &made, NULL, 0));
+    assert_null(made);
+    assert_null_refused(none, tb_world_create(&wd, NULL, NULL, 0));
+    tb_world_destroy(NULL);
+    assert_non_null(strstr(tb_world_message(NULL), "NULL"));
+    assert_true(tb_world_time(NULL) == 0);
+    assert_null_refused(none, tb_world_set_gravity(NULL, v));
+    assert_null_refused(s.w, tb_world_set_gravity(s.w, NULL));
+    out[0] = 42;
+    tb_world_gravity(NULL, out);
+    assert_true(out[0] == 42); /* nothing written */
+    tb_world_gravity(s.w, NULL);
+    assert_null_refused(none, tb_world_set_drag(NULL, 0, 0));
+    assert_null_refused(none, tb_world_set_integrator(NULL, "rk4"));
+    assert_int_equal(tb_world_set_integrator(s.w, NULL), TB_ERR_ARGUMENT);
+    assert_null_refused(none, tb_world_set_tolerance(NULL, 1e-6));
+    assert_true(tb_world_tolerance(NULL) == 0);
+    assert_null(tb_world_integrator(NULL));
+    assert_null(tb_world_auto_choice(NULL, &substeps));
+    assert_int_equal(substeps, 0);
+    assert_null(tb_world_auto_choice(s.w, NULL)); /* allowed: no step taken by auto */
+    assert_null_refused(none, tb_world_step(NULL, 0.01));
+    assert_null_refused(none, tb_world_set_guard(NULL, 2));
+    assert_true(tb_world_guard(NULL) == 0);
+
+    /* tracers and fields */
+    assert_null_refused(none, tb_world_add_tracer(NULL, &td, NULL));
+    assert_null_refused(s.w, tb_world_add_tracer(s.w, NULL, NULL));
+    assert_null_refused(none, tb_world_remove_tracer(NULL, tracer));
+    assert_null_refused(none, tb_tracer_position(NULL, tracer, out));
+    assert_null_refused(none, tb_tracer_set_position(NULL, tracer, v));
+    assert_int_equal(tb_world_tracer_count(NULL), 0);
+    assert_null(tb_world_tracer_positions(NULL));
+    assert_true(TB_ID_IS_NULL(tb_world_tracer_at(NULL, 0)));
+    assert_null_refused(none, tb_world_tracer_velocities(NULL, out));
+    assert_null_refused(s.w, tb_world_tracer_velocities(s.w, NULL));
+    assert_null_refused(none, tb_world_add_uniform_field(NULL, v, NULL));
+    assert_null_refused(s.w, tb_world_add_uniform_field(s.w, NULL, NULL));
+    assert_null_refused(none, tb_world_add_vortex_field(NULL, v, v, NULL));
+    assert_null_refused(s.w, tb_world_add_vortex_field(s.w, NULL, v, NULL));
+    assert_null_refused(s.w, tb_world_add_vortex_field(s.w, v, NULL, NULL));
+    assert_null_refused(none, tb_world_add_field(NULL, no_field, NULL, NULL));
+    assert_null_refused(s.w, tb_world_add_field(s.w, NULL, NULL, NULL));
+    assert_null_refused(none, tb_world_remove_field(NULL, field));
+
+    /* particles and springs */
+    assert_null_refused(none, tb_world_add_particle(NULL, &pd, NULL));
+    assert_null_refused(s.w, tb_world_add_particle(s.w, NULL, NULL));
+    assert_null_refused(none, tb_world_remove_particle(NULL, s.p));
+    assert_null_refused(none, tb_particle_position(NULL, s.p, out));
+    assert_null_refused(s.w, tb_particle_position(s.w, s.p, NULL));
+    assert_null_refused(none, tb_particle_velocity(NULL, s.p, out));
+    assert_null_refused(s.w, tb_particle_velocity(s.w, s.p, NULL));
+    assert_null_refused(none, tb_particle_mass(NULL, s.p, &m));
+    assert_null_refused(s.w, tb_particle_mass(s.w, s.p, NULL));
+    assert_null_refused(none, tb_particle_set_position(NULL, s.p, v));
+    assert_null_refused(s.w, tb_particle_set_position(s.w, s.p, NULL));
+    assert_null_refused(none, tb_particle_set_velocity(NULL, s.p, v));
+    assert_null_refused(s.w, tb_particle_set_velocity(s.w, s.p, NULL));
+    assert_int_equal(tb_world_particle_count(NULL), 0);
+    assert_null(tb_world_particle_positions(NULL));
+    assert_null(tb_world_particle_velocities(NULL));
+    assert_null(tb_world_particle_masses(NULL));
+    assert_true(TB_ID_IS_NULL(tb_world_particle_at(NULL, 0)));
+    assert_null_refused(none, tb_world_add_spring(NULL, &spd, NULL));
+    assert_null_refused(s.w, tb_world_add_spring(s.w, NULL, NULL));
+    assert_null_refused(none, tb_world_remove_spring(NULL, s.spring));
+    assert_int_equal(tb_world_spring_count(NULL), 0);
+
+    /* mass properties: no world, the message buffer may be NULL */
+    assert_int_equal(tb_mass_sphere(1, 1, NULL, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_box(1, NULL, &mass, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_box(1, v, NULL, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_cylinder(1, 1, 1, NULL, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_capsule(1, 1, 1, NULL, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_points(3, NULL, masses, &mass, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_points(3, points, NULL, &mass, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_points(3, points, masses, NULL, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_mesh(1, 3, NULL, 1, tri, &mass, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_mesh(1, 3, points, 1, NULL, &mass, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_mesh(1, 3, points, 1, tri, NULL, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_from_tensor(1, NULL, tensor, &mass, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_from_tensor(1, v, NULL, &mass, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_from_tensor(1, v, tensor, NULL, NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_mass_set_total(NULL, 1, NULL), TB_ERR_ARGUMENT);
+
+    /* bodies */
+    assert_null_refused(none, tb_world_add_body(NULL, &bd, NULL));
+    assert_null_refused(s.w, tb_world_add_body(s.w, NULL, NULL));
+    assert_null_refused(none, tb_world_remove_body(NULL, s.body));
+    assert_null_refused(none, tb_body_position(NULL, s.body, out));
+    assert_null_refused(s.w, tb_body_position(s.w, s.body, NULL));
+    assert_null_refused(none, tb_body_orientation(NULL, s.body, out));
+    assert_null_refused(s.w, tb_body_orientation(s.w, s.body, NULL));
+    assert_null_refused(none, tb_body_velocity(NULL, s.body, out));
+    assert_null_refused(s.w, tb_body_velocity(s.w, s.body, NULL));
+    assert_null_refused(none, tb_body_angular_velocity(NULL, s.body, out));
+    assert_null_refused(s.w, tb_body_angular_velocity(s.w, s.body, NULL));
+    assert_null_refused(none, tb_body_momentum(NULL, s.body, out, out));
+    assert_int_equal(tb_body_momentum(s.w, s.body, NULL, NULL), TB_OK); /* allowed */
+    assert_null_refused(none, tb_body_mass(NULL, s.body, &m, out));
+    assert_int_equal(tb_body_mass(s.w, s.body, NULL, NULL), TB_OK); /* allowed */
+    assert_null_refused(none, tb_body_set_position(NULL, s.body, v));
+    assert_null_refused(s.w, tb_body_set_position(s.w, s.body, NULL));
+    assert_null_refused(none, tb_body_set_orientation(NULL, s.body, q));
+    assert_null_refused(s.w, tb_body_set_orientation(s.w, s.body, NULL));
+    assert_null_refused(none, tb_body_set_velocity(NULL, s.body, v));
+    assert_null_refused(s.w, tb_body_set_velocity(s.w, s.body, NULL));
+    assert_null_refused(none, tb_body_set_angular_velocity(NULL, s.body, v));
+    assert_null_refused(s.w, tb_body_set_angular_velocity(s.w, s.body, NULL));
+    assert_null_refused(none, tb_body_apply_force(NULL, s.body, v, v));
+    assert_null_refused(s.w, tb_body_apply_force(s.w, s.body, NULL, v));
+    assert_null_refused(s.w, tb_body_apply_force(s.w, s.body, v, NULL));
+    assert_null_refused(none, tb_body_apply_force_at_body_point(NULL, s.body, v, v));
+    assert_null_refused(s.w, tb_body_apply_force_at_body_point(s.w, s.body, NULL, v));
+    assert_null_refused(s.w, tb_body_apply_force_at_body_point(s.w, s.body, v, NULL));
+    assert_null_refused(none, tb_body_apply_torque(NULL, s.body, v));
+    assert_null_refused(s.w, tb_body_apply_torque(s.w, s.body, NULL));
+    assert_int_equal(tb_world_body_count(NULL), 0);
+    assert_null(tb_world_body_positions(NULL));
+    assert_null(tb_world_body_orientations(NULL));
+    assert_true(TB_ID_IS_NULL(tb_world_body_at(NULL, 0)));
+
+    /* user forces, shapes, contacts, sleep */
+    assert_null_refused(none, tb_world_add_force(NULL, no_force, NULL, NULL));
+    assert_null_refused(s.w, tb_world_add_force(s.w, NULL, NULL, NULL));
+    assert_null_refused(none, tb_world_remove_force(NULL, force));
+    assert_null_refused(none, tb_world_add_shape(NULL, &sd, NULL));
+    assert_null_refused(s.w, tb_world_add_shape(s.w, NULL, NULL));
+    assert_null_refused(none, tb_world_remove_shape(NULL, shape));
+    assert_int_equal(tb_world_shape_count(NULL), 0);
+    assert_null_refused(none, tb_world_set_contact_settings(NULL, &cs));
+    assert_null_refused(s.w, tb_world_set_contact_settings(s.w, NULL));
+    assert_true(tb_world_contact_settings(NULL).hertz == cs.hertz);
+    assert_null(tb_world_contact_events(NULL, &count));
+    assert_int_equal(count, 0);
+    (void)tb_world_contact_events(s.w, NULL); /* allowed */
+    assert_int_equal(tb_world_contact_count(NULL), 0);
+    assert_null_refused(none, tb_body_asleep(NULL, s.body, &flag));
+    assert_null_refused(s.w, tb_body_asleep(s.w, s.body, NULL));
+    assert_null_refused(none, tb_body_wake(NULL, s.body));
+    assert_int_equal(tb_world_sleeping_count(NULL), 0);
+
+    /* advisor, diagnostics */
+    assert_null_refused(none, tb_world_advise(NULL, 0.01, &advice));
+    assert_null_refused(s.w, tb_world_advise(s.w, 0.01, NULL));
+    e = tb_world_energy(NULL);
+    assert_true(e.total == 0 && e.kinetic == 0);
+    out[0] = 42;
+    tb_world_momentum(NULL, out);
+    tb_world_angular_momentum(NULL, out);
+    assert_true(out[0] == 42);
+    tb_world_momentum(s.w, NULL);
+    tb_world_angular_momentum(s.w, NULL);
+
+    /* nothing changed, and the world steps */
+    assert_int_equal(look(s.w, seen_after), n);
+    assert_memory_equal(seen_before, seen_after, n * sizeof seen_before[0]);
+    assert_int_equal(tb_world_step(s.w, 0.01), TB_OK);
+    tb_world_destroy(s.w);
+}
+
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(overflowing_inputs_are_refused_or_stay_finite),
+    cmocka_unit_test(null_pointers_are_refused),
 };
 TB_TEST_MAIN(tests)

@@ -178,7 +178,7 @@ tb_status tb_world_add_shape(tb_world *w, const tb_shape_def *def, tb_shape_id *
     if ((st = tb__check_busy(w, "add a shape")) != TB_OK)
         return st;
     if (!def)
-        return tb__fail(w, TB_ERR_ARGUMENT, "tb_world_add_shape needs a definition");
+        return tb__null(w, "tb_world_add_shape", "the definition");
     if ((st = check_shape(w, def)) != TB_OK)
         return st;
     if ((st = contacts_of(w, &c)) != TB_OK)

@@ -182,7 +182,7 @@ tb_status tb_body_asleep(const tb_world *w, tb_body_id id, int *asleep)
     if (st != TB_OK)
         return st;
     if (!asleep)
-        return tb__fail((tb_world *)w, TB_ERR_ARGUMENT, "tb_body_asleep needs an output pointer");
+        return tb__null((tb_world *)w, "tb_body_asleep", "the output");
     *asleep = w->body_island[s] != 0;
     return TB_OK;
 }

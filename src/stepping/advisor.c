@@ -144,7 +144,7 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
     int i;
     TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if (!advice)
-        return tb__fail(w, TB_ERR_ARGUMENT, "tb_world_advise needs somewhere to write its advice");
+        return tb__null(w, "tb_world_advise", "the advice to write");
     if ((st = tb__check_scale(w, h, "step")) != TB_OK)
         return st;
     if ((st = tb__check_busy(w, "advise")) != TB_OK)
