@@ -180,6 +180,7 @@ tb_status tb__guard_check(tb_world *w, const double *before, double h)
     }
     /* back to the last good state, then ask the advisor why */
     tb__state_copy(w, w->y, before);
+    memset(&advice, 0, sizeof advice);
     {
         char was[256];
         if (find_unsound(w, before, was, sizeof was)) /* the guard came on after the harm was done */
@@ -187,6 +188,9 @@ tb_status tb__guard_check(tb_world *w, const double *before, double h)
                      "step can mend it", was);
         else if (tb_world_advise(w, h, &advice) == TB_OK && advice.exceeded)
             snprintf(cause, sizeof cause, "%s", advice.text);
+        else if (advice.fastest_spin * h > 1) /* the advisor's limits leave spins out */
+            snprintf(cause, sizeof cause, "the fastest body spins at %g rad/s, %g rad in a step of %g s: use a "
+                     "smaller step", advice.fastest_spin, advice.fastest_spin * h, h);
         else
             snprintf(cause, sizeof cause, "no stability limit of %s is exceeded: look at the forces on it "
                      "(callbacks, applied forces, huge velocities)", w->method->name);
