@@ -99,18 +99,22 @@ static double largest(const double v[3])
     return fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
 }
 
-/* What a body of mass m and principal moments I at the unit orientation q
-   has with momenta P and L: those momenta, and its kinetic energies
-   |P|^2 / 2m and w.L / 2 (the input rule, TB_LIMIT). */
-static tb_status check_motion(tb_world *w, double m, const double I[3], const double q[4], const double P[3],
-                              const double L[3])
+/* What a body of mass m moving with momentum P has (the input rule,
+   TB_LIMIT): P itself and the kinetic energy |P|^2 / 2m. */
+static tb_status check_linear(tb_world *w, double m, const double P[3])
 {
-    tb_status st;
+    tb_status st = tb__check_derived(w, largest(P), "body momentum m v", "kg m/s");
+    return st != TB_OK ? st : tb__check_derived(w, 0.5 * tb__dot3(P, P) / m, "body kinetic energy m v^2 / 2", "J");
+}
+
+/* ... and what a body of principal moments I at the unit orientation q
+   has with angular momentum L: L itself and the energy w.L / 2. */
+static tb_status check_angular(tb_world *w, const double I[3], const double q[4], const double L[3])
+{
     double inv[3], omega[3];
     int k;
-    if ((st = tb__check_derived(w, largest(P), "body momentum m v", "kg m/s")) != TB_OK ||
-        (st = tb__check_derived(w, largest(L), "body angular momentum I w", "kg m^2/s")) != TB_OK ||
-        (st = tb__check_derived(w, 0.5 * tb__dot3(P, P) / m, "body kinetic energy m v^2 / 2", "J")) != TB_OK)
+    tb_status st = tb__check_derived(w, largest(L), "body angular momentum I w", "kg m^2/s");
+    if (st != TB_OK)
         return st;
     for (k = 0; k < 3; ++k)
         inv[k] = 1 / I[k];
@@ -203,7 +207,8 @@ tb_status tb_world_add_body(tb_world *w, const tb_body_def *def, tb_body_id *id)
         P[k] = def->mass.mass * def->velocity[k] + 0.0; /* +0: see spin_of */
     spin_of(q, def->mass.inertia, def->angular_velocity, L);
     if ((st = tb__check_values(w, x, 3, "body centre of mass, placed,")) != TB_OK ||
-        (st = check_motion(w, def->mass.mass, def->mass.inertia, q, P, L)) != TB_OK)
+        (st = check_linear(w, def->mass.mass, P)) != TB_OK ||
+        (st = check_angular(w, def->mass.inertia, q, L)) != TB_OK)
         return st;
     if (w->body_count == w->body_cap && (st = grow(w)) != TB_OK)
         return st;
@@ -436,7 +441,7 @@ tb_status tb_body_set_orientation(tb_world *w, tb_body_id id, const double orien
     memcpy(q, orientation, sizeof q);
     tb__normalise(q);
     spin_of(q, w->body_inertia + 3 * s, omega, L);
-    if ((st = check_motion(w, w->body_mass[s], w->body_inertia + 3 * s, q, at(w, TB__BODY_MOM, 3, s), L)) != TB_OK)
+    if ((st = check_angular(w, w->body_inertia + 3 * s, q, L)) != TB_OK)
         return st;
     memcpy(at(w, TB__BODY_ROT, 4, s), q, sizeof q);
     memcpy(at(w, TB__BODY_ANG, 3, s), L, sizeof L);
@@ -454,8 +459,7 @@ tb_status tb_body_set_velocity(tb_world *w, tb_body_id id, const double velocity
         return st;
     for (k = 0; k < 3; ++k)
         P[k] = w->body_mass[s] * velocity[k] + 0.0; /* +0: see spin_of */
-    if ((st = check_motion(w, w->body_mass[s], w->body_inertia + 3 * s, at(w, TB__BODY_ROT, 4, s), P,
-                           at(w, TB__BODY_ANG, 3, s))) != TB_OK)
+    if ((st = check_linear(w, w->body_mass[s], P)) != TB_OK)
         return st;
     memcpy(at(w, TB__BODY_MOM, 3, s), P, sizeof P);
     tb__wake_body(w, s);
@@ -470,8 +474,7 @@ tb_status tb_body_set_angular_velocity(tb_world *w, tb_body_id id, const double 
     if (st != TB_OK)
         return st;
     spin_of(at(w, TB__BODY_ROT, 4, s), w->body_inertia + 3 * s, angular_velocity, L);
-    if ((st = check_motion(w, w->body_mass[s], w->body_inertia + 3 * s, at(w, TB__BODY_ROT, 4, s),
-                           at(w, TB__BODY_MOM, 3, s), L)) != TB_OK)
+    if ((st = check_angular(w, w->body_inertia + 3 * s, at(w, TB__BODY_ROT, 4, s), L)) != TB_OK)
         return st;
     memcpy(at(w, TB__BODY_ANG, 3, s), L, sizeof L);
     tb__wake_body(w, s);

@@ -76,7 +76,7 @@ double tb__state_error_norm(const tb_world *w, const double *err, const double *
 typedef struct tb__ids {
     uint32_t *slot;        /* [capacity] per id: its slot, or the next free id */
     uint32_t *generation;  /* [capacity] per id: the world's tag | a counter bumped
-                              on acquire and release, never 0 */
+                              on acquire and release (odd: live, never 0) */
     uint32_t *owner;       /* [capacity] per slot: the id index living there */
     uint32_t capacity;     /* ids and slots allocated */
     uint32_t used;         /* ids ever handed out (high-water mark) */
@@ -131,7 +131,6 @@ int tb__finite3(const double v[3]);
    and the value. */
 /* finite and |x| <= TB_LIMIT */
 int tb__bounded(double x);
-int tb__bounded_n(const double *v, size_t n);
 /* n values (NULL refused), each finite and within TB_LIMIT */
 tb_status tb__check_values(tb_world *w, const double *v, size_t n, const char *what);
 /* a value tumble divides by: finite and in [1 / TB_LIMIT, TB_LIMIT] */

@@ -122,15 +122,6 @@ int tb__bounded(double x)
     return fabs(x) <= TB_LIMIT; /* NaN fails */
 }
 
-int tb__bounded_n(const double *v, size_t n)
-{
-    size_t i;
-    for (i = 0; i < n; ++i)
-        if (!tb__bounded(v[i]))
-            return 0;
-    return 1;
-}
-
 tb_status tb__check_values(tb_world *w, const double *v, size_t n, const char *what)
 {
     size_t i;
