@@ -114,9 +114,9 @@ TB_API tb_status tb_world_step(tb_world *world, double h);
 
 /* The blow-up guard. energy_growth 0 (the default) turns it off, since it
    copies the state every step; INFINITY undoes any step that leaves the
-   state non-finite, a position, velocity or momentum past 1e150 (a
-   runaway, far beyond what the input rule admits) or an orientation that
-   is no longer a unit quaternion; a factor > 1 also undoes a step in which
+   state non-finite, a position, velocity, angular velocity or momentum
+   past 1e150 (a runaway, far beyond what the input rule admits) or an
+   orientation that is no longer a unit quaternion; a factor > 1 also undoes a step in which
    kinetic, rotational and spring energy grow by more than that factor
    beyond what gravity released (forces that do work must fit in it; a
    world starting at rest is checked once it moves). Such a step returns
@@ -332,8 +332,9 @@ TB_API size_t tb_world_sleeping_count(const tb_world *world);
 /* --------------------------------------------------------------- advisor -- */
 
 /* Before a run: the stability limit of the world's integrator for a step h
-   (as tb_world_step takes it), from the stiffest spring mode (power iteration on M^-1 K,
-   pinned particles excluded) and the fastest drag decay. Changes nothing. */
+   (as tb_world_step takes it), from the stiffest spring mode (power
+   iteration on M^-1 K, pinned particles excluded) and the fastest drag
+   decay. Changes nothing. */
 TB_API tb_status tb_world_advise(tb_world *world, double h, tb_advice *advice);
 
 /* ---------------------------------------------------------- diagnostics -- */
