@@ -13,7 +13,15 @@
    - a function that can fail returns a tb_status; on failure the world is
      unchanged and tb_world_message() holds a one-line reason;
    - NaN or Inf, non-positive masses or steps, negative stiffness, unknown
-     names and stale ids are refused, never crash, abort or exit;
+     names and stale ids (removed, or made by another world) are refused,
+     never crash, abort or exit; so is any number outside the input rule
+     (TB_LIMIT in tumble/base.h: at most 1e100 in magnitude, masses, moments,
+     sizes and steps at least 1e-100, and what tumble derives from them at
+     once, such as momentum and energy, at most 1e100);
+   - a NULL pointer is refused (TB_ERR_ARGUMENT) unless a function says it
+     may be NULL; a NULL world too: status functions return
+     TB_ERR_ARGUMENT, the others 0, NULL, a null id or zeros (void
+     functions write nothing), and tb_world_message(NULL) says why;
    - pointers to state arrays stay valid until the next step or structural
      change (adding or removing an object) of that world;
    - structural changes, setters and nested steps are refused (TB_ERR_BUSY)
@@ -89,7 +97,7 @@ TB_API int tb_integrator_order(int index);           /* 0 past the end */
 
 TB_API tb_status tb_world_set_integrator(tb_world *world, const char *name);
 /* The error per step asked of adaptive methods ("dopri5", "auto"), relative
-   to 1 + |y| per state component; finite, > 0. */
+   to 1 + |y| per state component; from 1e-100 to 1e100. */
 TB_API tb_status tb_world_set_tolerance(tb_world *world, double tolerance);
 TB_API double tb_world_tolerance(const tb_world *world);
 TB_API const char *tb_world_integrator(const tb_world *world);
@@ -99,17 +107,22 @@ TB_API const char *tb_world_integrator(const tb_world *world);
    step, the tolerance or the set of objects changes. */
 TB_API const char *tb_world_auto_choice(const tb_world *world, long *substeps);
 
-/* Advance by h seconds (finite, > 0). If a callback fails, the step is
-   abandoned and the state is bit-identical to what it was before. */
+/* Advance by h seconds (finite, from 1e-100 to 1e100). If a callback
+   fails, the step is abandoned and the state is bit-identical to what it
+   was before. */
 TB_API tb_status tb_world_step(tb_world *world, double h);
 
 /* The blow-up guard. energy_growth 0 (the default) turns it off, since it
    copies the state every step; INFINITY undoes any step that leaves the
-   state non-finite; a factor > 1 also undoes a step in which kinetic,
-   rotational and spring energy grow by more than that factor beyond what
-   gravity released (forces that do work must fit in it; a world starting
-   at rest is checked once it moves). Such a step returns TB_ERR_UNSTABLE,
-   with the advisor's verdict naming the step, the object and the cause. */
+   state non-finite, a position, velocity, angular velocity or momentum
+   past 1e150 (a runaway, far beyond what the input rule admits) or an
+   orientation that is no longer a unit quaternion; a factor > 1 also undoes a step in which
+   kinetic, rotational and spring energy grow by more than that factor
+   beyond what gravity released (forces that do work must fit in it; a
+   world starting at rest is checked once it moves). Such a step returns
+   TB_ERR_UNSTABLE, with the advisor's verdict naming the step, the object
+   and the cause; the world is back where the step began and steps again
+   (with a smaller step, or once the cause is fixed). */
 TB_API tb_status tb_world_set_guard(tb_world *world, double energy_growth);
 TB_API double tb_world_guard(const tb_world *world);
 
@@ -127,8 +140,8 @@ TB_API size_t tb_world_tracer_count(const tb_world *world);
 /* Flat array of 3 * count positions (m), in slot order. */
 TB_API const double *tb_world_tracer_positions(const tb_world *world);
 TB_API tb_tracer_id tb_world_tracer_at(const tb_world *world, size_t slot);
-/* The field velocity (m/s) at each tracer now, 3 * count values. Calls the
-   field callbacks, so it can fail like a step. */
+/* The field velocity (m/s) at each tracer now, 3 * count values (not
+   NULL). Calls the field callbacks, so it can fail like a step. */
 TB_API tb_status tb_world_tracer_velocities(tb_world *world, double *velocities);
 
 /* ---------------------------------------------------------------- fields -- */
@@ -181,7 +194,9 @@ TB_API size_t tb_world_spring_count(const tb_world *world);
    no world: on failure they return TB_ERR_ARGUMENT (tb_mass_mesh also
    TB_ERR_MEMORY: it sorts edges in scratch from malloc), write a one-line
    reason into `message` when it is not NULL (TB_MESSAGE_SIZE bytes), and
-   leave *mass untouched. */
+   leave *mass untouched. A result no body could take is refused: a mass
+   or a principal moment outside [1e-100, 1e100], a centre past 1e100
+   (the input rule, TB_LIMIT). */
 
 /* Solid sphere of radius r (m). */
 TB_API tb_status tb_mass_sphere(double rho, double radius, tb_mass *mass, char *message);
@@ -210,7 +225,7 @@ TB_API tb_status tb_mass_mesh(double rho, size_t vertex_count, const double *ver
    triangle inequality (I1 + I2 >= I3 for every order), is refused. */
 TB_API tb_status tb_mass_from_tensor(double total_mass, const double centre[3], const double tensor[9],
                                      tb_mass *mass, char *message);
-/* Scale to a given total mass (kg, finite and > 0), keeping the shape. */
+/* Scale to a given total mass (kg, from 1e-100 to 1e100), keeping the shape. */
 TB_API tb_status tb_mass_set_total(tb_mass *mass, double total_mass, char *message);
 
 /* --------------------------------------------------------------- bodies -- */
@@ -225,10 +240,12 @@ TB_API tb_status tb_mass_set_total(tb_mass *mass, double total_mass, char *messa
 
 TB_API tb_body_def tb_default_body_def(void);
 /* The body's centre of mass goes to position + R(orientation) mass.centre
-   and its principal axes to orientation * mass.frame. Refused: non-finite
-   values, a quaternion whose norm is not 1 within 1e-6 (it is then
-   normalised exactly), mass or moments that are not finite and > 0, moments
-   that break the triangle inequality, negative damping. */
+   and its principal axes to orientation * mass.frame. Refused: values
+   outside the input rule (mass and moments outside [1e-100, 1e100], the
+   rest past 1e100, and so momentum P = m v and L = I w and the energies
+   m v^2 / 2 and w.I.w / 2), a quaternion whose norm is not 1 within 1e-6
+   (it is then normalised exactly), moments that break the triangle
+   inequality, negative damping. */
 TB_API tb_status tb_world_add_body(tb_world *world, const tb_body_def *def, tb_body_id *id);
 /* Removing a body removes its shapes. */
 TB_API tb_status tb_world_remove_body(tb_world *world, tb_body_id id);
@@ -240,16 +257,20 @@ TB_API tb_status tb_body_angular_velocity(const tb_world *world, tb_body_id id, 
 /* Linear momentum P (kg m/s) and angular momentum L about the centre of
    mass (kg m^2/s), world frame. Either pointer may be NULL. */
 TB_API tb_status tb_body_momentum(const tb_world *world, tb_body_id id, double linear[3], double angular[3]);
+/* Mass (kg) and principal moments (kg m^2); either pointer may be NULL. */
 TB_API tb_status tb_body_mass(const tb_world *world, tb_body_id id, double *mass, double inertia[3]);
 TB_API tb_status tb_body_set_position(tb_world *world, tb_body_id id, const double position[3]);
 TB_API tb_status tb_body_set_orientation(tb_world *world, tb_body_id id, const double orientation[4]);
 TB_API tb_status tb_body_set_velocity(tb_world *world, tb_body_id id, const double velocity[3]);
+/* Setters refuse a state whose momentum or energy breaks the input rule;
+   an orientation keeps the angular velocity, so L = I w is checked anew. */
 TB_API tb_status tb_body_set_angular_velocity(tb_world *world, tb_body_id id, const double angular_velocity[3]);
 
 /* Forces and torques held for the next step, then cleared (as in ODE): a
    force f (N) at a world point p (m) also adds the torque (p - x) x f; at a
    point given in the body's principal frame, p = x + R p_body. A torque is
-   in N m, world frame. */
+   in N m, world frame. A force whose torque, or whose sum with what the
+   body already holds, passes 1e100 is refused (the input rule). */
 TB_API tb_status tb_body_apply_force(tb_world *world, tb_body_id id, const double force[3], const double point[3]);
 TB_API tb_status tb_body_apply_force_at_body_point(tb_world *world, tb_body_id id, const double force[3],
                                                    const double body_point[3]);
@@ -274,19 +295,23 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    nothing for collision. How contacts are found and solved: docs/contacts.md. */
 
 TB_API tb_shape_def tb_default_shape_def(void);
-/* Refused: sizes <= 0 or not finite, a plane normal that is not unit within
-   1e-6, a plane on a body, a stale body, friction < 0, restitution outside
-   [0, 1], rolling_resistance < 0 or not finite, a non-unit orientation. */
+/* Refused: sizes outside [1e-100, 1e100] (half_length and offset: past
+   1e100), a plane normal that is not unit within 1e-6, a plane on a body,
+   a stale body, friction < 0, restitution outside [0, 1],
+   rolling_resistance < 0 or not finite, a non-unit orientation, any value
+   past the input rule. */
 TB_API tb_status tb_world_add_shape(tb_world *world, const tb_shape_def *def, tb_shape_id *id);
 TB_API tb_status tb_world_remove_shape(tb_world *world, tb_shape_id id);
 TB_API size_t tb_world_shape_count(const tb_world *world);
 
 TB_API tb_contact_settings tb_default_contact_settings(void);
+/* Refused: values outside the ranges tb_contact_settings gives or the
+   input rule, and more than 1000000 iterations of any kind. */
 TB_API tb_status tb_world_set_contact_settings(tb_world *world, const tb_contact_settings *settings);
 TB_API tb_contact_settings tb_world_contact_settings(const tb_world *world);
 
 /* The contacts that began and ended in the last step, valid until the next
-   step or structural change. */
+   step or structural change; count may be NULL. */
 TB_API const tb_contact_event *tb_world_contact_events(const tb_world *world, size_t *count);
 /* Points of contact that are touching now (after the last step). */
 TB_API size_t tb_world_contact_count(const tb_world *world);
@@ -307,8 +332,9 @@ TB_API size_t tb_world_sleeping_count(const tb_world *world);
 /* --------------------------------------------------------------- advisor -- */
 
 /* Before a run: the stability limit of the world's integrator for a step h
-   (finite, > 0), from the stiffest spring mode (power iteration on M^-1 K,
-   pinned particles excluded) and the fastest drag decay. Changes nothing. */
+   (as tb_world_step takes it), from the stiffest spring mode (power
+   iteration on M^-1 K, pinned particles excluded) and the fastest drag
+   decay. Changes nothing. */
 TB_API tb_status tb_world_advise(tb_world *world, double h, tb_advice *advice);
 
 /* ---------------------------------------------------------- diagnostics -- */

@@ -20,10 +20,10 @@ tb_world_def tb_default_world_def(void)
 
 static tb_status check_drag(tb_world *w, double linear, double quadratic)
 {
-    if (!(isfinite(linear) && linear >= 0) || !(isfinite(quadratic) && quadratic >= 0))
+    if (!(linear >= 0 && linear <= TB_LIMIT) || !(quadratic >= 0 && quadratic <= TB_LIMIT))
         return tb__fail(w, TB_ERR_ARGUMENT,
-                        "drag coefficients must be finite and >= 0 (got linear %g, quadratic %g)",
-                        linear, quadratic);
+                        "drag coefficients must be finite and >= 0, at most %g (got linear %g, quadratic %g)",
+                        TB_LIMIT, linear, quadratic);
     return TB_OK;
 }
 
@@ -38,12 +38,12 @@ tb_status tb_world_create(const tb_world_def *def, tb_world **world, char *messa
         *world = NULL;
     if (!def || !world)
         st = tb__fail(&scratch, TB_ERR_ARGUMENT, "tb_world_create needs a definition and an output pointer");
-    else if (!tb__finite3(def->gravity))
-        st = tb__fail(&scratch, TB_ERR_ARGUMENT, "gravity must be finite");
+    else if ((st = tb__check_values(&scratch, def->gravity, 3, "gravity")) != TB_OK)
+        ;
     else if ((st = check_drag(&scratch, def->linear_drag, def->quadratic_drag)) != TB_OK)
         ;
-    else if (def->tolerance != 0 && !(isfinite(def->tolerance) && def->tolerance > 0))
-        st = tb__fail(&scratch, TB_ERR_ARGUMENT, "tolerance must be finite and > 0 (got %g)", def->tolerance);
+    else if (def->tolerance != 0 && (st = tb__check_scale(&scratch, def->tolerance, "tolerance")) != TB_OK)
+        ;
     else if (!tb__method_find(def->integrator ? def->integrator : "verlet"))
         st = tb__fail(&scratch, TB_ERR_ARGUMENT, "unknown integrator '%s'", def->integrator);
     if (st == TB_OK) {
@@ -54,6 +54,7 @@ tb_status tb_world_create(const tb_world_def *def, tb_world **world, char *messa
         } else {
             memset(w, 0, sizeof *w);
             w->allocator = def->allocator;
+            w->id_tag = tb__ids_new_tag();
             w->method = tb__method_find(def->integrator ? def->integrator : "verlet");
             memcpy(w->gravity, def->gravity, sizeof w->gravity);
             w->linear_drag = def->linear_drag;
@@ -95,20 +96,24 @@ void tb_world_destroy(tb_world *w)
 
 const char *tb_world_message(const tb_world *w)
 {
+    TB__NEED_WORLD(w, "the world pointer is NULL");
     return w->message;
 }
 
 double tb_world_time(const tb_world *w)
 {
+    TB__NEED_WORLD(w, 0);
     return w->time;
 }
 
 tb_status tb_world_set_gravity(tb_world *w, const double gravity[3])
 {
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if (w->stepping)
         return tb__check_busy(w, "change gravity");
-    if (!gravity || !tb__finite3(gravity))
-        return tb__fail(w, TB_ERR_ARGUMENT, "gravity must be finite");
+    if ((st = tb__check_values(w, gravity, 3, "gravity")) != TB_OK)
+        return st;
     memcpy(w->gravity, gravity, sizeof w->gravity);
     tb__wake_all(w); /* resting was under the old gravity */
     return TB_OK;
@@ -116,12 +121,15 @@ tb_status tb_world_set_gravity(tb_world *w, const double gravity[3])
 
 void tb_world_gravity(const tb_world *w, double gravity[3])
 {
-    memcpy(gravity, w->gravity, sizeof w->gravity);
+    if (w && gravity)
+        memcpy(gravity, w->gravity, sizeof w->gravity);
 }
 
 tb_status tb_world_set_drag(tb_world *w, double linear, double quadratic)
 {
-    tb_status st = tb__check_busy(w, "change drag");
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    st = tb__check_busy(w, "change drag");
     if (st == TB_OK)
         st = check_drag(w, linear, quadratic);
     if (st == TB_OK) {

@@ -64,6 +64,8 @@ struct tb_world {
     char message[TB_MESSAGE_SIZE];
     const tb__method *method;
     int stepping;          /* nonzero inside tb_world_step: no structural changes */
+    uint32_t id_tag;       /* this world's tag in the top bits of every id's
+                              generation (core/ids.c) */
 
     double time;           /* s */
     double time_carry;     /* s, the rounding lost from `time` (Kahan sum) */

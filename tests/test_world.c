@@ -13,7 +13,7 @@
 
 typedef struct fingerprint {
     double time, gravity[3];
-    size_t particles, tracers, springs;
+    size_t particles, tracers, springs, bodies, shapes;
     double data[64];
     size_t n;
     char integrator[32];
@@ -37,6 +37,18 @@ static void take(const tb_world *w, fingerprint *f)
     for (i = 0; i < 3 * nt && f->n + 3 <= 64; i += 3) {
         memcpy(f->data + f->n, tb_world_tracer_positions(w) + i, 3 * sizeof(double));
         f->n += 3;
+    }
+    f->bodies = tb_world_body_count(w);
+    f->shapes = tb_world_shape_count(w);
+    for (i = 0; i < f->bodies && f->n + 13 <= 64; ++i) {
+        double v[3], omega[3];
+        memcpy(f->data + f->n, tb_world_body_positions(w) + 3 * i, 3 * sizeof(double));
+        memcpy(f->data + f->n + 3, tb_world_body_orientations(w) + 4 * i, 4 * sizeof(double));
+        tb_body_velocity(w, tb_world_body_at(w, i), v);
+        tb_body_angular_velocity(w, tb_world_body_at(w, i), omega);
+        memcpy(f->data + f->n + 7, v, sizeof v);
+        memcpy(f->data + f->n + 10, omega, sizeof omega);
+        f->n += 13;
     }
     strncpy(f->integrator, tb_world_integrator(w), sizeof f->integrator - 1);
 }
@@ -162,6 +174,188 @@ static void ids_survive_swap_remove_and_go_stale(void **state)
     assert_true(TB_ID_EQUAL(tb_world_particle_at(w, 0), c) || TB_ID_EQUAL(tb_world_particle_at(w, 1), c));
     assert_true(TB_ID_IS_NULL(tb_world_particle_at(w, 5)));
     tb_world_destroy(w);
+}
+
+/* Every kind of id, from the other world or forged, is refused as stale
+   by every call that takes one, and the world stays as it was. The two
+   worlds hold the same objects made in the same order, so their ids share
+   indices and counters: only the world tag tells them apart. */
+typedef struct id_set {
+    tb_tracer_id tracer;
+    tb_particle_id particle, other;
+    tb_spring_id spring;
+    tb_body_id body;
+    tb_shape_id shape;
+    tb_field_id field;
+    tb_force_id force;
+} id_set;
+
+static tb_status no_force(const tb_force_args *args, void *user)
+{
+    (void)args, (void)user;
+    return TB_OK;
+}
+
+static void populate(tb_world *w, id_set *ids)
+{
+    tb_tracer_def t = tb_default_tracer_def();
+    tb_spring_def sp = tb_default_spring_def();
+    tb_body_def bd = tb_default_body_def();
+    tb_shape_def sh = tb_default_shape_def();
+    const double u[3] = { 1, 0, 0 };
+    assert_int_equal(tb_world_add_tracer(w, &t, &ids->tracer), TB_OK);
+    ids->particle = add_particle(w, 0, 1, 1);
+    ids->other = add_particle(w, 1, 0, 2);
+    sp.a = ids->particle, sp.b = ids->other, sp.stiffness = 3;
+    assert_int_equal(tb_world_add_spring(w, &sp, &ids->spring), TB_OK);
+    bd.position[2] = 5;
+    assert_int_equal(tb_world_add_body(w, &bd, &ids->body), TB_OK);
+    sh.body = ids->body;
+    assert_int_equal(tb_world_add_shape(w, &sh, &ids->shape), TB_OK);
+    assert_int_equal(tb_world_add_uniform_field(w, u, &ids->field), TB_OK);
+    assert_int_equal(tb_world_add_force(w, no_force, NULL, &ids->force), TB_OK);
+}
+
+#define assert_stale(w, call)                                                       \
+    do {                                                                            \
+        assert_int_equal((call), TB_ERR_STALE_ID);                                  \
+        assert_non_null(strstr(tb_world_message(w), "another world"));              \
+    } while (0)
+
+/* Every call that takes an id, each given the ids of `ids`. */
+static void all_refused(tb_world *w, const id_set *ids)
+{
+    double v[4] = { 1, 0, 0, 0 }, m;
+    int asleep;
+    tb_spring_def sp = tb_default_spring_def();
+    tb_shape_def sh = tb_default_shape_def();
+    fingerprint before;
+    take(w, &before);
+    assert_stale(w, tb_tracer_position(w, ids->tracer, v));
+    assert_stale(w, tb_tracer_set_position(w, ids->tracer, v));
+    assert_stale(w, tb_world_remove_tracer(w, ids->tracer));
+    assert_stale(w, tb_particle_position(w, ids->particle, v));
+    assert_stale(w, tb_particle_velocity(w, ids->particle, v));
+    assert_stale(w, tb_particle_mass(w, ids->particle, &m));
+    assert_stale(w, tb_particle_set_position(w, ids->particle, v));
+    assert_stale(w, tb_particle_set_velocity(w, ids->particle, v));
+    assert_stale(w, tb_world_remove_particle(w, ids->particle));
+    sp.a = ids->particle, sp.stiffness = 1; /* anchored */
+    assert_stale(w, tb_world_add_spring(w, &sp, NULL));
+    sp.a = tb_world_particle_at(w, 0), sp.b = ids->other;
+    if (!TB_ID_IS_NULL(sp.b)) /* a null b anchors the spring */
+        assert_stale(w, tb_world_add_spring(w, &sp, NULL));
+    assert_stale(w, tb_world_remove_spring(w, ids->spring));
+    assert_stale(w, tb_body_position(w, ids->body, v));
+    assert_stale(w, tb_body_orientation(w, ids->body, v));
+    assert_stale(w, tb_body_velocity(w, ids->body, v));
+    assert_stale(w, tb_body_angular_velocity(w, ids->body, v));
+    assert_stale(w, tb_body_momentum(w, ids->body, v, NULL));
+    assert_stale(w, tb_body_mass(w, ids->body, &m, NULL));
+    assert_stale(w, tb_body_set_position(w, ids->body, v));
+    assert_stale(w, tb_body_set_orientation(w, ids->body, v));
+    assert_stale(w, tb_body_set_velocity(w, ids->body, v));
+    assert_stale(w, tb_body_set_angular_velocity(w, ids->body, v));
+    assert_stale(w, tb_body_apply_force(w, ids->body, v, v));
+    assert_stale(w, tb_body_apply_force_at_body_point(w, ids->body, v, v));
+    assert_stale(w, tb_body_apply_torque(w, ids->body, v));
+    assert_stale(w, tb_body_asleep(w, ids->body, &asleep));
+    assert_stale(w, tb_body_wake(w, ids->body));
+    sh.body = ids->body;
+    if (!TB_ID_IS_NULL(sh.body)) /* a null body makes a static shape */
+        assert_stale(w, tb_world_add_shape(w, &sh, NULL));
+    assert_stale(w, tb_world_remove_body(w, ids->body));
+    assert_stale(w, tb_world_remove_shape(w, ids->shape));
+    assert_stale(w, tb_world_remove_field(w, ids->field));
+    assert_stale(w, tb_world_remove_force(w, ids->force));
+    assert_unchanged(w, before);
+}
+
+/* Change one id of every kind the same way. */
+#define FORGE_ALL(set, member, expr)                                      \
+    do {                                                                 \
+        (set).tracer.member = (expr)((set).tracer.member);                 \
+        (set).particle.member = (expr)((set).particle.member);             \
+        (set).other.member = (expr)((set).other.member);                   \
+        (set).spring.member = (expr)((set).spring.member);                 \
+        (set).body.member = (expr)((set).body.member);                     \
+        (set).shape.member = (expr)((set).shape.member);                   \
+        (set).field.member = (expr)((set).field.member);                   \
+        (set).force.member = (expr)((set).force.member);                   \
+    } while (0)
+
+static uint32_t next_life(uint32_t g) { return g + 2; }        /* what the entry's next life will carry */
+static uint32_t free_life(uint32_t g) { return g + 1; }        /* what a free entry carries */
+static uint32_t top_bit(uint32_t g) { return g ^ 0x80000000u; } /* another world's tag */
+static uint32_t low_tag(uint32_t g) { return g ^ 0x00100000u; }
+static uint32_t zero(uint32_t g) { (void)g; return 0; }
+static uint32_t far_index(uint32_t i) { return i + 1000; }
+static uint32_t last_index(uint32_t i) { (void)i; return UINT32_MAX; }
+
+static void ids_of_another_world_are_stale(void **state)
+{
+    tb_world *a = make_world("rk4"), *b = make_world("rk4");
+    id_set in_a, in_b, forged;
+    int k;
+    uint32_t (*const forge_generation[])(uint32_t) = { next_life, free_life, top_bit, low_tag, zero };
+    uint32_t (*const forge_index[])(uint32_t) = { far_index, last_index, zero };
+    (void)state;
+    populate(a, &in_a);
+    populate(b, &in_b);
+    /* the same index in both worlds, told apart by the generation alone */
+    assert_int_equal(in_a.body.index1, in_b.body.index1);
+    assert_int_not_equal(in_a.body.generation, in_b.body.generation);
+    all_refused(b, &in_a);
+    all_refused(a, &in_b);
+    for (k = 0; k < (int)(sizeof forge_generation / sizeof forge_generation[0]); ++k) {
+        forged = in_b;
+        FORGE_ALL(forged, generation, forge_generation[k]);
+        all_refused(b, &forged);
+    }
+    for (k = 0; k < (int)(sizeof forge_index / sizeof forge_index[0]); ++k) {
+        forged = in_b;
+        FORGE_ALL(forged, index1, forge_index[k]);
+        all_refused(b, &forged);
+    }
+    /* each world still answers to its own ids, and both step */
+    {
+        double x[3];
+        assert_int_equal(tb_particle_position(a, in_a.particle, x), TB_OK);
+        assert_int_equal(tb_body_position(b, in_b.body, x), TB_OK);
+        assert_int_equal(tb_world_step(a, 0.01), TB_OK);
+        assert_int_equal(tb_world_step(b, 0.01), TB_OK);
+        assert_int_equal(tb_world_remove_shape(b, in_b.shape), TB_OK);
+        assert_int_equal(tb_world_remove_force(b, in_b.force), TB_OK);
+        assert_int_equal(tb_world_remove_field(b, in_b.field), TB_OK);
+        assert_int_equal(tb_world_remove_spring(b, in_b.spring), TB_OK);
+        assert_int_equal(tb_world_remove_body(b, in_b.body), TB_OK);
+        assert_int_equal(tb_world_remove_particle(b, in_b.particle), TB_OK);
+        assert_int_equal(tb_world_remove_tracer(b, in_b.tracer), TB_OK);
+    }
+    tb_world_destroy(a);
+    tb_world_destroy(b);
+}
+
+/* A world's ids carry its tag through every life of an entry: reused 1000
+   times, an entry's id is never one of another world. */
+static void reused_entries_keep_their_world(void **state)
+{
+    tb_world *a = make_world(NULL), *b = make_world(NULL);
+    tb_particle_id pa = add_particle(a, 0, 0, 1), pb = add_particle(b, 0, 0, 1);
+    double x[3];
+    int i;
+    (void)state;
+    for (i = 0; i < 1000; ++i) {
+        assert_int_equal(tb_world_remove_particle(a, pa), TB_OK);
+        pa = add_particle(a, i, 0, 1);
+        assert_int_equal(tb_particle_position(b, pa, x), TB_ERR_STALE_ID);
+        assert_int_equal(tb_particle_position(a, pb, x), TB_ERR_STALE_ID);
+    }
+    assert_int_equal(pa.index1, pb.index1);
+    assert_int_equal(tb_particle_position(a, pa, x), TB_OK);
+    assert_true(x[0] == 999);
+    tb_world_destroy(a);
+    tb_world_destroy(b);
 }
 
 static void removing_a_particle_removes_its_springs(void **state)
@@ -476,12 +670,15 @@ static void out_of_memory_is_a_status_not_a_crash(void **state)
 static void worlds_are_independent(void **state)
 {
     tb_world *a = make_world("symplectic_euler"), *b = make_world("symplectic_euler");
-    tb_particle_id pa = add_particle(a, 0, 1, 1);
+    tb_particle_id pa = add_particle(a, 0, 1, 1), pb;
     double x[3];
     (void)state;
-    add_particle(b, 0, 1, 1);
+    pb = add_particle(b, 0, 1, 1);
+    assert_int_equal(pa.index1, pb.index1); /* the same index in both tables */
     assert_int_equal(tb_world_step(a, 0.5), TB_OK);
-    assert_int_equal(tb_particle_position(b, pa, x), TB_OK); /* same index, other world: still valid there */
+    assert_int_equal(tb_particle_position(b, pa, x), TB_ERR_STALE_ID); /* a's id means nothing to b */
+    assert_non_null(strstr(tb_world_message(b), "another world"));
+    assert_int_equal(tb_particle_position(b, pb, x), TB_OK);
     assert_true(x[0] == 0);
     assert_int_equal(tb_particle_position(a, pa, x), TB_OK);
     assert_true(x[0] == 0.5);
@@ -493,6 +690,8 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(create_rejects_bad_definitions),
     cmocka_unit_test(defaults_are_documented_values),
     cmocka_unit_test(ids_survive_swap_remove_and_go_stale),
+    cmocka_unit_test(ids_of_another_world_are_stale),
+    cmocka_unit_test(reused_entries_keep_their_world),
     cmocka_unit_test(removing_a_particle_removes_its_springs),
     cmocka_unit_test(bad_particles_are_refused),
     cmocka_unit_test(bad_steps_and_settings_are_refused),

@@ -57,6 +57,20 @@ typedef struct tb_allocator {
 /* Longest message a world keeps, including the terminating zero. */
 #define TB_MESSAGE_SIZE 512
 
+/* The input rule. Every number given to tumble (a definition's field, a
+   setter's value, a step) must be finite and at most TB_LIMIT in magnitude;
+   one tumble divides by (a mass, a moment of inertia, a size, a step) also
+   at least 1 / TB_LIMIT; and what tumble derives from them at once (inverse
+   mass and moments, momentum m v and I w, kinetic energy m v^2 / 2 and
+   w.I.w / 2, a spring's force and energy, a held force's torque) must also
+   be at most TB_LIMIT. The products of two or three such numbers that a step
+   and the diagnostics form (m g.x, k d^2, |P|^2 / m) then stay below 1e300,
+   short of DBL_MAX (1.8e308). A value that breaks the rule is refused with
+   TB_ERR_ARGUMENT and a message naming it. The bound lies far beyond any
+   physical scene in SI units (the observable universe is 1e27 m across and
+   weighs 1e53 kg; an electron weighs 1e-30 kg). */
+#define TB_LIMIT 1e100
+
 #ifdef __cplusplus
 }
 #endif

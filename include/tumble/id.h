@@ -1,11 +1,13 @@
 /* tumble/id.h: value ids.
 
-   An id is an index into a per-world table plus a generation counter. A
-   removed object's id goes stale, and every call given a stale id fails with
-   TB_ERR_STALE_ID instead of touching another object. The all-zero id is
-   null ({0} in C, {} in C++). Ids are plain values: copy and compare them
-   freely; their fields are not part of the contract. This header needs
-   nothing else from tumble and may be included on its own. */
+   An id is an index into a per-world table plus a generation, which counts
+   the lives of the table entry and carries a tag of the world that made the
+   id. A removed object's id goes stale, and every call given a stale id, or
+   an id made by another world, fails with TB_ERR_STALE_ID instead of
+   touching another object. The all-zero id is null ({0} in C, {} in C++);
+   an index of 0 is null whatever the generation. Ids are plain values: copy
+   and compare them freely; their fields are not part of the contract. This
+   header needs nothing else from tumble and may be included on its own. */
 #ifndef TUMBLE_ID_H
 #define TUMBLE_ID_H
 

@@ -52,7 +52,7 @@ typedef tb_status tb_field_fn(const tb_field_args *args, void *user);
 typedef struct tb_particle_def {
     double position[3];  /* m */
     double velocity[3];  /* m/s */
-    double mass;         /* kg, finite and > 0; default 1 */
+    double mass;         /* kg, from 1e-100 to 1e100 (TB_LIMIT); default 1 */
     int pinned;          /* nonzero: immovable by forces (cloth corners) */
 } tb_particle_def;
 

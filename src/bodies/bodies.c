@@ -12,10 +12,9 @@
    which lets the kicks leave alone the components no force reaches and
    still give the bits of P + h 0 and L + h 0
    (test_rotation.fast_paths_give_the_general_bits). */
-static void set_spin(tb_world *w, uint32_t s, const double omega[3])
+static void spin_of(const double q[4], const double inertia[3], const double omega[3], double L[3])
 {
-    double *L = w->y + w->off[TB__BODY_ANG] + 3 * s;
-    tb__through_inertia(w->y + w->off[TB__BODY_ROT] + 4 * s, w->body_inertia + 3 * s, omega, L);
+    tb__through_inertia(q, inertia, omega, L);
     L[0] += 0.0, L[1] += 0.0, L[2] += 0.0;
 }
 
@@ -57,19 +56,20 @@ static tb_status check_mass(tb_world *w, const tb_mass *m)
 {
     const double *I = m->inertia;
     tb_status st;
-    if (!(isfinite(m->mass) && m->mass > 0))
-        return tb__fail(w, TB_ERR_ARGUMENT, "body mass must be finite and > 0 (got %g)", m->mass);
-    if (!finite_n(I, 3) || !(I[0] > 0 && I[1] > 0 && I[2] > 0))
-        return tb__fail(w, TB_ERR_ARGUMENT, "body moments of inertia must be finite and > 0 (got %g, %g, %g)",
-                        I[0], I[1], I[2]);
+    if ((st = tb__check_scale(w, m->mass, "body mass")) != TB_OK)
+        return st;
+    if (!tb__in_scale(I[0]) || !tb__in_scale(I[1]) || !tb__in_scale(I[2]))
+        return tb__fail(w, TB_ERR_ARGUMENT,
+                        "body moments of inertia must be finite and > 0, from %g to %g (got %g, %g, %g)",
+                        1 / TB_LIMIT, TB_LIMIT, I[0], I[1], I[2]);
     /* A real mass distribution has I1 + I2 >= I3 for every order (equality
        for a flat plate); allow rounding. */
     if (I[0] + I[1] < I[2] * (1 - 1e-12) || I[1] + I[2] < I[0] * (1 - 1e-12) || I[0] + I[2] < I[1] * (1 - 1e-12))
         return tb__fail(w, TB_ERR_ARGUMENT,
                         "body moments of inertia %g, %g, %g break the triangle inequality: no body has them",
                         I[0], I[1], I[2]);
-    if (!tb__finite3(m->centre))
-        return tb__fail(w, TB_ERR_ARGUMENT, "body centre of mass must be finite");
+    if ((st = tb__check_values(w, m->centre, 3, "body centre of mass")) != TB_OK)
+        return st;
     if ((st = check_unit(w, m->frame, "body mass frame")) != TB_OK)
         return st;
     return TB_OK;
@@ -80,16 +80,46 @@ static tb_status check_def(tb_world *w, const tb_body_def *def)
     tb_status st;
     if (!def)
         return tb__fail(w, TB_ERR_ARGUMENT, "body definition must not be NULL");
-    if (!tb__finite3(def->position) || !tb__finite3(def->velocity) || !tb__finite3(def->angular_velocity))
-        return tb__fail(w, TB_ERR_ARGUMENT, "body position, velocity and angular velocity must be finite");
+    if ((st = tb__check_values(w, def->position, 3, "body position")) != TB_OK ||
+        (st = tb__check_values(w, def->velocity, 3, "body velocity")) != TB_OK ||
+        (st = tb__check_values(w, def->angular_velocity, 3, "body angular velocity")) != TB_OK)
+        return st;
     if ((st = check_unit(w, def->orientation, "body orientation")) != TB_OK)
         return st;
     if ((st = check_mass(w, &def->mass)) != TB_OK)
         return st;
-    if (!(isfinite(def->linear_damping) && def->linear_damping >= 0) ||
-        !(isfinite(def->angular_damping) && def->angular_damping >= 0))
-        return tb__fail(w, TB_ERR_ARGUMENT, "body damping must be finite and >= 0");
+    if ((st = tb__check_coefficient(w, def->linear_damping, "body linear damping")) != TB_OK ||
+        (st = tb__check_coefficient(w, def->angular_damping, "body angular damping")) != TB_OK)
+        return st;
     return TB_OK;
+}
+
+static double largest(const double v[3])
+{
+    return fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
+}
+
+/* What a body of mass m moving with momentum P has (the input rule,
+   TB_LIMIT): P itself and the kinetic energy |P|^2 / 2m. */
+static tb_status check_linear(tb_world *w, double m, const double P[3])
+{
+    tb_status st = tb__check_derived(w, largest(P), "body momentum m v", "kg m/s");
+    return st != TB_OK ? st : tb__check_derived(w, 0.5 * tb__dot3(P, P) / m, "body kinetic energy m v^2 / 2", "J");
+}
+
+/* ... and what a body of principal moments I at the unit orientation q
+   has with angular momentum L: L itself and the energy w.L / 2. */
+static tb_status check_angular(tb_world *w, const double I[3], const double q[4], const double L[3])
+{
+    double inv[3], omega[3];
+    int k;
+    tb_status st = tb__check_derived(w, largest(L), "body angular momentum I w", "kg m^2/s");
+    if (st != TB_OK)
+        return st;
+    for (k = 0; k < 3; ++k)
+        inv[k] = 1 / I[k];
+    tb__through_inertia(q, inv, L, omega);
+    return tb__check_derived(w, 0.5 * tb__dot3(L, omega), "body rotational energy w.I.w / 2", "J");
 }
 
 /* ---- adding and removing ----------------------------------------------------- */
@@ -152,23 +182,20 @@ tb_status tb_world_add_body(tb_world *w, const tb_body_def *def, tb_body_id *id)
     tb_status st;
     uint32_t s;
     tb_body_id made;
-    double R[9], c[3], *q;
+    double R[9], c[3], q[4], x[3], P[3], L[3];
     int k;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "add a body")) != TB_OK)
         return st;
     if ((st = check_def(w, def)) != TB_OK)
         return st;
-    if (w->body_count == w->body_cap && (st = grow(w)) != TB_OK)
-        return st;
-    s = (uint32_t)w->body_count++;
-    q = at(w, TB__BODY_ROT, 4, s);
     /* the centre of mass and the principal axes, placed by the shape pose */
-    memcpy(q, def->orientation, 4 * sizeof(double));
+    memcpy(q, def->orientation, sizeof q);
     tb__normalise(q);
     tb__matrix_of(q, R);
     tb__mul(R, def->mass.centre, c);
     for (k = 0; k < 3; ++k)
-        at(w, TB__BODY_POS, 3, s)[k] = def->position[k] + c[k];
+        x[k] = def->position[k] + c[k];
     {
         double frame[4];
         memcpy(frame, def->mass.frame, sizeof frame);
@@ -176,14 +203,26 @@ tb_status tb_world_add_body(tb_world *w, const tb_body_def *def, tb_body_id *id)
         tb__quat_mul(q, frame, q);
         tb__normalise(q);
     }
+    for (k = 0; k < 3; ++k)
+        P[k] = def->mass.mass * def->velocity[k] + 0.0; /* +0: see spin_of */
+    spin_of(q, def->mass.inertia, def->angular_velocity, L);
+    if ((st = tb__check_values(w, x, 3, "body centre of mass, placed,")) != TB_OK ||
+        (st = check_linear(w, def->mass.mass, P)) != TB_OK ||
+        (st = check_angular(w, def->mass.inertia, q, L)) != TB_OK)
+        return st;
+    if (w->body_count == w->body_cap && (st = grow(w)) != TB_OK)
+        return st;
+    s = (uint32_t)w->body_count++;
+    memcpy(at(w, TB__BODY_POS, 3, s), x, sizeof x);
+    memcpy(at(w, TB__BODY_ROT, 4, s), q, sizeof q);
+    memcpy(at(w, TB__BODY_MOM, 3, s), P, sizeof P);
+    memcpy(at(w, TB__BODY_ANG, 3, s), L, sizeof L);
     w->body_mass[s] = def->mass.mass;
     w->body_inv_mass[s] = 1 / def->mass.mass;
     for (k = 0; k < 3; ++k) {
         w->body_inertia[3 * s + k] = def->mass.inertia[k];
         w->body_inv_inertia[3 * s + k] = 1 / def->mass.inertia[k];
-        at(w, TB__BODY_MOM, 3, s)[k] = def->mass.mass * def->velocity[k] + 0.0; /* +0: see set_spin */
     }
-    set_spin(w, s, def->angular_velocity);
     tb__split_frame_of(w->body_inv_inertia + 3 * s, &w->body_frame[s]);
     tb__lane_frame_of(w->body_inv_inertia + 3 * s, &w->body_lane_frame[0][s], &w->body_lane_frame[1][s],
                       &w->body_lane_frame[2][s], &w->body_lane_frame[3][s]);
@@ -194,7 +233,7 @@ tb_status tb_world_add_body(tb_world *w, const tb_body_def *def, tb_body_id *id)
     memset(w->body_applied + 6 * s, 0, 6 * sizeof(double));
     w->body_rest[s] = 0;
     w->body_island[s] = 0;
-    tb__ids_acquire(&w->body_ids, s, &made.index1, &made.generation);
+    tb__ids_acquire(&w->body_ids, w->id_tag, s, &made.index1, &made.generation);
     if (id)
         *id = made;
     return TB_OK;
@@ -259,6 +298,7 @@ tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
     size_t sizes[BODY_ARRAYS], k;
     uint32_t s, last;
     tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "remove a body")) != TB_OK)
         return st;
     if ((st = tb__body_find(w, id, &s)) != TB_OK)
@@ -285,10 +325,22 @@ tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
 
 /* ---- reading and writing ------------------------------------------------------ */
 
+/* Getters share their checks: a world, a live id and somewhere to write. */
+static tb_status readable(const tb_world *w, tb_body_id id, const void *out, const char *function, uint32_t *s)
+{
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if ((st = tb__body_find(w, id, s)) != TB_OK)
+        return st;
+    if (!out)
+        return tb__null((tb_world *)w, function, "the output");
+    return TB_OK;
+}
+
 tb_status tb_body_position(const tb_world *w, tb_body_id id, double position[3])
 {
     uint32_t s;
-    tb_status st = tb__body_find(w, id, &s);
+    tb_status st = readable(w, id, position, "tb_body_position", &s);
     if (st == TB_OK)
         memcpy(position, at(w, TB__BODY_POS, 3, s), 3 * sizeof(double));
     return st;
@@ -297,7 +349,7 @@ tb_status tb_body_position(const tb_world *w, tb_body_id id, double position[3])
 tb_status tb_body_orientation(const tb_world *w, tb_body_id id, double orientation[4])
 {
     uint32_t s;
-    tb_status st = tb__body_find(w, id, &s);
+    tb_status st = readable(w, id, orientation, "tb_body_orientation", &s);
     if (st == TB_OK)
         memcpy(orientation, at(w, TB__BODY_ROT, 4, s), 4 * sizeof(double));
     return st;
@@ -306,7 +358,7 @@ tb_status tb_body_orientation(const tb_world *w, tb_body_id id, double orientati
 tb_status tb_body_velocity(const tb_world *w, tb_body_id id, double velocity[3])
 {
     uint32_t s;
-    tb_status st = tb__body_find(w, id, &s);
+    tb_status st = readable(w, id, velocity, "tb_body_velocity", &s);
     int k;
     if (st == TB_OK)
         for (k = 0; k < 3; ++k)
@@ -317,7 +369,7 @@ tb_status tb_body_velocity(const tb_world *w, tb_body_id id, double velocity[3])
 tb_status tb_body_angular_velocity(const tb_world *w, tb_body_id id, double angular_velocity[3])
 {
     uint32_t s;
-    tb_status st = tb__body_find(w, id, &s);
+    tb_status st = readable(w, id, angular_velocity, "tb_body_angular_velocity", &s);
     if (st == TB_OK)
         tb__through_inertia(at(w, TB__BODY_ROT, 4, s), w->body_inv_inertia + 3 * s, at(w, TB__BODY_ANG, 3, s),
                         angular_velocity);
@@ -327,7 +379,9 @@ tb_status tb_body_angular_velocity(const tb_world *w, tb_body_id id, double angu
 tb_status tb_body_momentum(const tb_world *w, tb_body_id id, double linear[3], double angular[3])
 {
     uint32_t s;
-    tb_status st = tb__body_find(w, id, &s);
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    st = tb__body_find(w, id, &s);
     if (st == TB_OK && linear)
         memcpy(linear, at(w, TB__BODY_MOM, 3, s), 3 * sizeof(double));
     if (st == TB_OK && angular)
@@ -338,7 +392,9 @@ tb_status tb_body_momentum(const tb_world *w, tb_body_id id, double linear[3], d
 tb_status tb_body_mass(const tb_world *w, tb_body_id id, double *mass, double inertia[3])
 {
     uint32_t s;
-    tb_status st = tb__body_find(w, id, &s);
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    st = tb__body_find(w, id, &s);
     if (st == TB_OK && mass)
         *mass = w->body_mass[s];
     if (st == TB_OK && inertia)
@@ -346,22 +402,24 @@ tb_status tb_body_mass(const tb_world *w, tb_body_id id, double *mass, double in
     return st;
 }
 
-/* Setters share their checks: the world is not stepping, the id is live and
-   the vector finite. */
+/* Setters share their checks: a world that is not stepping, a live id and
+   n values within the input rule. */
 static tb_status writable(tb_world *w, tb_body_id id, const double *v, int n, const char *what, uint32_t *s)
 {
-    tb_status st = tb__check_busy(w, "set a body's state");
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    st = tb__check_busy(w, "set a body's state");
     if (st == TB_OK)
         st = tb__body_find(w, id, s);
-    if (st == TB_OK && (!v || !finite_n(v, n)))
-        st = tb__fail(w, TB_ERR_ARGUMENT, "body %s must be finite", what);
+    if (st == TB_OK)
+        st = tb__check_values(w, v, (size_t)n, what);
     return st;
 }
 
 tb_status tb_body_set_position(tb_world *w, tb_body_id id, const double position[3])
 {
     uint32_t s;
-    tb_status st = writable(w, id, position, 3, "position", &s);
+    tb_status st = writable(w, id, position, 3, "body position", &s);
     if (st == TB_OK) {
         memcpy(at(w, TB__BODY_POS, 3, s), position, 3 * sizeof(double));
         tb__wake_body(w, s);
@@ -373,17 +431,20 @@ tb_status tb_body_set_position(tb_world *w, tb_body_id id, const double position
 tb_status tb_body_set_orientation(tb_world *w, tb_body_id id, const double orientation[4])
 {
     uint32_t s;
-    double omega[3], *q;
-    tb_status st = writable(w, id, orientation, 4, "orientation", &s);
+    double omega[3], q[4], L[3];
+    tb_status st = writable(w, id, orientation, 4, "body orientation", &s);
     if (st == TB_OK)
         st = check_unit(w, orientation, "body orientation");
     if (st != TB_OK)
         return st;
-    q = at(w, TB__BODY_ROT, 4, s);
-    tb__through_inertia(q, w->body_inv_inertia + 3 * s, at(w, TB__BODY_ANG, 3, s), omega);
-    memcpy(q, orientation, 4 * sizeof(double));
+    tb__through_inertia(at(w, TB__BODY_ROT, 4, s), w->body_inv_inertia + 3 * s, at(w, TB__BODY_ANG, 3, s), omega);
+    memcpy(q, orientation, sizeof q);
     tb__normalise(q);
-    set_spin(w, s, omega);
+    spin_of(q, w->body_inertia + 3 * s, omega, L);
+    if ((st = check_angular(w, w->body_inertia + 3 * s, q, L)) != TB_OK)
+        return st;
+    memcpy(at(w, TB__BODY_ROT, 4, s), q, sizeof q);
+    memcpy(at(w, TB__BODY_ANG, 3, s), L, sizeof L);
     tb__wake_body(w, s);
     return TB_OK;
 }
@@ -391,35 +452,64 @@ tb_status tb_body_set_orientation(tb_world *w, tb_body_id id, const double orien
 tb_status tb_body_set_velocity(tb_world *w, tb_body_id id, const double velocity[3])
 {
     uint32_t s;
+    double P[3];
     int k;
-    tb_status st = writable(w, id, velocity, 3, "velocity", &s);
-    if (st == TB_OK) {
-        for (k = 0; k < 3; ++k)
-            at(w, TB__BODY_MOM, 3, s)[k] = w->body_mass[s] * velocity[k] + 0.0; /* +0: see set_spin */
-        tb__wake_body(w, s);
-    }
-    return st;
+    tb_status st = writable(w, id, velocity, 3, "body velocity", &s);
+    if (st != TB_OK)
+        return st;
+    for (k = 0; k < 3; ++k)
+        P[k] = w->body_mass[s] * velocity[k] + 0.0; /* +0: see spin_of */
+    if ((st = check_linear(w, w->body_mass[s], P)) != TB_OK)
+        return st;
+    memcpy(at(w, TB__BODY_MOM, 3, s), P, sizeof P);
+    tb__wake_body(w, s);
+    return TB_OK;
 }
 
 tb_status tb_body_set_angular_velocity(tb_world *w, tb_body_id id, const double angular_velocity[3])
 {
     uint32_t s;
-    tb_status st = writable(w, id, angular_velocity, 3, "angular velocity", &s);
-    if (st == TB_OK) {
-        set_spin(w, s, angular_velocity);
-        tb__wake_body(w, s);
+    double L[3];
+    tb_status st = writable(w, id, angular_velocity, 3, "body angular velocity", &s);
+    if (st != TB_OK)
+        return st;
+    spin_of(at(w, TB__BODY_ROT, 4, s), w->body_inertia + 3 * s, angular_velocity, L);
+    if ((st = check_angular(w, w->body_inertia + 3 * s, at(w, TB__BODY_ROT, 4, s), L)) != TB_OK)
+        return st;
+    memcpy(at(w, TB__BODY_ANG, 3, s), L, sizeof L);
+    tb__wake_body(w, s);
+    return TB_OK;
+}
+
+/* Add a force (NULL: none) and a torque to what body slot s holds for the
+   next step, refusing sums past the input rule. */
+static tb_status add_held(tb_world *w, uint32_t s, const double force[3], const double torque[3])
+{
+    double *held = w->body_applied + 6 * s, sum[6];
+    tb_status st;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        sum[k] = force ? held[k] + force[k] : held[k];
+        sum[3 + k] = held[3 + k] + torque[k];
     }
-    return st;
+    if ((st = tb__check_derived(w, largest(torque), "torque of the force", "N m")) != TB_OK ||
+        (st = tb__check_derived(w, largest(sum), "force held for the next step", "N")) != TB_OK ||
+        (st = tb__check_derived(w, largest(sum + 3), "torque held for the next step", "N m")) != TB_OK)
+        return st;
+    memcpy(held, sum, sizeof sum);
+    w->body_held = 1;
+    tb__wake_body(w, s);
+    return TB_OK;
 }
 
 static tb_status hold(tb_world *w, tb_body_id id, const double force[3], const double point[3], int body_frame)
 {
     uint32_t s;
-    double p[3], r[3], tau[3], *held;
+    double r[3], tau[3];
     int k;
     tb_status st = writable(w, id, force, 3, "force", &s);
-    if (st == TB_OK && (!point || !tb__finite3(point)))
-        st = tb__fail(w, TB_ERR_ARGUMENT, "the point of a force must be finite");
+    if (st == TB_OK)
+        st = tb__check_values(w, point, 3, "the point of a force");
     if (st != TB_OK)
         return st;
     if (body_frame) {
@@ -428,17 +518,10 @@ static tb_status hold(tb_world *w, tb_body_id id, const double force[3], const d
         tb__mul(R, point, r);
     } else {
         for (k = 0; k < 3; ++k)
-            p[k] = point[k], r[k] = p[k] - at(w, TB__BODY_POS, 3, s)[k];
+            r[k] = point[k] - at(w, TB__BODY_POS, 3, s)[k];
     }
     tb__cross(r, force, tau);
-    held = w->body_applied + 6 * s;
-    for (k = 0; k < 3; ++k) {
-        held[k] += force[k];
-        held[3 + k] += tau[k];
-    }
-    w->body_held = 1;
-    tb__wake_body(w, s);
-    return TB_OK;
+    return add_held(w, s, force, tau);
 }
 
 tb_status tb_body_apply_force(tb_world *w, tb_body_id id, const double force[3], const double point[3])
@@ -455,36 +538,32 @@ tb_status tb_body_apply_force_at_body_point(tb_world *w, tb_body_id id, const do
 tb_status tb_body_apply_torque(tb_world *w, tb_body_id id, const double torque[3])
 {
     uint32_t s;
-    int k;
     tb_status st = writable(w, id, torque, 3, "torque", &s);
-    if (st == TB_OK) {
-        for (k = 0; k < 3; ++k)
-            w->body_applied[6 * s + 3 + k] += torque[k];
-        w->body_held = 1;
-        tb__wake_body(w, s);
-    }
-    return st;
+    return st != TB_OK ? st : add_held(w, s, NULL, torque);
 }
 
 size_t tb_world_body_count(const tb_world *w)
 {
+    TB__NEED_WORLD(w, 0);
     return w->body_count;
 }
 
 const double *tb_world_body_positions(const tb_world *w)
 {
+    TB__NEED_WORLD(w, NULL);
     return w->y ? w->y + w->off[TB__BODY_POS] : NULL;
 }
 
 const double *tb_world_body_orientations(const tb_world *w)
 {
+    TB__NEED_WORLD(w, NULL);
     return w->y ? w->y + w->off[TB__BODY_ROT] : NULL;
 }
 
 tb_body_id tb_world_body_at(const tb_world *w, size_t slot)
 {
     tb_body_id id = { 0, 0 };
-    if (slot < w->body_count)
+    if (w && slot < w->body_count)
         tb__ids_at(&w->body_ids, (uint32_t)slot, &id.index1, &id.generation);
     return id;
 }

@@ -8,6 +8,7 @@
 
 #include "world.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -223,9 +224,21 @@ static inline int tb__project_near(double q[4])
     return 1;
 }
 
+/* A q whose squares overflow (a turn of h |w| beyond about 1e38 through
+   RK4's polynomial) or underflow is first divided by its largest
+   component, so that it still comes back unit rather than zero or NaN;
+   every other q takes the one division by its root. */
 static inline void tb__project_far(double q[4])
 {
-    const double f = 1 / sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3], f;
+    if (!(n2 <= DBL_MAX && n2 >= DBL_MIN)) {
+        const double m = fmax(fmax(fabs(q[0]), fabs(q[1])), fmax(fabs(q[2]), fabs(q[3])));
+        if (m > 0 && m <= DBL_MAX) {
+            q[0] /= m, q[1] /= m, q[2] /= m, q[3] /= m;
+            n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+        }
+    }
+    f = 1 / sqrt(n2);
     q[0] *= f, q[1] *= f, q[2] *= f, q[3] *= f;
 }
 

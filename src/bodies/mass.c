@@ -45,6 +45,13 @@ static int positive(double x)
     return isfinite(x) && x > 0;
 }
 
+/* What a body can take (the input rule, TB_LIMIT in tumble/base.h): a mass
+   or moment in [1 / TB_LIMIT, TB_LIMIT]. */
+static int in_scale(double x)
+{
+    return x >= 1 / TB_LIMIT && x <= TB_LIMIT; /* NaN fails */
+}
+
 /* ---- diagonalisation -------------------------------------------------------- */
 
 /* Eigenvalues d and eigenvectors (columns of v, row-major) of the symmetric
@@ -180,14 +187,15 @@ static void principal(const double t[9], double moments[3], double frame[4])
 /* ---- results ---------------------------------------------------------------- */
 
 /* Store a result whose axes are the shape's own, refusing a mass or moment
-   that overflowed or underflowed (for example rho = 1e300 and r = 1e10). */
+   that overflowed, underflowed or that no body can take (for example
+   rho = 1e300 and r = 1e10). */
 static tb_status store_axes(const char *shape, double m, const double inertia[3], tb_mass *out, char *message)
 {
     tb_mass r;
-    if (!positive(m) || !positive(inertia[0]) || !positive(inertia[1]) || !positive(inertia[2]))
+    if (!in_scale(m) || !in_scale(inertia[0]) || !in_scale(inertia[1]) || !in_scale(inertia[2]))
         return fail(message, TB_ERR_ARGUMENT,
-                    "%s mass properties are not representable (mass %g, moments %g %g %g)", shape, m,
-                    inertia[0], inertia[1], inertia[2]);
+                    "%s mass properties are not representable (mass %g, moments %g %g %g; each must be from %g "
+                    "to %g)", shape, m, inertia[0], inertia[1], inertia[2], 1 / TB_LIMIT, TB_LIMIT);
     memset(&r, 0, sizeof r);
     r.mass = m;
     memcpy(r.inertia, inertia, sizeof r.inertia);
@@ -304,8 +312,13 @@ static tb_status store_tensor(const char *what, double m, const double centre[3]
     for (k = 0; k < 9; ++k)
         if (!isfinite(tensor[k]))
             return fail(message, TB_ERR_ARGUMENT, "%s: inertia tensor is not finite", what);
-    if (!positive(m))
-        return fail(message, TB_ERR_ARGUMENT, "%s: mass is not representable (%g)", what, m);
+    if (!in_scale(m))
+        return fail(message, TB_ERR_ARGUMENT, "%s: mass is not representable (%g; it must be from %g to %g)", what,
+                    m, 1 / TB_LIMIT, TB_LIMIT);
+    for (k = 0; k < 3; ++k)
+        if (!(fabs(centre[k]) <= TB_LIMIT))
+            return fail(message, TB_ERR_ARGUMENT, "%s: centre of mass %g is past the limit %g", what, centre[k],
+                        TB_LIMIT);
     principal(tensor, r.inertia, r.frame);
     if (!(r.inertia[0] > min_ratio * r.inertia[2]) || !(r.inertia[2] > 0))
         return fail(message, TB_ERR_ARGUMENT,
@@ -316,6 +329,9 @@ static tb_status store_tensor(const char *what, double m, const double centre[3]
         return fail(message, TB_ERR_ARGUMENT,
                     "%s: principal moments %g %g %g break the triangle inequality I1 + I2 >= I3", what,
                     r.inertia[0], r.inertia[1], r.inertia[2]);
+    if (!in_scale(r.inertia[0]) || !in_scale(r.inertia[2]))
+        return fail(message, TB_ERR_ARGUMENT, "%s: principal moments %g %g %g are not from %g to %g", what,
+                    r.inertia[0], r.inertia[1], r.inertia[2], 1 / TB_LIMIT, TB_LIMIT);
     r.mass = m;
     memcpy(r.centre, centre, sizeof r.centre);
     *out = r;
@@ -373,14 +389,15 @@ tb_status tb_mass_set_total(tb_mass *mass, double total_mass, char *message)
     int k;
     if (!mass)
         return refuse_null_mass("tb_mass_set_total", message);
-    if (!positive(total_mass))
-        return fail(message, TB_ERR_ARGUMENT, "total mass must be finite and > 0 (got %g)", total_mass);
+    if (!in_scale(total_mass))
+        return fail(message, TB_ERR_ARGUMENT, "total mass must be finite and > 0, from %g to %g (got %g)",
+                    1 / TB_LIMIT, TB_LIMIT, total_mass);
     if (!positive(mass->mass))
         return fail(message, TB_ERR_ARGUMENT, "current mass must be finite and > 0 (got %g)", mass->mass);
     scale = total_mass / mass->mass;
     for (k = 0; k < 3; ++k) {
         inertia[k] = mass->inertia[k] * scale;
-        if (!positive(mass->inertia[k]) || !positive(inertia[k]))
+        if (!positive(mass->inertia[k]) || !in_scale(inertia[k]))
             return fail(message, TB_ERR_ARGUMENT, "moment %d (%g kg m^2) cannot be scaled by %g", k,
                         mass->inertia[k], scale);
     }

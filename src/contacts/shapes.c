@@ -112,47 +112,50 @@ void tb__contacts_free(tb_world *w)
     w->contacts = NULL;
 }
 
-static int positive(double x)
-{
-    return isfinite(x) && x > 0;
-}
-
 static tb_status check_shape(tb_world *w, const tb_shape_def *def)
 {
     const double qn = sqrt(def->orientation[0] * def->orientation[0] + def->orientation[1] * def->orientation[1] +
                            def->orientation[2] * def->orientation[2] + def->orientation[3] * def->orientation[3]);
     uint32_t slot;
-    if (!tb__finite3(def->position) || !(fabs(qn - 1) <= 1e-6))
-        return tb__fail(w, TB_ERR_ARGUMENT, "shape: position must be finite and orientation a unit quaternion");
-    if (!(isfinite(def->friction) && def->friction >= 0) ||
+    tb_status st;
+    if ((st = tb__check_values(w, def->position, 3, "shape position")) != TB_OK)
+        return st;
+    if (!(fabs(qn - 1) <= 1e-6))
+        return tb__fail(w, TB_ERR_ARGUMENT, "shape: orientation must be a unit quaternion (its norm is %g)", qn);
+    if (!(def->friction >= 0 && def->friction <= TB_LIMIT) ||
         !(def->restitution >= 0 && def->restitution <= 1) ||
-        !(isfinite(def->rolling_resistance) && def->rolling_resistance >= 0))
+        !(def->rolling_resistance >= 0 && def->rolling_resistance <= TB_LIMIT))
         return tb__fail(w, TB_ERR_ARGUMENT,
-                        "shape: friction and rolling_resistance must be finite and >= 0, restitution in [0, 1] "
-                        "(got %g, %g, %g)",
-                        def->friction, def->rolling_resistance, def->restitution);
+                        "shape: friction and rolling_resistance must be finite and >= 0, at most %g, restitution in "
+                        "[0, 1] (got %g, %g, %g)",
+                        TB_LIMIT, def->friction, def->rolling_resistance, def->restitution);
     switch (def->type) {
     case TB_SHAPE_SPHERE:
-        if (!positive(def->radius))
-            return tb__fail(w, TB_ERR_ARGUMENT, "sphere: radius must be finite and > 0 (got %g)", def->radius);
+        if (!tb__in_scale(def->radius))
+            return tb__fail(w, TB_ERR_ARGUMENT, "sphere: radius must be finite and > 0, from %g to %g (got %g)",
+                            1 / TB_LIMIT, TB_LIMIT, def->radius);
         break;
     case TB_SHAPE_CAPSULE:
-        if (!positive(def->radius) || !(isfinite(def->half_length) && def->half_length >= 0))
+        if (!tb__in_scale(def->radius) || !(def->half_length >= 0 && def->half_length <= TB_LIMIT))
             return tb__fail(w, TB_ERR_ARGUMENT,
-                            "capsule: radius must be > 0 and half_length >= 0, both finite (got %g, %g)",
-                            def->radius, def->half_length);
+                            "capsule: radius must be > 0 and half_length >= 0, both finite, from %g (radius) to %g "
+                            "(got %g, %g)",
+                            1 / TB_LIMIT, TB_LIMIT, def->radius, def->half_length);
         break;
     case TB_SHAPE_BOX:
-        if (!positive(def->half_extents[0]) || !positive(def->half_extents[1]) || !positive(def->half_extents[2]))
-            return tb__fail(w, TB_ERR_ARGUMENT, "box: half extents must be finite and > 0 (got %g, %g, %g)",
-                            def->half_extents[0], def->half_extents[1], def->half_extents[2]);
+        if (!tb__in_scale(def->half_extents[0]) || !tb__in_scale(def->half_extents[1]) ||
+            !tb__in_scale(def->half_extents[2]))
+            return tb__fail(w, TB_ERR_ARGUMENT,
+                            "box: half extents must be finite and > 0, from %g to %g (got %g, %g, %g)", 1 / TB_LIMIT,
+                            TB_LIMIT, def->half_extents[0], def->half_extents[1], def->half_extents[2]);
         break;
     case TB_SHAPE_PLANE: {
         const double n = sqrt(def->normal[0] * def->normal[0] + def->normal[1] * def->normal[1] +
                               def->normal[2] * def->normal[2]);
-        if (!tb__finite3(def->normal) || !(fabs(n - 1) <= 1e-6) || !isfinite(def->offset))
-            return tb__fail(w, TB_ERR_ARGUMENT, "plane: the normal must be a unit vector (|n| = %g) and the offset finite",
-                            n);
+        if (!tb__finite3(def->normal) || !(fabs(n - 1) <= 1e-6))
+            return tb__fail(w, TB_ERR_ARGUMENT, "plane: the normal must be a unit vector (|n| = %g)", n);
+        if ((st = tb__check_values(w, &def->offset, 1, "plane offset")) != TB_OK)
+            return st;
         if (!TB_ID_IS_NULL(def->body))
             return tb__fail(w, TB_ERR_ARGUMENT, "plane: planes are static (give no body)");
         break;
@@ -172,10 +175,11 @@ tb_status tb_world_add_shape(tb_world *w, const tb_shape_def *def, tb_shape_id *
     tb__shape *s;
     tb_shape_id made;
     tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "add a shape")) != TB_OK)
         return st;
     if (!def)
-        return tb__fail(w, TB_ERR_ARGUMENT, "tb_world_add_shape needs a definition");
+        return tb__null(w, "tb_world_add_shape", "the definition");
     if ((st = check_shape(w, def)) != TB_OK)
         return st;
     if ((st = contacts_of(w, &c)) != TB_OK)
@@ -212,7 +216,7 @@ tb_status tb_world_add_shape(tb_world *w, const tb_shape_def *def, tb_shape_id *
                                                 s->half[2] * s->half[2])
                                          : s->radius + s->half[2]);
     c->planes += s->kind == TB__SHAPE_PLANE;
-    tb__ids_acquire(&c->ids, (uint32_t)c->shape_count, &made.index1, &made.generation);
+    tb__ids_acquire(&c->ids, w->id_tag, (uint32_t)c->shape_count, &made.index1, &made.generation);
     c->shape_count++;
     tb__wake_all(w); /* it may reach into what sleeps */
     if (id)
@@ -238,6 +242,7 @@ tb_status tb_world_remove_shape(tb_world *w, tb_shape_id id)
 {
     uint32_t slot;
     tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "remove a shape")) != TB_OK)
         return st;
     if (!w->contacts || !tb__ids_lookup(&w->contacts->ids, id.index1, id.generation, &slot))
@@ -256,28 +261,60 @@ int tb__contacts_active(const tb_world *w)
 
 size_t tb_world_shape_count(const tb_world *w)
 {
+    TB__NEED_WORLD(w, 0);
     return w->contacts ? w->contacts->shape_count : 0;
+}
+
+/* The most sweeps of each kind a step may take: far beyond any use (the
+   defaults are 20, 3 and 0), and small enough that the solver's multiples
+   of them stay ints. */
+#define MAX_ITERATIONS 1000000
+
+static tb_status check_settings(tb_world *w, const tb_contact_settings *s)
+{
+    tb_status st;
+    if (!s)
+        return tb__fail(w, TB_ERR_ARGUMENT, "contact settings must not be NULL");
+    if ((st = tb__check_scale(w, s->hertz, "contact settings: hertz")) != TB_OK ||
+        (st = tb__check_coefficient(w, s->damping_ratio, "contact settings: damping_ratio")) != TB_OK ||
+        (st = tb__check_scale(w, s->max_push, "contact settings: max_push")) != TB_OK ||
+        (st = tb__check_coefficient(w, s->restitution_threshold, "contact settings: restitution_threshold")) != TB_OK ||
+        (st = tb__check_coefficient(w, s->slop, "contact settings: slop")) != TB_OK ||
+        (st = tb__check_coefficient(w, s->velocity_tolerance, "contact settings: velocity_tolerance")) != TB_OK ||
+        (st = tb__check_values(w, &s->particle_radius, 1, "contact settings: particle_radius")) != TB_OK ||
+        (st = tb__check_coefficient(w, s->particle_friction, "contact settings: particle_friction")) != TB_OK ||
+        (st = tb__check_coefficient(w, s->sleep_speed, "contact settings: sleep_speed")) != TB_OK)
+        return st;
+    if (s->velocity_iterations < 1 || s->velocity_iterations > MAX_ITERATIONS)
+        return tb__fail(w, TB_ERR_ARGUMENT, "contact settings: velocity iterations must be from 1 to %d (got %d)",
+                        MAX_ITERATIONS, s->velocity_iterations);
+    if (s->position_iterations < 0 || s->position_iterations > MAX_ITERATIONS ||
+        s->stack_iterations < 0 || s->stack_iterations > MAX_ITERATIONS)
+        return tb__fail(w, TB_ERR_ARGUMENT,
+                        "contact settings: position and stack iterations must be from 0 to %d (got %d, %d)",
+                        MAX_ITERATIONS, s->position_iterations, s->stack_iterations);
+    if (s->substeps < 0 || s->substeps > MAX_ITERATIONS)
+        return tb__fail(w, TB_ERR_ARGUMENT, "contact settings: substeps must be from 0 to %d (got %d)",
+                        MAX_ITERATIONS, s->substeps);
+    if (!(s->particle_restitution >= 0 && s->particle_restitution <= 1))
+        return tb__fail(w, TB_ERR_ARGUMENT, "contact settings: particle_restitution must be in [0, 1] (got %g)",
+                        s->particle_restitution);
+    if (!(s->sleep_time > 0 && (s->sleep_time <= TB_LIMIT || s->sleep_time == INFINITY)))
+        return tb__fail(w, TB_ERR_ARGUMENT,
+                        "contact settings: sleep_time must be > 0, at most %g, or INFINITY (never sleep) (got %g)",
+                        TB_LIMIT, s->sleep_time);
+    return TB_OK;
 }
 
 tb_status tb_world_set_contact_settings(tb_world *w, const tb_contact_settings *s)
 {
     tb__contacts *c;
     tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "change the contact settings")) != TB_OK)
         return st;
-    if (!s || !positive(s->hertz) || !(isfinite(s->damping_ratio) && s->damping_ratio >= 0) ||
-        !positive(s->max_push) || !(isfinite(s->restitution_threshold) && s->restitution_threshold >= 0) ||
-        !(isfinite(s->slop) && s->slop >= 0) || s->velocity_iterations < 1 || s->position_iterations < 0 ||
-        s->stack_iterations < 0 || s->substeps < 0 ||
-        !(isfinite(s->velocity_tolerance) && s->velocity_tolerance >= 0) ||
-        !isfinite(s->particle_radius) || !(isfinite(s->particle_friction) && s->particle_friction >= 0) ||
-        !(s->particle_restitution >= 0 && s->particle_restitution <= 1) ||
-        !(isfinite(s->sleep_speed) && s->sleep_speed >= 0) || !(s->sleep_time > 0))
-        return tb__fail(w, TB_ERR_ARGUMENT,
-                        "contact settings: hertz and max_push must be > 0, damping_ratio, threshold, slop and "
-                        "particle friction >= 0, at least 1 velocity iteration, position and stack iterations "
-                        ">= 0, substeps >= 0, velocity_tolerance finite and >= 0, restitution in [0, 1], "
-                        "sleep_speed finite and >= 0, sleep_time > 0 (INFINITY: never sleep)");
+    if ((st = check_settings(w, s)) != TB_OK)
+        return st;
     if ((st = contacts_of(w, &c)) != TB_OK)
         return st;
     c->settings = *s;
@@ -287,17 +324,17 @@ tb_status tb_world_set_contact_settings(tb_world *w, const tb_contact_settings *
 
 tb_contact_settings tb_world_contact_settings(const tb_world *w)
 {
-    return w->contacts ? w->contacts->settings : tb_default_contact_settings();
+    return w && w->contacts ? w->contacts->settings : tb_default_contact_settings();
 }
 
 const tb_contact_event *tb_world_contact_events(const tb_world *w, size_t *count)
 {
     if (count)
-        *count = w->contacts ? w->contacts->event_count : 0;
-    return w->contacts ? w->contacts->events : NULL;
+        *count = w && w->contacts ? w->contacts->event_count : 0;
+    return w && w->contacts ? w->contacts->events : NULL;
 }
 
 size_t tb_world_contact_count(const tb_world *w)
 {
-    return w->contacts ? w->contacts->touching_points : 0;
+    return w && w->contacts ? w->contacts->touching_points : 0;
 }

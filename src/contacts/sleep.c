@@ -176,11 +176,13 @@ void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
 tb_status tb_body_asleep(const tb_world *w, tb_body_id id, int *asleep)
 {
     uint32_t s;
-    tb_status st = tb__body_find(w, id, &s);
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    st = tb__body_find(w, id, &s);
     if (st != TB_OK)
         return st;
     if (!asleep)
-        return tb__fail((tb_world *)w, TB_ERR_ARGUMENT, "tb_body_asleep needs an output pointer");
+        return tb__null((tb_world *)w, "tb_body_asleep", "the output");
     *asleep = w->body_island[s] != 0;
     return TB_OK;
 }
@@ -189,6 +191,7 @@ tb_status tb_body_wake(tb_world *w, tb_body_id id)
 {
     uint32_t s;
     tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "wake a body")) != TB_OK || (st = tb__body_find(w, id, &s)) != TB_OK)
         return st;
     tb__wake_body(w, s);
@@ -197,5 +200,6 @@ tb_status tb_body_wake(tb_world *w, tb_body_id id)
 
 size_t tb_world_sleeping_count(const tb_world *w)
 {
+    TB__NEED_WORLD(w, 0);
     return w->body_sleeping;
 }

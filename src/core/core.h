@@ -64,10 +64,19 @@ void tb__state_scale(const tb_world *w, double *out, double a, const double *in)
    absolute near zero and relative for large values. <= 1 means accept. */
 double tb__state_error_norm(const tb_world *w, const double *err, const double *y0, const double *y1, double tol);
 
-/* ---- ids (ids.c): generation-checked id tables, one per kind of object ---- */
+/* ---- ids (ids.c): generation-checked id tables, one per kind of object ----
+   A generation holds the world's tag in its top TB__ID_TAG_BITS bits and a
+   counter of the entry's lives below: 2^12 worlds created one after another
+   have distinct tags, and an entry's live generation comes back after 2^19
+   reuses (live counters are odd). */
+#define TB__ID_TAG_BITS 12
+#define TB__ID_COUNTER_BITS (32 - TB__ID_TAG_BITS)
+#define TB__ID_COUNTER_MASK ((1u << TB__ID_COUNTER_BITS) - 1u)
+
 typedef struct tb__ids {
     uint32_t *slot;        /* [capacity] per id: its slot, or the next free id */
-    uint32_t *generation;  /* [capacity] per id: bumped on release, never 0 */
+    uint32_t *generation;  /* [capacity] per id: the world's tag | a counter bumped
+                              on acquire and release (odd: live, never 0) */
     uint32_t *owner;       /* [capacity] per slot: the id index living there */
     uint32_t capacity;     /* ids and slots allocated */
     uint32_t used;         /* ids ever handed out (high-water mark) */
@@ -76,9 +85,13 @@ typedef struct tb__ids {
 
 tb_status tb__ids_reserve(tb_world *w, tb__ids *ids, size_t capacity);
 void tb__ids_free(tb_world *w, tb__ids *ids);
-/* Hand out an id for `slot`; capacity must have been reserved. */
-void tb__ids_acquire(tb__ids *ids, uint32_t slot, uint32_t *index1, uint32_t *generation);
-/* 1 and the slot when the id is live. */
+/* A new world's tag (already shifted into the generation's top bits);
+   safe to call from several threads at once. */
+uint32_t tb__ids_new_tag(void);
+/* Hand out an id for `slot` in the world with tag `tag` (w->id_tag);
+   capacity must have been reserved. */
+void tb__ids_acquire(tb__ids *ids, uint32_t tag, uint32_t slot, uint32_t *index1, uint32_t *generation);
+/* 1 and the slot when the id is live (and of this table's world). */
 int tb__ids_lookup(const tb__ids *ids, uint32_t index1, uint32_t generation, uint32_t *slot);
 void tb__ids_release(tb__ids *ids, uint32_t index1);
 /* The object in slot `from` moved to slot `to` (swap-remove). */
@@ -112,6 +125,31 @@ void tb__free_arrays(tb_world *w, void **arrays[], const size_t elem_size[], int
 /* Record a message and return status (for `return tb__fail(...)`). */
 tb_status tb__fail(tb_world *w, tb_status status, const char *fmt, ...);
 int tb__finite3(const double v[3]);
+
+/* ---- the input rule (memory.c; TB_LIMIT in tumble/base.h) -------------------
+   Each check returns TB_OK, or TB_ERR_ARGUMENT with a message naming `what`
+   and the value. */
+/* finite and |x| <= TB_LIMIT */
+int tb__bounded(double x);
+/* n values (NULL refused), each finite and within TB_LIMIT */
+tb_status tb__check_values(tb_world *w, const double *v, size_t n, const char *what);
+/* a value tumble divides by: finite and in [1 / TB_LIMIT, TB_LIMIT] */
+int tb__in_scale(double x);
+tb_status tb__check_scale(tb_world *w, double x, const char *what);
+/* a coefficient: finite and in [0, TB_LIMIT] */
+tb_status tb__check_coefficient(tb_world *w, double x, const char *what);
+/* a derived quantity (momentum, energy, ...) of magnitude x, with its unit */
+tb_status tb__check_derived(tb_world *w, double x, const char *what, const char *unit);
+/* TB_ERR_ARGUMENT naming the function when a pointer it needs is NULL. */
+tb_status tb__null(tb_world *w, const char *function, const char *what);
+/* A NULL world has no message to write: the call returns `value` at once
+   (TB_ERR_ARGUMENT for a call that returns a status, the documented
+   neutral value otherwise), and tb_world_message(NULL) says why. */
+#define TB__NEED_WORLD(w, value) \
+    do {                         \
+        if (!(w))                \
+            return (value);      \
+    } while (0)
 /* sum a_i b_i over n, in order */
 double tb__dot(const double *a, const double *b, size_t n);
 /* TB_ERR_BUSY with a message while the world is stepping (inside a callback). */

@@ -19,7 +19,7 @@ tb_status tb__list_add(tb_world *w, tb__list *list, const void *item, uint32_t *
         list->cap = cap;
     }
     memcpy(list->items + list->count * list->item_size, item, list->item_size);
-    tb__ids_acquire(&list->ids, (uint32_t)list->count, index1, generation);
+    tb__ids_acquire(&list->ids, w->id_tag, (uint32_t)list->count, index1, generation);
     list->count++;
     return TB_OK;
 }

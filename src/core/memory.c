@@ -116,3 +116,57 @@ tb_status tb__check_busy(tb_world *w, const char *what)
         return tb__fail(w, TB_ERR_BUSY, "cannot %s while the world is stepping", what);
     return TB_OK;
 }
+
+int tb__bounded(double x)
+{
+    return fabs(x) <= TB_LIMIT; /* NaN fails */
+}
+
+tb_status tb__check_values(tb_world *w, const double *v, size_t n, const char *what)
+{
+    size_t i;
+    if (!v)
+        return tb__fail(w, TB_ERR_ARGUMENT, "%s must not be NULL", what);
+    for (i = 0; i < n; ++i)
+        if (!tb__bounded(v[i])) {
+            if (n == 1)
+                return tb__fail(w, TB_ERR_ARGUMENT, "%s must be finite and at most %g in magnitude (got %g)", what,
+                                TB_LIMIT, v[i]);
+            return tb__fail(w, TB_ERR_ARGUMENT,
+                            "%s must be finite and at most %g in magnitude (component %zu is %g)", what, TB_LIMIT,
+                            i, v[i]);
+        }
+    return TB_OK;
+}
+
+int tb__in_scale(double x)
+{
+    return x >= 1 / TB_LIMIT && x <= TB_LIMIT; /* NaN fails */
+}
+
+tb_status tb__check_scale(tb_world *w, double x, const char *what)
+{
+    if (!tb__in_scale(x))
+        return tb__fail(w, TB_ERR_ARGUMENT, "%s must be finite and > 0, from %g to %g (got %g)", what, 1 / TB_LIMIT,
+                        TB_LIMIT, x);
+    return TB_OK;
+}
+
+tb_status tb__check_coefficient(tb_world *w, double x, const char *what)
+{
+    if (!(x >= 0 && x <= TB_LIMIT))
+        return tb__fail(w, TB_ERR_ARGUMENT, "%s must be finite and >= 0, at most %g (got %g)", what, TB_LIMIT, x);
+    return TB_OK;
+}
+
+tb_status tb__check_derived(tb_world *w, double x, const char *what, const char *unit)
+{
+    if (!(fabs(x) <= TB_LIMIT))
+        return tb__fail(w, TB_ERR_ARGUMENT, "%s would be %g %s, past the limit %g", what, x, unit, TB_LIMIT);
+    return TB_OK;
+}
+
+tb_status tb__null(tb_world *w, const char *function, const char *what)
+{
+    return tb__fail(w, TB_ERR_ARGUMENT, "%s: %s must not be NULL", function, what);
+}

@@ -18,9 +18,11 @@ static tb_status add(tb_world *w, const tb__field *f, tb_field_id *id)
 tb_status tb_world_add_uniform_field(tb_world *w, const double velocity[3], tb_field_id *id)
 {
     tb__field f;
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     memset(&f, 0, sizeof f);
-    if (!velocity || !tb__finite3(velocity))
-        return tb__fail(w, TB_ERR_ARGUMENT, "uniform field velocity must be finite");
+    if ((st = tb__check_values(w, velocity, 3, "uniform field velocity")) != TB_OK)
+        return st;
     f.kind = TB__FIELD_UNIFORM;
     memcpy(f.a, velocity, sizeof f.a);
     return add(w, &f, id);
@@ -29,9 +31,12 @@ tb_status tb_world_add_uniform_field(tb_world *w, const double velocity[3], tb_f
 tb_status tb_world_add_vortex_field(tb_world *w, const double omega[3], const double centre[3], tb_field_id *id)
 {
     tb__field f;
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     memset(&f, 0, sizeof f);
-    if (!omega || !centre || !tb__finite3(omega) || !tb__finite3(centre))
-        return tb__fail(w, TB_ERR_ARGUMENT, "vortex field omega and centre must be finite");
+    if ((st = tb__check_values(w, omega, 3, "vortex field omega")) != TB_OK ||
+        (st = tb__check_values(w, centre, 3, "vortex field centre")) != TB_OK)
+        return st;
     f.kind = TB__FIELD_VORTEX;
     memcpy(f.a, omega, sizeof f.a);
     memcpy(f.b, centre, sizeof f.b);
@@ -41,6 +46,7 @@ tb_status tb_world_add_vortex_field(tb_world *w, const double omega[3], const do
 tb_status tb_world_add_field(tb_world *w, tb_field_fn *fn, void *user, tb_field_id *id)
 {
     tb__field f;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     memset(&f, 0, sizeof f);
     if (!fn)
         return tb__fail(w, TB_ERR_ARGUMENT, "field callback must not be NULL");
@@ -52,7 +58,9 @@ tb_status tb_world_add_field(tb_world *w, tb_field_fn *fn, void *user, tb_field_
 
 tb_status tb_world_remove_field(tb_world *w, tb_field_id id)
 {
-    tb_status st = tb__check_busy(w, "remove a field");
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    st = tb__check_busy(w, "remove a field");
     if (st == TB_OK)
         st = tb__list_remove(w, &w->fields, id.index1, id.generation, "field");
     return st;
@@ -101,8 +109,11 @@ tb_status tb__field_velocities(tb_world *w, double t, size_t n, const double *po
 tb_status tb_world_tracer_velocities(tb_world *w, double *velocities)
 {
     tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "evaluate tracer velocities")) != TB_OK)
         return st;
+    if (!velocities)
+        return tb__null(w, "tb_world_tracer_velocities", "the output");
     w->stepping = 1; /* callbacks may not add or remove objects meanwhile */
     st = tb__field_velocities(w, w->time, w->tracer_count, w->y + w->off[TB__TRACER_POS], velocities);
     w->stepping = 0;

@@ -9,7 +9,9 @@ tb_status tb_world_add_force(tb_world *w, tb_force_fn *fn, void *user, tb_force_
 {
     tb__force f;
     tb_force_id made;
-    tb_status st = tb__check_busy(w, "add a force");
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    st = tb__check_busy(w, "add a force");
     if (st != TB_OK)
         return st;
     if (!fn)
@@ -24,7 +26,9 @@ tb_status tb_world_add_force(tb_world *w, tb_force_fn *fn, void *user, tb_force_
 
 tb_status tb_world_remove_force(tb_world *w, tb_force_id id)
 {
-    tb_status st = tb__check_busy(w, "remove a force");
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    st = tb__check_busy(w, "remove a force");
     if (st == TB_OK)
         st = tb__list_remove(w, &w->forces, id.index1, id.generation, "force");
     return st;

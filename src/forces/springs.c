@@ -35,9 +35,11 @@ tb_status tb_world_add_spring(tb_world *w, const tb_spring_def *def, tb_spring_i
 {
     tb_status st;
     uint32_t a, b = TB__ANCHOR, s;
-    const double *pos = w->y ? w->y + w->off[TB__PARTICLE_POS] : NULL;
-    const double *pb;
+    const double *pos, *pb;
+    double rest, stretch;
     tb_spring_id made;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    pos = w->y ? w->y + w->off[TB__PARTICLE_POS] : NULL;
     if ((st = tb__check_busy(w, "add a spring")) != TB_OK)
         return st;
     if (!def)
@@ -50,14 +52,22 @@ tb_status tb_world_add_spring(tb_world *w, const tb_spring_def *def, tb_spring_i
                         def->b.index1, def->b.generation);
     if (a == b)
         return tb__fail(w, TB_ERR_ARGUMENT, "a spring cannot join a particle to itself");
-    if (b == TB__ANCHOR && !tb__finite3(def->anchor))
-        return tb__fail(w, TB_ERR_ARGUMENT, "spring anchor must be finite");
-    if (!(isfinite(def->stiffness) && def->stiffness >= 0))
-        return tb__fail(w, TB_ERR_ARGUMENT, "spring stiffness must be finite and >= 0 (got %g)", def->stiffness);
-    if (!(isfinite(def->damping) && def->damping >= 0))
-        return tb__fail(w, TB_ERR_ARGUMENT, "spring damping must be finite and >= 0 (got %g)", def->damping);
-    if (!isfinite(def->rest_length))
-        return tb__fail(w, TB_ERR_ARGUMENT, "spring rest length must be finite");
+    if (b == TB__ANCHOR && (st = tb__check_values(w, def->anchor, 3, "spring anchor")) != TB_OK)
+        return st;
+    if ((st = tb__check_coefficient(w, def->stiffness, "spring stiffness")) != TB_OK ||
+        (st = tb__check_coefficient(w, def->damping, "spring damping")) != TB_OK ||
+        (st = tb__check_values(w, &def->rest_length, 1, "spring rest length")) != TB_OK)
+        return st;
+    /* what it starts with: its rest length (the distance, by default), and
+       the force and energy of its stretch */
+    pb = b == TB__ANCHOR ? def->anchor : pos + 3 * b;
+    rest = def->rest_length >= 0 ? def->rest_length : distance(pos + 3 * a, pb);
+    stretch = fabs(distance(pos + 3 * a, pb) - rest);
+    if ((st = tb__check_derived(w, rest, "spring rest length", "m")) != TB_OK ||
+        (st = tb__check_derived(w, def->stiffness * stretch, "spring force k |d - rest|", "N")) != TB_OK ||
+        (st = tb__check_derived(w, 0.5 * def->stiffness * stretch * stretch, "spring energy k (d - rest)^2 / 2",
+                                "J")) != TB_OK)
+        return st;
     if (w->spring_count == w->spring_cap) {
         size_t cap = w->spring_cap ? 2 * w->spring_cap : 8;
         void **arrays[6];
@@ -71,15 +81,14 @@ tb_status tb_world_add_spring(tb_world *w, const tb_spring_def *def, tb_spring_i
     }
     s = (uint32_t)w->spring_count++;
     w->particle_removed = particle_removed;
-    pb = b == TB__ANCHOR ? def->anchor : pos + 3 * b;
     w->spring_a[s] = a;
     w->spring_b[s] = b;
     memcpy(w->spring_anchor + 3 * s, def->anchor, 3 * sizeof(double));
     w->spring_k[s] = def->stiffness;
     w->spring_c[s] = def->damping;
     w->spring_damped += def->damping != 0;
-    w->spring_rest[s] = def->rest_length >= 0 ? def->rest_length : distance(pos + 3 * a, pb);
-    tb__ids_acquire(&w->spring_ids, s, &made.index1, &made.generation);
+    w->spring_rest[s] = rest;
+    tb__ids_acquire(&w->spring_ids, w->id_tag, s, &made.index1, &made.generation);
     if (id)
         *id = made;
     return TB_OK;
@@ -107,6 +116,7 @@ tb_status tb_world_remove_spring(tb_world *w, tb_spring_id id)
 {
     tb_status st;
     uint32_t s;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "remove a spring")) != TB_OK)
         return st;
     if (!tb__ids_lookup(&w->spring_ids, id.index1, id.generation, &s))
@@ -118,6 +128,7 @@ tb_status tb_world_remove_spring(tb_world *w, tb_spring_id id)
 
 size_t tb_world_spring_count(const tb_world *w)
 {
+    TB__NEED_WORLD(w, 0);
     return w->spring_count;
 }
 

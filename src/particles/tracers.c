@@ -22,10 +22,13 @@ tb_status tb_world_add_tracer(tb_world *w, const tb_tracer_def *def, tb_tracer_i
 {
     tb_status st;
     uint32_t slot;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "add a tracer")) != TB_OK)
         return st;
-    if (!def || !tb__finite3(def->position))
-        return tb__fail(w, TB_ERR_ARGUMENT, "tracer position must be finite");
+    if (!def)
+        return tb__fail(w, TB_ERR_ARGUMENT, "tracer definition must not be NULL");
+    if ((st = tb__check_values(w, def->position, 3, "tracer position")) != TB_OK)
+        return st;
     if (w->method->split)
         return tb__fail(w, TB_ERR_ARGUMENT,
                         "integrator '%s' kicks velocities and tracers have none: "
@@ -42,7 +45,7 @@ tb_status tb_world_add_tracer(tb_world *w, const tb_tracer_def *def, tb_tracer_i
     memcpy(w->y + w->off[TB__TRACER_POS] + 3 * slot, def->position, 3 * sizeof(double));
     {
         tb_tracer_id made;
-        tb__ids_acquire(&w->tracer_ids, slot, &made.index1, &made.generation);
+        tb__ids_acquire(&w->tracer_ids, w->id_tag, slot, &made.index1, &made.generation);
         if (id)
             *id = made;
     }
@@ -53,6 +56,7 @@ tb_status tb_world_remove_tracer(tb_world *w, tb_tracer_id id)
 {
     tb_status st;
     uint32_t slot, last;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "remove a tracer")) != TB_OK)
         return st;
     if ((st = find(w, id, &slot)) != TB_OK)
@@ -70,40 +74,48 @@ tb_status tb_world_remove_tracer(tb_world *w, tb_tracer_id id)
 tb_status tb_tracer_position(const tb_world *w, tb_tracer_id id, double position[3])
 {
     uint32_t slot;
-    tb_status st = find(w, id, &slot);
-    if (st == TB_OK)
-        memcpy(position, w->y + w->off[TB__TRACER_POS] + 3 * slot, 3 * sizeof(double));
-    return st;
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if ((st = find(w, id, &slot)) != TB_OK)
+        return st;
+    if (!position)
+        return tb__null((tb_world *)w, "tb_tracer_position", "the output");
+    memcpy(position, w->y + w->off[TB__TRACER_POS] + 3 * slot, 3 * sizeof(double));
+    return TB_OK;
 }
 
 tb_status tb_tracer_set_position(tb_world *w, tb_tracer_id id, const double position[3])
 {
     uint32_t slot;
-    tb_status st = tb__check_busy(w, "set a tracer's position");
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    st = tb__check_busy(w, "set a tracer's position");
     if (st == TB_OK)
         st = find(w, id, &slot);
+    if (st == TB_OK)
+        st = tb__check_values(w, position, 3, "tracer position");
     if (st != TB_OK)
         return st;
-    if (!tb__finite3(position))
-        return tb__fail(w, TB_ERR_ARGUMENT, "tracer position must be finite");
     memcpy(w->y + w->off[TB__TRACER_POS] + 3 * slot, position, 3 * sizeof(double));
     return TB_OK;
 }
 
 size_t tb_world_tracer_count(const tb_world *w)
 {
+    TB__NEED_WORLD(w, 0);
     return w->tracer_count;
 }
 
 const double *tb_world_tracer_positions(const tb_world *w)
 {
+    TB__NEED_WORLD(w, NULL);
     return w->y ? w->y + w->off[TB__TRACER_POS] : NULL;
 }
 
 tb_tracer_id tb_world_tracer_at(const tb_world *w, size_t slot)
 {
     tb_tracer_id id = { 0, 0 };
-    if (slot < w->tracer_count)
+    if (w && slot < w->tracer_count)
         tb__ids_at(&w->tracer_ids, (uint32_t)slot, &id.index1, &id.generation);
     return id;
 }

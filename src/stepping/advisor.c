@@ -142,10 +142,11 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
     const tb__method *best = NULL;
     double best_limit = 0;
     int i;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if (!advice)
-        return tb__fail(w, TB_ERR_ARGUMENT, "tb_world_advise needs somewhere to write its advice");
-    if (!(isfinite(h) && h > 0))
-        return tb__fail(w, TB_ERR_ARGUMENT, "step must be finite and > 0 (got %g)", h);
+        return tb__null(w, "tb_world_advise", "the advice to write");
+    if ((st = tb__check_scale(w, h, "step")) != TB_OK)
+        return st;
     if ((st = tb__check_busy(w, "advise")) != TB_OK)
         return st;
     memset(advice, 0, sizeof *advice);

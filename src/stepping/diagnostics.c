@@ -26,6 +26,10 @@ tb_energy tb__energy_of(const tb_world *w, const double *y)
 
 tb_energy tb_world_energy(const tb_world *w)
 {
+    if (!w) {
+        const tb_energy none = { 0, 0, 0, 0, 0 };
+        return none;
+    }
     return tb__energy_of(w, w->y);
 }
 
@@ -53,11 +57,13 @@ static void momenta(const tb_world *w, double p[3], double l[3])
 void tb_world_momentum(const tb_world *w, double p[3])
 {
     double l[3];
-    momenta(w, p, l);
+    if (w && p)
+        momenta(w, p, l);
 }
 
 void tb_world_angular_momentum(const tb_world *w, double l[3])
 {
     double p[3];
-    momenta(w, p, l);
+    if (w && l)
+        momenta(w, p, l);
 }

@@ -248,6 +248,11 @@ static tb_status auto_step(tb_world *w, double h)
 
 const char *tb_world_auto_choice(const tb_world *w, long *substeps)
 {
+    if (!w) {
+        if (substeps)
+            *substeps = 0;
+        return NULL;
+    }
     if (substeps)
         *substeps = w->auto_method ? w->auto_substeps : 0;
     return w->auto_method ? w->auto_method->name : NULL;

@@ -23,6 +23,7 @@ tb_status tb_world_set_integrator(tb_world *w, const char *name)
 {
     const tb__method *m = name ? tb__method_find(name) : NULL;
     tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if (!m)
         return tb__fail(w, TB_ERR_ARGUMENT, "unknown integrator '%s'", name ? name : "(null)");
     if ((st = tb__check_busy(w, "change the integrator")) != TB_OK)
@@ -35,11 +36,11 @@ tb_status tb_world_set_integrator(tb_world *w, const char *name)
 
 tb_status tb_world_set_tolerance(tb_world *w, double tolerance)
 {
-    tb_status st = tb__check_busy(w, "change the tolerance");
-    if (st != TB_OK)
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if ((st = tb__check_busy(w, "change the tolerance")) != TB_OK ||
+        (st = tb__check_scale(w, tolerance, "tolerance")) != TB_OK)
         return st;
-    if (!(isfinite(tolerance) && tolerance > 0))
-        return tb__fail(w, TB_ERR_ARGUMENT, "tolerance must be finite and > 0 (got %g)", tolerance);
     w->tolerance = tolerance;
     w->adaptive_h = 0; /* a new tolerance starts the step-size search afresh */
     return TB_OK;
@@ -47,11 +48,13 @@ tb_status tb_world_set_tolerance(tb_world *w, double tolerance)
 
 double tb_world_tolerance(const tb_world *w)
 {
+    TB__NEED_WORLD(w, 0);
     return w->tolerance;
 }
 
 const char *tb_world_integrator(const tb_world *w)
 {
+    TB__NEED_WORLD(w, NULL);
     return w->method->name;
 }
 
@@ -128,8 +131,9 @@ tb_status tb_world_step(tb_world *w, double h)
     tb_status st;
     int snapshot;
     double *saved = NULL;
-    if (!(isfinite(h) && h > 0))
-        return tb__fail(w, TB_ERR_ARGUMENT, "step must be finite and > 0 (got %g)", h);
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if ((st = tb__check_scale(w, h, "step")) != TB_OK)
+        return st;
     if ((st = tb__check_busy(w, "step")) != TB_OK)
         return st;
     if ((st = refuse_split_with_tracers(w, w->method)) != TB_OK)

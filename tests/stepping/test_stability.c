@@ -368,7 +368,8 @@ static void implicit_euler_survives_100x_the_limit(void **state)
 /* ---- the blow-up guard ------------------------------------------------------ */
 
 /* The chain past symplectic Euler's limit: the guard stops the step where
-   the state stops being finite (or, with an energy factor, much earlier),
+   the state runs away past 1e150, a few steps before it would stop being
+   finite (or, with an energy factor, much earlier),
    names the step, the particle and the advisor's cause, and leaves the
    world exactly as it was after the last good step. */
 static int run_until_stopped(tb_world *w, double h, double *kept, int *stopped_at)
@@ -412,7 +413,7 @@ static void guard_stops_a_blow_up_and_names_its_cause(void **state)
         print_message("guard %g: %s\n", growths[k], m);
         snprintf(step_text, sizeof step_text, "step %d ", stopped[k]);
         assert_non_null(strstr(m, step_text));
-        assert_non_null(strstr(m, k == 0 ? "is not finite" : "energy grew"));
+        assert_non_null(strstr(m, k == 0 ? "(a runaway)" : "energy grew"));
         assert_non_null(strstr(m, "particle "));
         assert_non_null(strstr(m, "exceeds the limit"));
         assert_non_null(strstr(m, "spring "));
@@ -448,6 +449,91 @@ static void guard_lets_stable_runs_through(void **state)
     tb_world_destroy(w);
 }
 
+/* A torque callback that spins a light body (moments near 1e-60 kg m^2)
+   up by 1e99 N m per evaluation: w passes 1e150 rad/s in the first step.
+   Whatever the method, the guard stops the step where the body runs away
+   (or dopri5 refuses it), puts the world back, and once the callback is
+   gone the world steps on. */
+static tb_status spin_up(const tb_force_args *args, void *user)
+{
+    (void)user;
+    args->body_torques[2] += 1e99;
+    args->body_torques[0] += 3e98;
+    return TB_OK;
+}
+
+static void guard_stops_a_runaway_and_the_world_steps_on(void **state)
+{
+    int m;
+    (void)state;
+    for (m = 0; m < tb_integrator_count(); ++m) {
+        tb_world_def def = tb_default_world_def();
+        tb_body_def bd = tb_default_body_def();
+        tb_world *w;
+        tb_body_id id;
+        tb_force_id spin;
+        double q0[4], q[4], L[3];
+        int k, stopped = 0;
+        def.integrator = tb_integrator_name(m);
+        assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+        bd.mass.inertia[0] = 1e-60, bd.mass.inertia[1] = 1.5e-60, bd.mass.inertia[2] = 2e-60;
+        assert_int_equal(tb_world_add_body(w, &bd, &id), TB_OK);
+        assert_int_equal(tb_world_add_force(w, spin_up, NULL, &spin), TB_OK);
+        assert_int_equal(tb_world_set_guard(w, INFINITY), TB_OK);
+        for (k = 0; k < 10 && !stopped; ++k) {
+            tb_status st;
+            assert_int_equal(tb_body_orientation(w, id, q0), TB_OK);
+            st = tb_world_step(w, 1.0 / 60);
+            if (st == TB_OK)
+                continue;
+            stopped = 1;
+            if (st == TB_ERR_UNSTABLE) {
+                assert_non_null(strstr(tb_world_message(w), "body 1's"));
+                assert_int_equal(tb_body_orientation(w, id, q), TB_OK);
+                assert_memory_equal(q, q0, sizeof q); /* back where the step began */
+            } else { /* dopri5 (and auto, which picks it with callbacks) cannot meet its tolerance */
+                assert_int_equal(st, TB_ERR_ARGUMENT);
+                assert_non_null(strstr(tb_world_message(w), "dopri5"));
+            }
+            if (k == 0 || m == 0)
+                print_message("%s, step %d: %s\n", tb_integrator_name(m), k + 1, tb_world_message(w));
+        }
+        assert_true(stopped);
+        /* the cause removed, it steps on, sound */
+        assert_int_equal(tb_world_remove_force(w, spin), TB_OK);
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        assert_int_equal(tb_body_orientation(w, id, q), TB_OK);
+        assert_rel(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3], 1, 1e-9);
+        assert_int_equal(tb_body_momentum(w, id, NULL, L), TB_OK);
+        assert_below(fabs(L[2]), 1e150);
+        tb_world_destroy(w);
+    }
+}
+
+/* Turned on after the harm is done, the guard says so, and the world steps
+   again once the state is set anew. */
+static void guard_names_a_state_already_unsound(void **state)
+{
+    tb_particle_id id;
+    tb_world *w = oscillator("symplectic_euler", 1e40, 0, &id);
+    const double x[3] = { 1, 0, 0 }, v[3] = { 0, 0, 0 };
+    double now[3];
+    int k;
+    (void)state;
+    for (k = 0; k < 2; ++k) /* h w = 1.7e38: each step multiplies x by about 3e76 */
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    assert_int_equal(tb_particle_position(w, id, now), TB_OK);
+    assert_true(fabs(now[0]) > 1e150 && isfinite(now[0]));
+    assert_int_equal(tb_world_set_guard(w, INFINITY), TB_OK);
+    assert_int_equal(tb_world_step(w, 1e-60), TB_ERR_UNSTABLE);
+    print_message("%s\n", tb_world_message(w));
+    assert_non_null(strstr(tb_world_message(w), "unsound before this step already"));
+    assert_int_equal(tb_particle_set_position(w, id, x), TB_OK);
+    assert_int_equal(tb_particle_set_velocity(w, id, v), TB_OK);
+    assert_int_equal(tb_world_step(w, 1e-42), TB_OK);
+    tb_world_destroy(w);
+}
+
 static void guard_refuses_bad_settings(void **state)
 {
     tb_world *w = chain("verlet");
@@ -469,6 +555,8 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(guard_stops_a_blow_up_and_names_its_cause),
     cmocka_unit_test(guard_lets_stable_runs_through),
     cmocka_unit_test(guard_refuses_bad_settings),
+    cmocka_unit_test(guard_stops_a_runaway_and_the_world_steps_on),
+    cmocka_unit_test(guard_names_a_state_already_unsound),
     cmocka_unit_test(implicit_euler_damps_as_predicted),
     cmocka_unit_test(implicit_euler_survives_100x_the_limit),
     cmocka_unit_test(advisor_predicts_chain_blow_up),
