@@ -51,6 +51,7 @@ static const char *const handle_mt[H_KINDS] = {
 typedef struct tl_callback tl_callback;
 
 typedef struct tl_world {
+    const char *tag;  /* &world_tag */
     tb_world *world;  /* NULL once closed */
     double dt;        /* default step, s */
     lua_State *L;     /* while tb_lua_step runs: the thread stepping */
@@ -61,6 +62,7 @@ typedef struct tl_world {
 } tl_world;
 
 typedef struct tl_handle {
+    const char *tag;  /* &handle_tag */
     int kind;
     uint32_t index1, generation;
     int key;          /* fields and forces written in Lua: their callback key */
@@ -74,6 +76,10 @@ struct tl_callback {
     int key;
     tl_callback *next;
 };
+
+/* The debug library can give any userdata a tumble metatable: a world and
+   a handle are known by their metatable, their size and this tag. */
+static const char world_tag = 'w', handle_tag = 'h';
 
 /* Registry key of the anchor table: light userdata tl_world* -> false, or
    the world's userdata while it steps. The key exists from the world's
@@ -109,9 +115,25 @@ static void copy_first_line(char *out, size_t size, const char *s)
     out[n] = 0;
 }
 
+/* The world userdata at idx, open or closed, or NULL. */
+static tl_world *test_world(lua_State *L, int idx)
+{
+    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    return lw && lua_rawlen(L, idx) == sizeof *lw && lw->tag == &world_tag ? lw : NULL;
+}
+
+/* The same, raising unless idx holds one. */
+static tl_world *check_world_userdata(lua_State *L, int idx)
+{
+    tl_world *lw = test_world(L, idx);
+    if (!lw)
+        luaL_typeerror(L, idx, WORLD_MT);
+    return lw;
+}
+
 static tl_world *check_world(lua_State *L, int idx)
 {
-    tl_world *lw = luaL_checkudata(L, idx, WORLD_MT);
+    tl_world *lw = check_world_userdata(L, idx);
     if (!lw->world)
         luaL_error(L, "tumble: the world is closed");
     return lw;
@@ -225,6 +247,7 @@ static void push_handle(lua_State *L, int world_idx, int kind, uint32_t index1, 
     tl_handle *h;
     world_idx = lua_absindex(L, world_idx);
     h = lua_newuserdatauv(L, sizeof *h, 1);
+    h->tag = &handle_tag;
     h->kind = kind;
     h->index1 = index1;
     h->generation = generation;
@@ -234,12 +257,21 @@ static void push_handle(lua_State *L, int world_idx, int kind, uint32_t index1, 
     luaL_setmetatable(L, handle_mt[kind]);
 }
 
+/* The handle of `kind` at idx, or NULL. */
+static tl_handle *test_handle(lua_State *L, int idx, int kind)
+{
+    tl_handle *h = luaL_testudata(L, idx, handle_mt[kind]);
+    return h && lua_rawlen(L, idx) == sizeof *h && h->tag == &handle_tag && h->kind == kind ? h : NULL;
+}
+
 /* The handle at idx (of `kind`) and its open world. */
 static tl_handle *check_handle(lua_State *L, int idx, int kind, tl_world **lw)
 {
-    tl_handle *h = luaL_checkudata(L, idx, handle_mt[kind]);
+    tl_handle *h = test_handle(L, idx, kind);
+    if (!h)
+        luaL_typeerror(L, idx, handle_mt[kind]);
     lua_getiuservalue(L, idx, 1);
-    *lw = luaL_testudata(L, -1, WORLD_MT); /* the debug library can replace it */
+    *lw = test_world(L, -1); /* the debug library can replace it */
     lua_pop(L, 1);
     if (!*lw || !(*lw)->world)
         luaL_error(L, "%s: its world is closed", handle_mt[kind]);
@@ -498,7 +530,7 @@ static int handle_remove(lua_State *L)
     int kind, k;
     tl_world *lw;
     tb_status st = TB_OK;
-    for (kind = 0; kind < H_KINDS && !luaL_testudata(L, 1, handle_mt[kind]); ++kind)
+    for (kind = 0; kind < H_KINDS && !test_handle(L, 1, kind); ++kind)
         ;
     if (kind == H_KINDS)
         return luaL_typeerror(L, 1, "tumble handle");
@@ -548,7 +580,7 @@ static tl_handle *to_handle(lua_State *L, int idx)
     tl_handle *h = NULL;
     int kind;
     for (kind = 0; kind < H_KINDS && !h; ++kind)
-        h = luaL_testudata(L, idx, handle_mt[kind]);
+        h = test_handle(L, idx, kind);
     return h;
 }
 
@@ -844,6 +876,7 @@ static int module_world(lua_State *L)
     lua_settop(L, top);
     lw = lua_newuserdatauv(L, sizeof *lw, 1);
     memset(lw, 0, sizeof *lw);
+    lw->tag = &world_tag;
     lw->dt = dt;
     lw->alloc = lua_getallocf(L, &lw->alloc_ud);
     lua_newtable(L);
@@ -874,7 +907,7 @@ static int module_world(lua_State *L)
 
 static int world_close(lua_State *L)
 {
-    tl_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    tl_world *lw = check_world_userdata(L, 1);
     if (lw->L)
         return luaL_error(L, "tumble: cannot close a world while it is stepping");
     tb_world_destroy(lw->world);
@@ -888,7 +921,7 @@ static int world_close(lua_State *L)
    refused like world:close(). */
 static int world_gc(lua_State *L)
 {
-    tl_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    tl_world *lw = check_world_userdata(L, 1);
     if (lw->L)
         return luaL_error(L, "tumble: cannot collect a world while it is stepping");
     tb_world_destroy(lw->world);
@@ -904,7 +937,7 @@ static int world_gc(lua_State *L)
 
 static int world_tostring(lua_State *L)
 {
-    tl_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    tl_world *lw = check_world_userdata(L, 1);
     if (!lw->world)
         lua_pushliteral(L, "tumble.world (closed)");
     else
@@ -1520,13 +1553,13 @@ tb_world *tb_lua_check_world(lua_State *L, int idx)
 
 tb_world *tb_lua_to_world(lua_State *L, int idx)
 {
-    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    tl_world *lw = test_world(L, idx);
     return lw ? lw->world : NULL;
 }
 
 double tb_lua_world_dt(lua_State *L, int idx)
 {
-    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    tl_world *lw = test_world(L, idx);
     return lw && lw->world ? lw->dt : 0;
 }
 
@@ -1557,7 +1590,7 @@ static int set_anchor(lua_State *L, int idx, tl_world *lw, int anchor)
    world anchored for the call. */
 static tb_status run_with_callbacks(lua_State *L, int idx, double h, double *velocities)
 {
-    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    tl_world *lw = test_world(L, idx);
     tb_status st;
     if (!lw || !lw->world)
         return TB_ERR_ARGUMENT;
