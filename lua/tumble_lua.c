@@ -1658,15 +1658,21 @@ static void set_trip(tl_budget *b, int why)
 }
 
 /* One request to the allocator. A request past the memory budget is
-   refused; Lua then collects all its garbage and asks again, and a second
-   refusal of the same request ends the run (a script that catches the
-   memory error and asks again is refused twice in a row too). A world's
-   request has no collection to wait for: one refusal ends the run. */
+   refused. Lua's own allocations then collect all garbage and ask again
+   at once: if that succeeds, the run goes on. Anything else ends the run:
+   the same request refused again, another request instead (the refusal
+   became an error: lauxlib's buffers ask once), a count of the hook or
+   tb_lua_limit_error before either, or any refusal of a world's request
+   (the core has no collection to wait for). */
 static void *serve(tl_budget *b, void *ptr, size_t osize, size_t nsize, int from_world)
 {
     void *p;
+    int grows;
     if (!ptr)
         osize = 0; /* Lua passes the type of the new object there */
+    grows = nsize > osize;
+    if (grows && b->refused && !(b->refused_ptr == ptr && b->refused_size == nsize))
+        set_trip(b, TRIP_MEMORY);
     if (nsize == 0) {
         free(ptr);
         if (ptr) {
@@ -1676,8 +1682,8 @@ static void *serve(tl_budget *b, void *ptr, size_t osize, size_t nsize, int from
         }
         return NULL;
     }
-    if (nsize > osize && b->limits.memory && nsize - osize > b->limits.memory - (b->used < b->limits.memory ? b->used : b->limits.memory)) {
-        if (from_world || (b->refused && b->refused_ptr == ptr && b->refused_size == nsize))
+    if (grows && b->limits.memory && nsize - osize > b->limits.memory - (b->used < b->limits.memory ? b->used : b->limits.memory)) {
+        if (from_world || b->refused)
             set_trip(b, TRIP_MEMORY);
         b->refused = 1;
         b->refused_ptr = ptr;
@@ -1687,7 +1693,8 @@ static void *serve(tl_budget *b, void *ptr, size_t osize, size_t nsize, int from
     p = realloc(ptr, nsize);
     if (!p)
         return NULL;
-    b->refused = 0;
+    if (grows)
+        b->refused = 0;
     if (!ptr)
         ++b->blocks;
     b->used = b->used - osize + nsize;
@@ -1726,6 +1733,8 @@ static void budget_hook(lua_State *L, lua_Debug *ar)
             set_trip(b, TRIP_INSTRUCTIONS);
         else if (b->limits.stop && *b->limits.stop)
             set_trip(b, TRIP_STOP);
+        else if (b->refused)
+            set_trip(b, TRIP_MEMORY);
         else
             return;
     }
@@ -1816,6 +1825,8 @@ int tb_lua_set_limits(lua_State *L, const tb_lua_limits *limits)
 const char *tb_lua_limit_error(lua_State *L)
 {
     tl_budget *b = get_budget(L);
+    if (b && b->refused)
+        set_trip(b, TRIP_MEMORY);
     return b && b->trip ? b->message : NULL;
 }
 
@@ -1865,8 +1876,16 @@ static const char *push_path_in_folder(lua_State *L, int folder_idx, const char 
     else
         lua_pushfstring(L, "%s/%s", folder, name);
     if (!resolve_path(lua_tostring(L, -1), real)) {
-        lua_pop(L, 1);
+        /* missing: say "outside" when the name alone says so, and whether
+           a file outside exists stays unsaid */
+        const char *path = lua_tostring(L, -1), *p;
+        int outside = strncmp(path, folder, n) != 0;
         *why = strerror(errno);
+        for (p = path; *p && !outside; ++p)
+            outside = p[0] == '.' && p[1] == '.' && (p == path || p[-1] == '/') && (!p[2] || p[2] == '/');
+        if (outside)
+            *why = "outside the scene's folder (the sandbox reads files only there)";
+        lua_pop(L, 1);
         return NULL;
     }
     lua_pop(L, 1);
@@ -2007,6 +2026,92 @@ static int sandbox_collectgarbage(lua_State *L)
     return call_original(L);
 }
 
+/* After a budget has run out, the error leaves through the count hook, and
+   Lua keeps hooks off until the error reaches a pcall: a message handler
+   (xpcall) and the __close handlers of a coroutine killed by the error
+   (closed by coroutine.close or coroutine.wrap) would run without a count.
+   So then the sandbox's xpcall passes the error on without calling the
+   handler, and its coroutine.close and coroutine.wrap do not close. */
+static int budget_ran_out(lua_State *L)
+{
+    tl_budget *b = get_budget(L);
+    return b && b->trip;
+}
+
+/* The message handler xpcall gets: upvalue 1 is the script's. */
+static int sandbox_handler(lua_State *L)
+{
+    if (budget_ran_out(L))
+        return 1;
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, 1);
+    lua_call(L, lua_gettop(L) - 1, 1);
+    return 1;
+}
+
+static int sandbox_xpcall(lua_State *L)
+{
+    luaL_checktype(L, 2, LUA_TFUNCTION);
+    lua_pushvalue(L, 2);
+    lua_pushcclosure(L, sandbox_handler, 1);
+    lua_replace(L, 2);
+    return call_original(L);
+}
+
+static int sandbox_coroutine_close(lua_State *L)
+{
+    tl_budget *b = get_budget(L);
+    if (b && b->trip) {
+        lua_pushstring(L, b->message);
+        return lua_error(L);
+    }
+    return call_original(L);
+}
+
+/* The function coroutine.wrap returns (as Lua's own, but closing the dead
+   coroutine only while the budgets hold); upvalue 1: the coroutine. */
+static int sandbox_wrapped(lua_State *L)
+{
+    lua_State *co = lua_tothread(L, lua_upvalueindex(1));
+    int n = lua_gettop(L), results, status;
+    if (!lua_checkstack(co, n))
+        return luaL_error(L, "too many arguments to resume");
+    lua_xmove(L, co, n);
+    status = lua_resume(co, L, n, &results);
+    n = results;
+    if (status == LUA_OK || status == LUA_YIELD) {
+        if (!lua_checkstack(L, n + 1)) {
+            lua_pop(co, n);
+            return luaL_error(L, "too many results to resume");
+        }
+        lua_xmove(co, L, n);
+        return n;
+    }
+    lua_xmove(co, L, 1); /* the error */
+    status = lua_status(co);
+    if (status != LUA_OK && status != LUA_YIELD && !budget_ran_out(L)) {
+        status = lua_resetthread(co); /* close its to-be-closed variables */
+        lua_xmove(co, L, 1);
+    }
+    if (status != LUA_ERRMEM && lua_type(L, -1) == LUA_TSTRING) {
+        luaL_where(L, 1);
+        lua_insert(L, -2);
+        lua_concat(L, 2);
+    }
+    return lua_error(L);
+}
+
+static int sandbox_coroutine_wrap(lua_State *L)
+{
+    lua_State *co;
+    luaL_checktype(L, 1, LUA_TFUNCTION);
+    co = lua_newthread(L);
+    lua_pushvalue(L, 1);
+    lua_xmove(L, co, 1);
+    lua_pushcclosure(L, sandbox_wrapped, 1);
+    return 1;
+}
+
 /* Replace global `name` (in the table at g) by f with the old value as its
    upvalue (and the value at extra_idx as the second, if extra_idx). */
 static void wrap_function(lua_State *L, int g, const char *name, lua_CFunction f, int extra_idx)
@@ -2075,6 +2180,7 @@ static int open_sandbox(lua_State *L)
     wrap_function(L, g, "load", sandbox_load, 0);
     wrap_function(L, g, "setmetatable", sandbox_setmetatable, 0);
     wrap_function(L, g, "collectgarbage", sandbox_collectgarbage, 0);
+    wrap_function(L, g, "xpcall", sandbox_xpcall, 0);
 
     open_library(L, g, loaded, LUA_STRLIBNAME, luaopen_string);
     lua_pushnil(L);
@@ -2094,6 +2200,9 @@ static int open_sandbox(lua_State *L)
     open_library(L, g, loaded, LUA_UTF8LIBNAME, luaopen_utf8);
     lua_pop(L, 1);
     open_library(L, g, loaded, LUA_COLIBNAME, luaopen_coroutine);
+    wrap_function(L, lua_gettop(L), "close", sandbox_coroutine_close, 0);
+    lua_pushcfunction(L, sandbox_coroutine_wrap);
+    lua_setfield(L, -2, "wrap");
     lua_pop(L, 1);
 
     lua_pushcfunction(L, luaopen_os); /* os: the clock and the calendar */

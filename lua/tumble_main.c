@@ -683,7 +683,8 @@ int main(int argc, char **argv)
     limits.stop = &stop_signal;
     L = tb_lua_newstate(&limits);
     if (!L)
-        return die(1, "%s", "cannot create a Lua state (out of memory)");
+        return die(1, "%s", o.max_memory > 0 ? "cannot create a Lua state within the memory budget; raise it with "
+                                               "--max-memory" : "cannot create a Lua state (out of memory)");
     rc = prepare_state(L, &o);
     if (!rc)
         rc = run_scene(L, &o);
