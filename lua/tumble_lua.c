@@ -7,9 +7,17 @@
    every call checks the id).
 
    The world's user value is a table holding its Lua callbacks under
-   integer keys and the tables handed to them (reused from call to call).
-   Callbacks run under lua_pcall with a traceback handler inside a protected
-   C function, so no Lua error ever unwinds through the core.
+   integer keys and the tables handed to them (reused from call to call);
+   what the core holds for each callback (tl_callback) is C memory owned by
+   the world, so no script, not even with the debug library, can free it
+   under the core. Callbacks run under lua_pcall with a traceback handler
+   inside a protected C function, so no Lua error ever unwinds through the
+   core. While a world steps it is anchored in the registry, so neither the
+   collector nor a rewritten stack slot can take it away mid-step.
+
+   The second half of the file holds what a host needs to run scripts it
+   does not trust: budgets (tb_lua_newstate: an allocator that counts, a
+   count hook that re-arms itself) and the sandbox (tb_lua_sandbox).
 
    Names: Lua reserves the lua_ and luaL_ prefixes, so the binding's types
    are tl_*. Static functions carry no prefix: a function Lua calls is named
@@ -19,11 +27,17 @@
    (check_ raises unless the value is valid, read_ requires a value, opt_
    takes one if present, push_ leaves one on the Lua stack, to_ converts).
    The same rule holds in tumble_main.c. */
+#if !defined(_WIN32)
+#define _XOPEN_SOURCE 700 /* realpath */
+#endif
 #include "tumble_lua.h"
 
+#include <errno.h>
 #include <lauxlib.h>
+#include <lualib.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define WORLD_MT "tumble.world"
@@ -34,26 +48,47 @@ static const char *const handle_mt[H_KINDS] = {
     "tumble.shape"
 };
 
+typedef struct tl_callback tl_callback;
+
 typedef struct tl_world {
+    const char *tag;  /* &world_tag */
     tb_world *world;  /* NULL once closed */
     double dt;        /* default step, s */
-    lua_State *L;     /* while tb_lua_step runs: the thread stepping ... */
-    int index;        /* ... and the world's absolute stack index there */
+    lua_State *L;     /* while tb_lua_step runs: the thread stepping */
     int next_key;     /* next callback key in the user value table */
+    tl_callback *callbacks; /* what the core holds for each Lua callback */
+    lua_Alloc alloc;  /* the state's allocator, which made them */
+    void *alloc_ud;
 } tl_world;
 
 typedef struct tl_handle {
+    const char *tag;  /* &handle_tag */
     int kind;
     uint32_t index1, generation;
     int key;          /* fields and forces written in Lua: their callback key */
 } tl_handle;
 
-/* What a C callback needs to find its Lua function. Lives as a userdata in
-   the world's user value table, so its address is stable. */
-typedef struct tl_callback {
+/* What a C callback needs to find its Lua function (the world's user value
+   table at `key`). Allocated with the state's allocator and listed in its
+   world, which frees it when the callback is removed or the world closes. */
+struct tl_callback {
     tl_world *owner;
     int key;
-} tl_callback;
+    tl_callback *next;
+};
+
+/* The debug library can give any userdata a tumble metatable: a world and
+   a handle are known by their metatable, their size and this tag. */
+static const char world_tag = 'w', handle_tag = 'h';
+
+/* Registry key of the anchor table: light userdata tl_world* -> false, or
+   the world's userdata while it steps. The key exists from the world's
+   creation, so anchoring it at a step sets a value and allocates nothing. */
+static const char anchor_key = 0;
+
+/* The budgets' allocator (below): the world's memory goes through it too. */
+static void *budget_alloc(void *ud, void *ptr, size_t osize, size_t nsize);
+static void *budget_alloc_for_world(void *ud, void *ptr, size_t osize, size_t nsize);
 
 /* ------------------------------------------------------------ helpers -- */
 
@@ -80,9 +115,25 @@ static void copy_first_line(char *out, size_t size, const char *s)
     out[n] = 0;
 }
 
+/* The world userdata at idx, open or closed, or NULL. */
+static tl_world *test_world(lua_State *L, int idx)
+{
+    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    return lw && lua_rawlen(L, idx) == sizeof *lw && lw->tag == &world_tag ? lw : NULL;
+}
+
+/* The same, raising unless idx holds one. */
+static tl_world *check_world_userdata(lua_State *L, int idx)
+{
+    tl_world *lw = test_world(L, idx);
+    if (!lw)
+        luaL_typeerror(L, idx, WORLD_MT);
+    return lw;
+}
+
 static tl_world *check_world(lua_State *L, int idx)
 {
-    tl_world *lw = luaL_checkudata(L, idx, WORLD_MT);
+    tl_world *lw = check_world_userdata(L, idx);
     if (!lw->world)
         luaL_error(L, "tumble: the world is closed");
     return lw;
@@ -196,6 +247,7 @@ static void push_handle(lua_State *L, int world_idx, int kind, uint32_t index1, 
     tl_handle *h;
     world_idx = lua_absindex(L, world_idx);
     h = lua_newuserdatauv(L, sizeof *h, 1);
+    h->tag = &handle_tag;
     h->kind = kind;
     h->index1 = index1;
     h->generation = generation;
@@ -205,12 +257,21 @@ static void push_handle(lua_State *L, int world_idx, int kind, uint32_t index1, 
     luaL_setmetatable(L, handle_mt[kind]);
 }
 
+/* The handle of `kind` at idx, or NULL. */
+static tl_handle *test_handle(lua_State *L, int idx, int kind)
+{
+    tl_handle *h = luaL_testudata(L, idx, handle_mt[kind]);
+    return h && lua_rawlen(L, idx) == sizeof *h && h->tag == &handle_tag && h->kind == kind ? h : NULL;
+}
+
 /* The handle at idx (of `kind`) and its open world. */
 static tl_handle *check_handle(lua_State *L, int idx, int kind, tl_world **lw)
 {
-    tl_handle *h = luaL_checkudata(L, idx, handle_mt[kind]);
+    tl_handle *h = test_handle(L, idx, kind);
+    if (!h)
+        luaL_typeerror(L, idx, handle_mt[kind]);
     lua_getiuservalue(L, idx, 1);
-    *lw = lua_touserdata(L, -1);
+    *lw = test_world(L, -1); /* the debug library can replace it */
     lua_pop(L, 1);
     if (!*lw || !(*lw)->world)
         luaL_error(L, "%s: its world is closed", handle_mt[kind]);
@@ -434,15 +495,33 @@ static int apply_body_force(lua_State *L, int local, const char *fname)
 static int body_push(lua_State *L) { return apply_body_force(L, 0, "body:push"); }
 static int body_push_local(lua_State *L) { return apply_body_force(L, 1, "body:push_local"); }
 
-/* Forget a Lua callback of the world at world_idx: function and record. */
-static void forget_callback(lua_State *L, int world_idx, int key)
+/* Forget a Lua callback of the world at world_idx: its function and the
+   record the core held. */
+static void forget_callback(lua_State *L, int world_idx, tl_world *lw, int key)
 {
-    lua_getiuservalue(L, world_idx, 1);
-    lua_pushnil(L);
-    lua_rawseti(L, -2, key);
-    lua_pushnil(L);
-    lua_rawseti(L, -2, -key);
+    tl_callback **link = &lw->callbacks;
+    while (*link && (*link)->key != key)
+        link = &(*link)->next;
+    if (*link) {
+        tl_callback *cb = *link;
+        *link = cb->next;
+        lw->alloc(lw->alloc_ud, cb, sizeof *cb, 0);
+    }
+    if (lua_getiuservalue(L, world_idx, 1) == LUA_TTABLE) {
+        lua_pushnil(L);
+        lua_rawseti(L, -2, key);
+    }
     lua_pop(L, 1);
+}
+
+/* Free every callback record of a world (when it closes). */
+static void free_callbacks(tl_world *lw)
+{
+    while (lw->callbacks) {
+        tl_callback *cb = lw->callbacks;
+        lw->callbacks = cb->next;
+        lw->alloc(lw->alloc_ud, cb, sizeof *cb, 0);
+    }
 }
 
 static int handle_remove(lua_State *L)
@@ -451,7 +530,7 @@ static int handle_remove(lua_State *L)
     int kind, k;
     tl_world *lw;
     tb_status st = TB_OK;
-    for (kind = 0; kind < H_KINDS && !luaL_testudata(L, 1, handle_mt[kind]); ++kind)
+    for (kind = 0; kind < H_KINDS && !test_handle(L, 1, kind); ++kind)
         ;
     if (kind == H_KINDS)
         return luaL_typeerror(L, 1, "tumble handle");
@@ -488,18 +567,26 @@ static int handle_remove(lua_State *L)
         return raise_world_error(L, lw, "remove");
     if (h->key) {
         lua_getiuservalue(L, 1, 1); /* the handle's world */
-        forget_callback(L, lua_gettop(L), h->key);
+        forget_callback(L, lua_gettop(L), lw, h->key);
         lua_pop(L, 1);
     }
     return 0;
 }
 
-static int handle_id(lua_State *L)
+/* The handle of any kind at idx, or NULL. The metamethods check it too:
+   the debug library can hand them any value. */
+static tl_handle *to_handle(lua_State *L, int idx)
 {
     tl_handle *h = NULL;
     int kind;
     for (kind = 0; kind < H_KINDS && !h; ++kind)
-        h = luaL_testudata(L, 1, handle_mt[kind]);
+        h = test_handle(L, idx, kind);
+    return h;
+}
+
+static int handle_id(lua_State *L)
+{
+    tl_handle *h = to_handle(L, 1);
     if (!h)
         return luaL_typeerror(L, 1, "tumble handle");
     lua_pushinteger(L, (lua_Integer)h->index1);
@@ -509,14 +596,20 @@ static int handle_id(lua_State *L)
 
 static int handle_tostring(lua_State *L)
 {
-    tl_handle *h = lua_touserdata(L, 1);
+    tl_handle *h = to_handle(L, 1);
+    if (!h)
+        return luaL_typeerror(L, 1, "tumble handle");
     lua_pushfstring(L, "%s %d.%d", handle_mt[h->kind], (int)h->index1, (int)h->generation);
     return 1;
 }
 
 static int handle_eq(lua_State *L)
 {
-    tl_handle *a = lua_touserdata(L, 1), *b = lua_touserdata(L, 2);
+    tl_handle *a = to_handle(L, 1), *b = to_handle(L, 2);
+    if (!a || !b) {
+        lua_pushboolean(L, 0);
+        return 1;
+    }
     lua_getiuservalue(L, 1, 1);
     lua_getiuservalue(L, 2, 1);
     lua_pushboolean(L, a->kind == b->kind && a->index1 == b->index1 && a->generation == b->generation &&
@@ -546,6 +639,13 @@ static const luaL_Reg plain_methods[] = {
 };
 
 /* ------------------------------------------------ callbacks into Lua -- */
+
+/* The world's user value is its table unless the debug library replaced it. */
+static void check_world_table(lua_State *L, int idx)
+{
+    if (!lua_istable(L, idx))
+        luaL_error(L, "tumble: the world's table of callbacks is gone (replaced through the debug library)");
+}
 
 /* A table in the world's table under `name`, made if missing. */
 static int get_scratch_table(lua_State *L, int table_idx, const char *name)
@@ -598,6 +698,7 @@ static int run_force(lua_State *L)
     const tb_force_args *a = c->args;
     const int t = 2; /* the world's table */
     int state;
+    check_world_table(L, t);
     lua_rawgeti(L, t, c->cb->key);
     lua_pushnumber(L, a->time);
     state = get_scratch_table(L, t, "force_state");
@@ -622,13 +723,13 @@ static int run_force(lua_State *L)
     fill_array(L, get_scratch_table(L, t, "body_force_out"), NULL, 3 * a->body_count);
     fill_array(L, get_scratch_table(L, t, "body_torque_out"), NULL, 3 * a->body_count);
     lua_call(L, 5, 0);
-    lua_getfield(L, t, "force_out");
-    add_from_table(L, lua_gettop(L), a->forces, 3 * a->count, "forces");
+    check_world_table(L, t);
+    add_from_table(L, get_scratch_table(L, t, "force_out"), a->forces, 3 * a->count, "forces");
     if (a->body_count) {
-        lua_getfield(L, t, "body_force_out");
-        add_from_table(L, lua_gettop(L), a->body_forces, 3 * a->body_count, "body_forces");
-        lua_getfield(L, t, "body_torque_out");
-        add_from_table(L, lua_gettop(L), a->body_torques, 3 * a->body_count, "body_torques");
+        add_from_table(L, get_scratch_table(L, t, "body_force_out"), a->body_forces, 3 * a->body_count,
+                       "body_forces");
+        add_from_table(L, get_scratch_table(L, t, "body_torque_out"), a->body_torques, 3 * a->body_count,
+                       "body_torques");
     }
     return 0;
 }
@@ -641,14 +742,15 @@ static int run_field(lua_State *L)
     const tb_field_args *a = c->args;
     const int t = 2; /* the world's table */
     int vel;
+    check_world_table(L, t);
     lua_rawgeti(L, t, c->cb->key);
     lua_pushnumber(L, a->time);
     fill_array(L, get_scratch_table(L, t, "field_pos"), a->positions, 3 * a->count);
     vel = get_scratch_table(L, t, "field_out");
     fill_array(L, vel, NULL, 3 * a->count);
     lua_call(L, 3, 0);
-    lua_getfield(L, t, "field_out");
-    add_from_table(L, lua_gettop(L), a->velocities, 3 * a->count, "vel");
+    check_world_table(L, t);
+    add_from_table(L, get_scratch_table(L, t, "field_out"), a->velocities, 3 * a->count, "vel");
     return 0;
 }
 
@@ -672,12 +774,23 @@ static tb_status run_protected(tl_callback *cb, lua_CFunction run, void *call, c
     lua_pushcfunction(L, add_traceback);
     lua_pushcfunction(L, run);
     lua_pushlightuserdata(L, call);
-    /* Stack indices belong to a call frame: fetch the world's table here, in
-       the frame that tb_lua_step was called from, and hand it to `run`. */
-    lua_getiuservalue(L, cb->owner->index, 1);
+    /* The world's table, through its anchor: no stack slot, which a script
+       could rewrite (debug.setlocal), holds the world. */
+    lua_rawgetp(L, LUA_REGISTRYINDEX, &anchor_key);
+    if (lua_istable(L, -1))
+        lua_rawgetp(L, -1, cb->owner);
+    else
+        lua_pushnil(L);
+    if (lua_touserdata(L, -1) == cb->owner)
+        lua_getiuservalue(L, -1, 1);
+    else
+        lua_pushnil(L);
+    lua_replace(L, top + 4);
+    lua_settop(L, top + 4);
     rc = lua_pcall(L, 2, 0, top + 1);
     if (rc != LUA_OK)
-        copy_first_line(message, TB_MESSAGE_SIZE, lua_tostring(L, -1));
+        copy_first_line(message, TB_MESSAGE_SIZE,
+                        lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : "(error object is not a string)");
     lua_settop(L, top);
     return rc == LUA_OK ? TB_OK : TB_ERR_CALLBACK;
 }
@@ -700,18 +813,22 @@ static tb_status call_lua_field(const tb_field_args *args, void *user)
     return run_protected(c.cb, run_field, &c, args->message);
 }
 
-/* Store the function at fn_idx in the world's table; returns the record. */
+/* Store the function at fn_idx in the world's table; returns the record,
+   listed in the world before anything can raise, so it is never lost. */
 static tl_callback *keep_callback(lua_State *L, int world_idx, tl_world *lw, int fn_idx)
 {
     tl_callback *cb;
-    int key = ++lw->next_key;
-    lua_getiuservalue(L, world_idx, 1);
-    lua_pushvalue(L, fn_idx);
-    lua_rawseti(L, -2, key);
-    cb = lua_newuserdatauv(L, sizeof *cb, 0);
+    if (lua_getiuservalue(L, world_idx, 1) != LUA_TTABLE)
+        check_world_table(L, -1);
+    cb = lw->alloc(lw->alloc_ud, NULL, 0, sizeof *cb);
+    if (!cb)
+        luaL_error(L, "not enough memory");
     cb->owner = lw;
-    cb->key = key;
-    lua_rawseti(L, -2, -key);
+    cb->key = ++lw->next_key;
+    cb->next = lw->callbacks;
+    lw->callbacks = cb;
+    lua_pushvalue(L, fn_idx);
+    lua_rawseti(L, -2, cb->key);
     lua_pop(L, 1);
     return cb;
 }
@@ -759,12 +876,22 @@ static int module_world(lua_State *L)
     lua_settop(L, top);
     lw = lua_newuserdatauv(L, sizeof *lw, 1);
     memset(lw, 0, sizeof *lw);
+    lw->tag = &world_tag;
     lw->dt = dt;
+    lw->alloc = lua_getallocf(L, &lw->alloc_ud);
     lua_newtable(L);
     lua_setiuservalue(L, -2, 1);
     luaL_setmetatable(L, WORLD_MT);
-    /* The world's memory counts against the Lua state's allocator. */
-    def.allocator.realloc = (tb_realloc_fn *)lua_getallocf(L, &def.allocator.user);
+    /* its key in the anchor table, so that stepping allocates nothing */
+    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &anchor_key) != LUA_TTABLE)
+        return luaL_error(L, "tumble.world: the module was not opened in this Lua state");
+    lua_pushboolean(L, 0);
+    lua_rawsetp(L, -2, lw);
+    lua_pop(L, 1);
+    /* The world's memory counts against the Lua state's allocator; under a
+       memory budget, a request the budget refuses ends the run. */
+    def.allocator.realloc = lw->alloc == budget_alloc ? budget_alloc_for_world : (tb_realloc_fn *)lw->alloc;
+    def.allocator.user = lw->alloc_ud;
     if (tb_world_create(&def, &lw->world, message, sizeof message) != TB_OK)
         return luaL_error(L, "tumble.world: %s", message);
     if (lua_getfield(L, 1, "guard") != LUA_TNIL) {
@@ -780,25 +907,37 @@ static int module_world(lua_State *L)
 
 static int world_close(lua_State *L)
 {
-    tl_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    tl_world *lw = check_world_userdata(L, 1);
     if (lw->L)
         return luaL_error(L, "tumble: cannot close a world while it is stepping");
     tb_world_destroy(lw->world);
     lw->world = NULL;
+    free_callbacks(lw);
     return 0;
 }
 
+/* The collector never finalizes a stepping world (it is anchored), so a
+   stepping world here is a direct call (debug.getmetatable(w).__gc(w)),
+   refused like world:close(). */
 static int world_gc(lua_State *L)
 {
-    tl_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    tl_world *lw = check_world_userdata(L, 1);
+    if (lw->L)
+        return luaL_error(L, "tumble: cannot collect a world while it is stepping");
     tb_world_destroy(lw->world);
     lw->world = NULL;
+    free_callbacks(lw);
+    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &anchor_key) == LUA_TTABLE) {
+        lua_pushnil(L);
+        lua_rawsetp(L, -2, lw);
+    }
+    lua_pop(L, 1);
     return 0;
 }
 
 static int world_tostring(lua_State *L)
 {
-    tl_world *lw = luaL_checkudata(L, 1, WORLD_MT);
+    tl_world *lw = check_world_userdata(L, 1);
     if (!lw->world)
         lua_pushliteral(L, "tumble.world (closed)");
     else
@@ -1164,7 +1303,7 @@ static int world_field(lua_State *L)
         key = cb->key;
         st = tb_world_add_field(lw->world, call_lua_field, cb, &id);
         if (st != TB_OK)
-            forget_callback(L, 1, key);
+            forget_callback(L, 1, lw, key);
     } else {
         double v[3], c[3] = { 0, 0, 0 };
         check_options(L, 2, "world:field", field_options);
@@ -1190,7 +1329,7 @@ static int world_force(lua_State *L)
     luaL_checktype(L, 2, LUA_TFUNCTION);
     cb = keep_callback(L, 1, lw, 2);
     if (tb_world_add_force(lw->world, call_lua_force, cb, &id) != TB_OK) {
-        forget_callback(L, 1, cb->key);
+        forget_callback(L, 1, lw, cb->key);
         return raise_world_error(L, lw, "world:force");
     }
     push_handle(L, 1, H_FORCE, id.index1, id.generation, cb->key);
@@ -1378,6 +1517,11 @@ int luaopen_tumble(lua_State *L)
         plain_methods
     };
     int k;
+    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &anchor_key) != LUA_TTABLE) {
+        lua_newtable(L);
+        lua_rawsetp(L, LUA_REGISTRYINDEX, &anchor_key);
+    }
+    lua_pop(L, 1);
     create_metatable(L, WORLD_MT, world_methods);
     lua_pushcfunction(L, world_gc);
     lua_setfield(L, -2, "__gc");
@@ -1409,29 +1553,56 @@ tb_world *tb_lua_check_world(lua_State *L, int idx)
 
 tb_world *tb_lua_to_world(lua_State *L, int idx)
 {
-    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    tl_world *lw = test_world(L, idx);
     return lw ? lw->world : NULL;
 }
 
 double tb_lua_world_dt(lua_State *L, int idx)
 {
-    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    tl_world *lw = test_world(L, idx);
     return lw && lw->world ? lw->dt : 0;
 }
 
-/* Run a core call with the world's Lua callbacks pointed at (L, idx). */
+/* Set the world's anchor to the world at idx (anchor) or back to false.
+   The key exists since the world was made, so this allocates nothing and
+   cannot raise; returns 0 if the anchor table or the key is missing. */
+static int set_anchor(lua_State *L, int idx, tl_world *lw, int anchor)
+{
+    int ok;
+    if (lua_rawgetp(L, LUA_REGISTRYINDEX, &anchor_key) != LUA_TTABLE) {
+        lua_pop(L, 1);
+        return 0;
+    }
+    ok = lua_rawgetp(L, -1, lw) != LUA_TNIL;
+    lua_pop(L, 1);
+    if (ok) {
+        if (anchor)
+            lua_pushvalue(L, idx);
+        else
+            lua_pushboolean(L, 0);
+        lua_rawsetp(L, -2, lw);
+    }
+    lua_pop(L, 1);
+    return ok;
+}
+
+/* Run a core call with the world's Lua callbacks pointed at thread L, the
+   world anchored for the call. */
 static tb_status run_with_callbacks(lua_State *L, int idx, double h, double *velocities)
 {
-    tl_world *lw = luaL_testudata(L, idx, WORLD_MT);
+    tl_world *lw = test_world(L, idx);
     tb_status st;
     if (!lw || !lw->world)
         return TB_ERR_ARGUMENT;
     if (lw->L) /* nested: the core refuses it as busy */
         return velocities ? tb_world_tracer_velocities(lw->world, velocities) : tb_world_step(lw->world, h);
+    idx = lua_absindex(L, idx);
+    if (!lua_checkstack(L, 4) || !set_anchor(L, idx, lw, 1))
+        return TB_ERR_MEMORY;
     lw->L = L;
-    lw->index = lua_absindex(L, idx);
     st = velocities ? tb_world_tracer_velocities(lw->world, velocities) : tb_world_step(lw->world, h);
     lw->L = NULL;
+    set_anchor(L, idx, lw, 0);
     return st;
 }
 
@@ -1443,4 +1614,636 @@ tb_status tb_lua_step(lua_State *L, int idx, double h)
 tb_status tb_lua_tracer_velocities(lua_State *L, int idx, double *velocities)
 {
     return run_with_callbacks(L, idx, 0, velocities);
+}
+
+/* ------------------------------------------------------------ budgets -- */
+
+/* The instructions between two counts: a hook call costs about as much as
+   a few dozen instructions, and a budget overshoots by at most this. */
+#define HOOK_COUNT 1000
+
+enum tl_trip { TRIP_NONE, TRIP_INSTRUCTIONS, TRIP_MEMORY, TRIP_STOP };
+
+/* The allocator's user data of a state made by tb_lua_newstate: the budgets
+   and what has been used. It lives until lua_close frees the state's last
+   block (blocks back to 0), and frees itself then. */
+typedef struct tl_budget {
+    tb_lua_limits limits;
+    unsigned long long executed; /* instructions counted */
+    size_t used, peak;           /* bytes held now, and at most */
+    size_t blocks;               /* blocks held */
+    int opened;                  /* lua_newstate returned: the state's block is held */
+    int trip;                    /* enum tl_trip: why the code was stopped */
+    int where_known;             /* the message names where it stopped */
+    int refused;                 /* the last request was refused ... */
+    void *refused_ptr;           /* ... this one */
+    size_t refused_size;
+    int warn_on, warn_continued; /* lua_setwarnf's switch and a message being continued */
+    char message[256];
+} tl_budget;
+
+static void set_trip(tl_budget *b, int why)
+{
+    if (b->trip)
+        return;
+    b->trip = why;
+    if (why == TRIP_INSTRUCTIONS)
+        snprintf(b->message, sizeof b->message, "instruction budget exceeded: more than %llu Lua instructions",
+                 b->limits.instructions);
+    else if (why == TRIP_MEMORY)
+        snprintf(b->message, sizeof b->message, "memory budget exceeded: more than %lu bytes",
+                 (unsigned long)b->limits.memory);
+    else
+        snprintf(b->message, sizeof b->message, "stopped by the host");
+}
+
+/* One request to the allocator. A request past the memory budget is
+   refused. Lua's own allocations then collect all garbage and ask again
+   at once: if that succeeds, the run goes on. Anything else ends the run:
+   the same request refused again, another request instead (the refusal
+   became an error: lauxlib's buffers ask once), a count of the hook or
+   tb_lua_limit_error before either, or any refusal of a world's request
+   (the core has no collection to wait for). */
+static void *serve(tl_budget *b, void *ptr, size_t osize, size_t nsize, int from_world)
+{
+    void *p;
+    int grows;
+    if (!ptr)
+        osize = 0; /* Lua passes the type of the new object there */
+    grows = nsize > osize;
+    if (grows && b->refused && !(b->refused_ptr == ptr && b->refused_size == nsize))
+        set_trip(b, TRIP_MEMORY);
+    if (nsize == 0) {
+        free(ptr);
+        if (ptr) {
+            b->used -= osize < b->used ? osize : b->used;
+            if (--b->blocks == 0 && b->opened)
+                free(b); /* lua_close freed the state's own block, the last */
+        }
+        return NULL;
+    }
+    if (grows && b->limits.memory && nsize - osize > b->limits.memory - (b->used < b->limits.memory ? b->used : b->limits.memory)) {
+        if (from_world || b->refused)
+            set_trip(b, TRIP_MEMORY);
+        b->refused = 1;
+        b->refused_ptr = ptr;
+        b->refused_size = nsize;
+        return NULL;
+    }
+    p = realloc(ptr, nsize);
+    if (!p)
+        return NULL;
+    if (grows)
+        b->refused = 0;
+    if (!ptr)
+        ++b->blocks;
+    b->used = b->used - osize + nsize;
+    if (b->used > b->peak)
+        b->peak = b->used;
+    return p;
+}
+
+static void *budget_alloc(void *ud, void *ptr, size_t osize, size_t nsize)
+{
+    return serve(ud, ptr, osize, nsize, 0);
+}
+
+static void *budget_alloc_for_world(void *ud, void *ptr, size_t osize, size_t nsize)
+{
+    return serve(ud, ptr, osize, nsize, 1);
+}
+
+static tl_budget *get_budget(lua_State *L)
+{
+    void *ud;
+    return lua_getallocf(L, &ud) == budget_alloc ? ud : NULL;
+}
+
+/* The count hook: counts, and once a budget has run out raises an error
+   and re-arms itself to run at every instruction, so the error comes back
+   at the first instruction after any pcall that caught it. */
+static void budget_hook(lua_State *L, lua_Debug *ar)
+{
+    tl_budget *b = get_budget(L);
+    if (!b)
+        return;
+    b->executed += (unsigned long long)lua_gethookcount(L);
+    if (!b->trip) {
+        if (b->limits.instructions && b->executed > b->limits.instructions)
+            set_trip(b, TRIP_INSTRUCTIONS);
+        else if (b->limits.stop && *b->limits.stop)
+            set_trip(b, TRIP_STOP);
+        else if (b->refused)
+            set_trip(b, TRIP_MEMORY);
+        else
+            return;
+    }
+    if (!b->where_known && lua_getinfo(L, "Sl", ar)) {
+        size_t n = strlen(b->message);
+        b->where_known = 1;
+        snprintf(b->message + n, sizeof b->message - n, " (at %s:%d)", ar->short_src, ar->currentline);
+    }
+    lua_sethook(L, budget_hook, LUA_MASKCOUNT, 1);
+    lua_pushstring(L, b->message);
+    lua_error(L);
+}
+
+static void set_hook(lua_State *L, const tl_budget *b)
+{
+    const unsigned long long n = b->limits.instructions;
+    if (n || b->limits.memory)
+        lua_sethook(L, budget_hook, LUA_MASKCOUNT, n && n < HOOK_COUNT ? (int)n : HOOK_COUNT);
+    else
+        lua_sethook(L, NULL, 0, 0);
+}
+
+/* What luaL_newstate installs, for a state made with lua_newstate. */
+static int budget_panic(lua_State *L)
+{
+    fprintf(stderr, "PANIC: unprotected error in call to Lua API (%s)\n",
+            lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : "error object is not a string");
+    return 0;
+}
+
+static void budget_warn(void *ud, const char *message, int to_continue)
+{
+    tl_budget *b = ud;
+    if (!b->warn_continued && message[0] == '@') {
+        if (!strcmp(message, "@on"))
+            b->warn_on = 1;
+        else if (!strcmp(message, "@off"))
+            b->warn_on = 0;
+        return;
+    }
+    if (b->warn_on) {
+        if (!b->warn_continued)
+            fputs("Lua warning: ", stderr);
+        fputs(message, stderr);
+        if (!to_continue)
+            fputc('\n', stderr);
+    }
+    b->warn_continued = to_continue;
+}
+
+lua_State *tb_lua_newstate(const tb_lua_limits *limits)
+{
+    tl_budget *b = calloc(1, sizeof *b);
+    lua_State *L;
+    if (!b)
+        return NULL;
+    if (limits)
+        b->limits = *limits;
+    L = lua_newstate(budget_alloc, b);
+    if (!L) {
+        free(b);
+        return NULL;
+    }
+    b->opened = 1;
+    lua_atpanic(L, budget_panic);
+    lua_setwarnf(L, budget_warn, b);
+    set_hook(L, b);
+    return L;
+}
+
+int tb_lua_set_limits(lua_State *L, const tb_lua_limits *limits)
+{
+    tl_budget *b = get_budget(L);
+    if (!b)
+        return -1;
+    memset(&b->limits, 0, sizeof b->limits);
+    if (limits)
+        b->limits = *limits;
+    b->executed = 0;
+    b->trip = TRIP_NONE;
+    b->where_known = 0;
+    b->refused = 0;
+    b->message[0] = 0;
+    set_hook(L, b);
+    return 0;
+}
+
+const char *tb_lua_limit_error(lua_State *L)
+{
+    tl_budget *b = get_budget(L);
+    if (b && b->refused)
+        set_trip(b, TRIP_MEMORY);
+    return b && b->trip ? b->message : NULL;
+}
+
+int tb_lua_usage(lua_State *L, unsigned long long *instructions, size_t *peak_memory)
+{
+    tl_budget *b = get_budget(L);
+    if (instructions)
+        *instructions = b ? b->executed : 0;
+    if (peak_memory)
+        *peak_memory = b ? b->peak : 0;
+    return b ? 0 : -1;
+}
+
+/* ------------------------------------------------------------ sandbox -- */
+
+#if defined(_WIN32)
+#include <stdlib.h>
+#define PATH_SIZE 4096
+#define resolve_path(path, buf) _fullpath((buf), (path), PATH_SIZE)
+#define is_absolute(name) ((name)[0] == '/' || (name)[0] == '\\' || ((name)[0] && (name)[1] == ':'))
+#else
+#include <limits.h>
+#ifdef PATH_MAX
+#define PATH_SIZE PATH_MAX
+#else
+#define PATH_SIZE 4096
+#endif
+#define resolve_path(path, buf) realpath((path), (buf))
+#define is_absolute(name) ((name)[0] == '/')
+#endif
+
+/* Push the real path of file `name` (taken from the folder at folder_idx
+   when relative) when it lies inside that folder, links and ".." resolved,
+   and return it; else push nothing, return NULL and say why. */
+static const char *push_path_in_folder(lua_State *L, int folder_idx, const char *name, const char **why)
+{
+    const char *folder = lua_tostring(L, folder_idx);
+    char real[PATH_SIZE];
+    size_t n;
+    if (!folder) {
+        *why = "the sandbox reads no files (it was given no folder)";
+        return NULL;
+    }
+    n = strlen(folder);
+    if (is_absolute(name))
+        lua_pushstring(L, name);
+    else
+        lua_pushfstring(L, "%s/%s", folder, name);
+    if (!resolve_path(lua_tostring(L, -1), real)) {
+        /* missing: say "outside" when the name alone says so, and whether
+           a file outside exists stays unsaid */
+        const char *path = lua_tostring(L, -1), *p;
+        int outside = strncmp(path, folder, n) != 0;
+        *why = strerror(errno);
+        for (p = path; *p && !outside; ++p)
+            outside = p[0] == '.' && p[1] == '.' && (p == path || p[-1] == '/') && (!p[2] || p[2] == '/');
+        if (outside)
+            *why = "outside the scene's folder (the sandbox reads files only there)";
+        lua_pop(L, 1);
+        return NULL;
+    }
+    lua_pop(L, 1);
+    if (strncmp(real, folder, n) || !(real[n] == '/' || (n && folder[n - 1] == '/'))) {
+        *why = "outside the scene's folder (the sandbox reads files only there)";
+        return NULL;
+    }
+    return lua_pushstring(L, real);
+}
+
+/* require(name): "tumble" and the safe libraries, or NAME.lua (dots are
+   folders) or NAME/init.lua in the scene's folder, loaded as text once.
+   Upvalues: the table of loaded modules, the folder. */
+static int sandbox_require(lua_State *L)
+{
+    static const char *const forms[] = { "%s.lua", "%s/init.lua" };
+    const char *name = luaL_checkstring(L, 1), *path = NULL, *why = NULL, *first_why = NULL;
+    size_t i, n = strlen(name);
+    int ok = n > 0 && n < 256, k;
+    lua_settop(L, 1);
+    lua_pushvalue(L, 1);
+    if (lua_rawget(L, lua_upvalueindex(1)) != LUA_TNIL)
+        return 1;
+    lua_pop(L, 1);
+    for (i = 0; i < n && ok; ++i) {
+        const char c = name[i];
+        ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-' ||
+             (c == '.' && i > 0 && i + 1 < n && name[i + 1] != '.');
+    }
+    if (!ok)
+        return luaL_error(L, "require: bad module name '%s' (letters, digits, '_', '-', and dots between them)",
+                          name);
+    luaL_gsub(L, name, ".", "/"); /* 2 */
+    for (k = 0; k < 2 && !path; ++k) {
+        lua_pushfstring(L, forms[k], lua_tostring(L, 2));
+        path = push_path_in_folder(L, lua_upvalueindex(2), lua_tostring(L, -1), &why);
+        if (!first_why)
+            first_why = why;
+        if (path)
+            lua_remove(L, -2);
+        else
+            lua_pop(L, 1);
+    }
+    if (!path)
+        return luaL_error(L, "require: no module '%s' in the scene's folder (%s.lua: %s)", name, lua_tostring(L, 2),
+                          first_why);
+    /* 3: the path */
+    if (luaL_loadfilex(L, path, "t") != LUA_OK)
+        return lua_error(L);
+    lua_pushvalue(L, 1);
+    lua_pushvalue(L, 3);
+    lua_call(L, 2, 1);
+    if (lua_isnil(L, -1)) {
+        lua_pop(L, 1);
+        lua_pushboolean(L, 1);
+    }
+    lua_pushvalue(L, 1);
+    lua_pushvalue(L, -2);
+    lua_rawset(L, lua_upvalueindex(1));
+    lua_pushvalue(L, 3);
+    return 2;
+}
+
+/* Call the function in upvalue 1 with every argument; return what it does. */
+static int call_original(lua_State *L)
+{
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, 1);
+    lua_call(L, lua_gettop(L) - 1, LUA_MULTRET);
+    return lua_gettop(L);
+}
+
+/* io.open(name [, "r" | "rb"]) and io.lines(name, ...): files in the
+   folder only, for reading. Upvalues: the io library's function, the folder. */
+static int sandbox_io_open(lua_State *L)
+{
+    const char *name = luaL_checkstring(L, 1), *mode = luaL_optstring(L, 2, "r"), *why = NULL;
+    if (strcmp(mode, "r") && strcmp(mode, "rb"))
+        return luaL_error(L, "io.open: the sandbox opens files for reading only (mode 'r' or 'rb', not '%s')", mode);
+    lua_settop(L, 2);
+    if (!push_path_in_folder(L, lua_upvalueindex(2), name, &why)) {
+        luaL_pushfail(L);
+        lua_pushfstring(L, "%s: %s", name, why);
+        return 2;
+    }
+    lua_replace(L, 1);
+    return call_original(L);
+}
+
+static int sandbox_io_lines(lua_State *L)
+{
+    const char *name = luaL_checkstring(L, 1), *why = NULL;
+    if (!push_path_in_folder(L, lua_upvalueindex(2), name, &why))
+        return luaL_error(L, "io.lines: %s: %s", name, why);
+    lua_replace(L, 1);
+    return call_original(L);
+}
+
+/* load(chunk [, name [, mode [, env]]]): text only. */
+static int sandbox_load(lua_State *L)
+{
+    const char *mode = luaL_optstring(L, 3, "t");
+    if (strcmp(mode, "t"))
+        return luaL_error(L, "load: the sandbox loads text chunks only (mode 't', not '%s')", mode);
+    if (lua_gettop(L) < 3)
+        lua_settop(L, 3);
+    lua_pushliteral(L, "t");
+    lua_replace(L, 3);
+    return call_original(L);
+}
+
+/* setmetatable(t, mt) with no __gc in mt: finalizers run with the count
+   hook off, so no budget could stop a loop in one. Lua marks a table for
+   finalization only when its metatable has __gc at this call, so a __gc
+   added to mt afterwards never runs. */
+static int sandbox_setmetatable(lua_State *L)
+{
+    if (lua_type(L, 2) == LUA_TTABLE) {
+        lua_pushliteral(L, "__gc");
+        if (lua_rawget(L, 2) != LUA_TNIL)
+            return luaL_error(L, "setmetatable: the sandbox allows no __gc metamethod (finalizers run outside "
+                                 "the instruction budget)");
+        lua_pop(L, 1);
+    }
+    return call_original(L);
+}
+
+static int sandbox_collectgarbage(lua_State *L)
+{
+    static const char *const allowed[] = { "collect", "count", "step", "isrunning", NULL };
+    const char *option = luaL_optstring(L, 1, "collect");
+    int k;
+    for (k = 0; allowed[k] && strcmp(allowed[k], option); ++k)
+        ;
+    if (!allowed[k])
+        return luaL_error(L, "collectgarbage: the sandbox allows only \"collect\", \"count\", \"step\" and "
+                             "\"isrunning\" (not \"%s\")", option);
+    return call_original(L);
+}
+
+/* After a budget has run out, the error leaves through the count hook, and
+   Lua keeps hooks off until the error reaches a pcall: a message handler
+   (xpcall) and the __close handlers of a coroutine killed by the error
+   (closed by coroutine.close or coroutine.wrap) would run without a count.
+   So then the sandbox's xpcall passes the error on without calling the
+   handler, and its coroutine.close and coroutine.wrap do not close. */
+static int budget_ran_out(lua_State *L)
+{
+    tl_budget *b = get_budget(L);
+    return b && b->trip;
+}
+
+/* The message handler xpcall gets: upvalue 1 is the script's. */
+static int sandbox_handler(lua_State *L)
+{
+    if (budget_ran_out(L))
+        return 1;
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, 1);
+    lua_call(L, lua_gettop(L) - 1, 1);
+    return 1;
+}
+
+static int sandbox_xpcall(lua_State *L)
+{
+    luaL_checktype(L, 2, LUA_TFUNCTION);
+    lua_pushvalue(L, 2);
+    lua_pushcclosure(L, sandbox_handler, 1);
+    lua_replace(L, 2);
+    return call_original(L);
+}
+
+static int sandbox_coroutine_close(lua_State *L)
+{
+    tl_budget *b = get_budget(L);
+    if (b && b->trip) {
+        lua_pushstring(L, b->message);
+        return lua_error(L);
+    }
+    return call_original(L);
+}
+
+/* The function coroutine.wrap returns (as Lua's own, but closing the dead
+   coroutine only while the budgets hold); upvalue 1: the coroutine. */
+static int sandbox_wrapped(lua_State *L)
+{
+    lua_State *co = lua_tothread(L, lua_upvalueindex(1));
+    int n = lua_gettop(L), results, status;
+    if (!lua_checkstack(co, n))
+        return luaL_error(L, "too many arguments to resume");
+    lua_xmove(L, co, n);
+    status = lua_resume(co, L, n, &results);
+    n = results;
+    if (status == LUA_OK || status == LUA_YIELD) {
+        if (!lua_checkstack(L, n + 1)) {
+            lua_pop(co, n);
+            return luaL_error(L, "too many results to resume");
+        }
+        lua_xmove(co, L, n);
+        return n;
+    }
+    lua_xmove(co, L, 1); /* the error */
+    status = lua_status(co);
+    if (status != LUA_OK && status != LUA_YIELD && !budget_ran_out(L)) {
+        status = lua_resetthread(co); /* close its to-be-closed variables */
+        lua_xmove(co, L, 1);
+    }
+    if (status != LUA_ERRMEM && lua_type(L, -1) == LUA_TSTRING) {
+        luaL_where(L, 1);
+        lua_insert(L, -2);
+        lua_concat(L, 2);
+    }
+    return lua_error(L);
+}
+
+static int sandbox_coroutine_wrap(lua_State *L)
+{
+    lua_State *co;
+    luaL_checktype(L, 1, LUA_TFUNCTION);
+    co = lua_newthread(L);
+    lua_pushvalue(L, 1);
+    lua_xmove(L, co, 1);
+    lua_pushcclosure(L, sandbox_wrapped, 1);
+    return 1;
+}
+
+/* Replace global `name` (in the table at g) by f with the old value as its
+   upvalue (and the value at extra_idx as the second, if extra_idx). */
+static void wrap_function(lua_State *L, int g, const char *name, lua_CFunction f, int extra_idx)
+{
+    lua_getfield(L, g, name);
+    if (extra_idx)
+        lua_pushvalue(L, extra_idx);
+    lua_pushcclosure(L, f, extra_idx ? 2 : 1);
+    lua_setfield(L, g, name);
+}
+
+/* Open library `open` as global `name` and as loaded[name]; leaves it on
+   the stack. */
+static void open_library(lua_State *L, int g, int loaded, const char *name, lua_CFunction open)
+{
+    lua_pushcfunction(L, open);
+    lua_call(L, 0, 1);
+    lua_pushvalue(L, -1);
+    lua_setfield(L, g, name);
+    lua_pushvalue(L, -1);
+    lua_setfield(L, loaded, name);
+}
+
+/* Copy the fields `names` of the table at from into the table on top. */
+static void copy_fields(lua_State *L, int from, const char *const names[])
+{
+    int k;
+    for (k = 0; names[k]; ++k) {
+        lua_getfield(L, from, names[k]);
+        lua_setfield(L, -2, names[k]);
+    }
+}
+
+/* Under lua_pcall: argument 1 is the folder as a light userdata (a C
+   string, or NULL). */
+static int open_sandbox(lua_State *L)
+{
+    static const char *const removed[] = { "dofile", "loadfile", "warn", NULL };
+    static const char *const os_names[] = { "clock", "time", "date", "difftime", NULL };
+    const char *folder = lua_touserdata(L, 1);
+    char real[PATH_SIZE];
+    int g, loaded, folder_idx, k;
+    lua_settop(L, 0);
+    if (folder) {
+        if (!resolve_path(folder, real))
+            return luaL_error(L, "tumble: the sandbox's folder '%s': %s", folder, strerror(errno));
+        lua_pushstring(L, real);
+    } else {
+        lua_pushnil(L);
+    }
+    folder_idx = 1;
+    lua_newtable(L); /* 2: the loaded modules */
+    loaded = 2;
+    lua_newtable(L); /* 3: the new globals */
+    g = 3;
+    lua_pushvalue(L, g);
+    lua_rawseti(L, LUA_REGISTRYINDEX, LUA_RIDX_GLOBALS);
+
+    lua_pushcfunction(L, luaopen_base); /* fills the globals, as _G */
+    lua_call(L, 0, 1);
+    lua_setfield(L, loaded, "_G");
+    for (k = 0; removed[k]; ++k) {
+        lua_pushnil(L);
+        lua_setfield(L, g, removed[k]);
+    }
+    wrap_function(L, g, "load", sandbox_load, 0);
+    wrap_function(L, g, "setmetatable", sandbox_setmetatable, 0);
+    wrap_function(L, g, "collectgarbage", sandbox_collectgarbage, 0);
+    wrap_function(L, g, "xpcall", sandbox_xpcall, 0);
+
+    open_library(L, g, loaded, LUA_STRLIBNAME, luaopen_string);
+    lua_pushnil(L);
+    lua_setfield(L, -2, "dump");
+    lua_pop(L, 1);
+    lua_pushliteral(L, ""); /* lock the strings' metatable, which every string shares */
+    if (lua_getmetatable(L, -1)) {
+        lua_pushliteral(L, "string");
+        lua_setfield(L, -2, "__metatable");
+        lua_pop(L, 1);
+    }
+    lua_pop(L, 1);
+    open_library(L, g, loaded, LUA_TABLIBNAME, luaopen_table);
+    lua_pop(L, 1);
+    open_library(L, g, loaded, LUA_MATHLIBNAME, luaopen_math);
+    lua_pop(L, 1);
+    open_library(L, g, loaded, LUA_UTF8LIBNAME, luaopen_utf8);
+    lua_pop(L, 1);
+    open_library(L, g, loaded, LUA_COLIBNAME, luaopen_coroutine);
+    wrap_function(L, lua_gettop(L), "close", sandbox_coroutine_close, 0);
+    lua_pushcfunction(L, sandbox_coroutine_wrap);
+    lua_setfield(L, -2, "wrap");
+    lua_pop(L, 1);
+
+    lua_pushcfunction(L, luaopen_os); /* os: the clock and the calendar */
+    lua_call(L, 0, 1);
+    lua_newtable(L);
+    copy_fields(L, lua_gettop(L) - 1, os_names);
+    lua_pushvalue(L, -1);
+    lua_setfield(L, g, LUA_OSLIBNAME);
+    lua_setfield(L, loaded, LUA_OSLIBNAME);
+    lua_pop(L, 1);
+
+    lua_pushcfunction(L, luaopen_io); /* io: reading in the folder */
+    lua_call(L, 0, 1);
+    lua_newtable(L);
+    lua_getfield(L, -2, "open");
+    lua_pushvalue(L, folder_idx);
+    lua_pushcclosure(L, sandbox_io_open, 2);
+    lua_setfield(L, -2, "open");
+    lua_getfield(L, -2, "lines");
+    lua_pushvalue(L, folder_idx);
+    lua_pushcclosure(L, sandbox_io_lines, 2);
+    lua_setfield(L, -2, "lines");
+    lua_pushvalue(L, -1);
+    lua_setfield(L, g, LUA_IOLIBNAME);
+    lua_setfield(L, loaded, LUA_IOLIBNAME);
+    lua_pop(L, 1);
+
+    luaL_requiref(L, "tumble", luaopen_tumble, 0);
+    lua_setfield(L, loaded, "tumble");
+    lua_pushvalue(L, loaded);
+    lua_pushvalue(L, folder_idx);
+    lua_pushcclosure(L, sandbox_require, 2);
+    lua_setfield(L, g, "require");
+    return 0;
+}
+
+int tb_lua_sandbox(lua_State *L, const char *folder)
+{
+    if (!lua_checkstack(L, 2))
+        return LUA_ERRMEM;
+    lua_pushcfunction(L, open_sandbox);
+    lua_pushlightuserdata(L, (void *)folder);
+    return lua_pcall(L, 1, 0, 0);
 }

@@ -1,21 +1,43 @@
 /* tumble_main.c: the `tumble` command. Runs a Lua scene script and writes
    its trajectory as CSV. Errors are one line on stderr and a non-zero exit;
-   the output file appears only when the whole run succeeded. Static
-   functions are named as in tumble_lua.c: each starts with a verb. */
-#define _POSIX_C_SOURCE 200809L /* clock_gettime */
+   the output file appears only when the whole run succeeded: rows go to a
+   temporary file of its own next to it, renamed over it at the end, and
+   removed on failure and on SIGINT, SIGTERM and SIGHUP.
+
+   Scripts run in the binding's sandbox under an instruction and a memory
+   budget (tb_lua_newstate, tb_lua_sandbox) unless --trust; every call into
+   Lua is protected, so whatever a scene returns ends in a message, never a
+   Lua panic. Static functions are named as in tumble_lua.c: each starts
+   with a verb. */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime, sigaction, mkstemp, fchmod */
 #include "tumble_lua.h"
 
 #include <lauxlib.h>
 #include <lualib.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
+
+/* The default budgets: far above what any shipped scene uses (at most
+   0.43 M instructions, scenes/push.lua, and 2.5 MiB, scenes/pyramid.lua;
+   docs/command.md has them all), yet reached soon: a scene looping for
+   ever stops within about 10 s, a memory bomb within about 1 s. */
+#define DEFAULT_MAX_INSTRUCTIONS 1000000000.0
+#define DEFAULT_MAX_MEMORY (256.0 * 1024 * 1024)
+
+/* The most steps a run may take: past this a typo in a duration, not a
+   scene, is the likelier cause, and a step count stays exact in a long. */
+#define MAX_STEPS 1e9
 
 static const char usage[] =
     "usage: tumble run SCENE.lua [--out FILE.csv] [--integrator NAME] [--dt SECONDS]\n"
     "                            [--tol TOLERANCE] [--until SECONDS] [--every SECONDS]\n"
+    "                            [--trust] [--max-instructions N] [--max-memory BYTES]\n"
     "                            [--quiet]\n"
     "       tumble --help | --version\n"
     "\n"
@@ -25,7 +47,8 @@ static const char usage[] =
     "                     { world = w, duration = S, record_every = S }\n"
     "  --out FILE.csv     where to write the trajectory (default: the scene's\n"
     "                     name with .csv, in the current directory); written to\n"
-    "                     FILE.csv.part and renamed only when the run succeeds\n"
+    "                     a temporary FILE.csv.part.XXXXXX and renamed only when\n"
+    "                     the run succeeds\n"
     "  --integrator NAME  override the scene's integrator: %s\n"
     "  --dt SECONDS       override the step (default: the world's dt, 1/60 s\n"
     "                     unless the scene says otherwise)\n"
@@ -38,6 +61,17 @@ static const char usage[] =
     "  --until SECONDS    override the scene's duration\n"
     "  --every SECONDS    override record_every (default 1/60 s; 0 records\n"
     "                     every step)\n"
+    "  --trust            give the script Lua's whole standard library (os, io,\n"
+    "                     debug, package): only for scripts you trust. Without\n"
+    "                     it the script runs in a sandbox: no os.execute, no\n"
+    "                     debug, no binary chunks; require, io.open and io.lines\n"
+    "                     read only in the scene's folder\n"
+    "  --max-instructions N\n"
+    "                     the Lua instructions the scene may run in all (script,\n"
+    "                     callbacks, metamethods); default %.0fG, 0: no limit;\n"
+    "                     K, M, G multiply by 1e3, 1e6, 1e9\n"
+    "  --max-memory BYTES the bytes the scene's Lua and worlds may hold at once;\n"
+    "                     default %.0fM, 0: no limit; K, M, G: KiB, MiB, GiB\n"
     "  --quiet            print no summary\n"
     "\n"
     "Output: header t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz then one row\n"
@@ -53,16 +87,28 @@ static const char usage[] =
     "of the integrator (stiffest spring mode, drag) and warns on stderr when\n"
     "dt exceeds it, suggesting a step or an integrator.\n"
     "Summary (stdout): steps, simulated time, wall time, the advisor's\n"
-    "verdict and the relative energy drift (E_end - E_start) / |E_start| of\n"
-    "the particles and bodies (kinetic, rotational, gravitational, spring).\n"
-    "Exit status: 0 on success, 1 when the scene or the run fails, 2 for a\n"
-    "bad command line.\n";
+    "verdict, the relative energy drift (E_end - E_start) / |E_start| of the\n"
+    "particles and bodies (kinetic, rotational, gravitational, spring), and\n"
+    "what the scene's Lua used of its budgets.\n"
+    "Exit status: 0 on success, 1 when the scene or the run fails (a budget\n"
+    "run out, a duration of more than 1e9 steps), 2 for a bad command line,\n"
+    "128 + the signal's number after SIGINT, SIGTERM or SIGHUP (a second\n"
+    "signal ends it at once).\n";
 
 typedef struct options {
     const char *scene, *out, *integrator;
     double dt, until, every, tol, guard;
-    int quiet;
+    double max_instructions, max_memory; /* budgets; 0: no limit */
+    int quiet, trust;
 } options;
+
+/* The first SIGINT, SIGTERM or SIGHUP; the Lua budgets' hook reads it too
+   (tb_lua_limits.stop), so a scene stuck in Lua stops at once. */
+static volatile sig_atomic_t stop_signal;
+
+/* The temporary output, while it exists: a second signal removes it. */
+static char temp_path[4200];
+static volatile sig_atomic_t temp_made;
 
 static int die(int code, const char *fmt, const char *arg)
 {
@@ -81,7 +127,7 @@ static void print_usage(FILE *f)
             strncat(names, ", ", sizeof names - strlen(names) - 1);
         strncat(names, tb_integrator_name(i), sizeof names - strlen(names) - 1);
     }
-    fprintf(f, usage, names);
+    fprintf(f, usage, names, DEFAULT_MAX_INSTRUCTIONS / 1e9, DEFAULT_MAX_MEMORY / (1024 * 1024));
 }
 
 static int parse_number(const char *flag, const char *text, double *out, int allow_zero)
@@ -97,11 +143,37 @@ static int parse_number(const char *flag, const char *text, double *out, int all
     return 0;
 }
 
+/* A budget: a number >= 0 with an optional suffix K, M or G, each `unit`
+   times the one before; whole units, at most `most`. */
+static int parse_budget(const char *flag, const char *text, double unit, double most, double *out)
+{
+    char *end;
+    double v, scale = 1;
+    if (!text)
+        return die(2, "%s needs a number", flag);
+    v = strtod(text, &end);
+    if (end != text && *end && !end[1]) {
+        const char *units = strchr("KkMmGg", *end);
+        if (units) {
+            int k = (int)(units - "KkMmGg") / 2;
+            scale = k == 0 ? unit : k == 1 ? unit * unit : unit * unit * unit;
+            ++end;
+        }
+    }
+    v = floor(v * scale);
+    if (end == text || *end || !(v >= 0 && v <= most))
+        return die(2, "bad budget '%s' (a number >= 0, optionally followed by K, M or G)", text);
+    *out = v;
+    return 0;
+}
+
 static int parse_arguments(int argc, char **argv, options *o)
 {
     int i, rc;
     memset(o, 0, sizeof *o);
     o->dt = o->until = o->every = o->tol = o->guard = -1;
+    o->max_instructions = DEFAULT_MAX_INSTRUCTIONS;
+    o->max_memory = DEFAULT_MAX_MEMORY;
     if (argc < 2)
         return print_usage(stderr), 2;
     if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))
@@ -142,6 +214,16 @@ static int parse_arguments(int argc, char **argv, options *o)
             if ((rc = parse_number(a, v, &o->every, 1)))
                 return rc;
             ++i;
+        } else if (!strcmp(a, "--trust")) {
+            o->trust = 1;
+        } else if (!strcmp(a, "--max-instructions")) {
+            if ((rc = parse_budget(a, v, 1000, 1e18, &o->max_instructions)))
+                return rc;
+            ++i;
+        } else if (!strcmp(a, "--max-memory")) {
+            if ((rc = parse_budget(a, v, 1024, (double)((size_t)-1 / 2), &o->max_memory)))
+                return rc;
+            ++i;
         } else if (!strcmp(a, "--quiet")) {
             o->quiet = 1;
         } else if (a[0] == '-') {
@@ -157,6 +239,36 @@ static int parse_arguments(int argc, char **argv, options *o)
     return 0;
 }
 
+static void on_signal(int sig)
+{
+    if (stop_signal) { /* the second: leave at once */
+        if (temp_made)
+            unlink(temp_path);
+        _exit(128 + sig);
+    }
+    stop_signal = sig;
+}
+
+/* Catch SIGINT, SIGTERM and SIGHUP, unless ignored (as nohup leaves SIGHUP). */
+static void catch_signals(void)
+{
+    static const int signals[] = { SIGINT, SIGTERM, SIGHUP };
+    struct sigaction sa, old;
+    size_t k;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART;
+    for (k = 0; k < sizeof signals / sizeof signals[0]; ++k)
+        if (sigaction(signals[k], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
+            sigaction(signals[k], &sa, NULL);
+}
+
+static const char *signal_name(int sig)
+{
+    return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "a signal";
+}
+
 static int add_traceback(lua_State *L)
 {
     const char *msg = lua_tostring(L, 1);
@@ -169,10 +281,31 @@ static int add_traceback(lua_State *L)
 /* Print the first line of the Lua error on top of the stack. */
 static int die_with_lua_error(lua_State *L, const char *prefix)
 {
-    const char *msg = lua_tostring(L, -1);
+    const char *msg = lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : NULL;
     size_t n = strcspn(msg ? msg : "", "\n");
     fprintf(stderr, "tumble: %s%.*s\n", prefix, (int)n, msg ? msg : "(no message)");
     return 1;
+}
+
+/* When a signal came or a budget ran out: say so (with the world's time
+   when w is given) and return the exit status; else 0. */
+static int report_stop(lua_State *L, const options *o, tb_world *w)
+{
+    const char *why = tb_lua_limit_error(L);
+    char at[64] = "";
+    if (w)
+        snprintf(at, sizeof at, "at t = %.17g s: ", tb_world_time(w));
+    if (stop_signal) {
+        fprintf(stderr, "tumble: %s: %sinterrupted by %s; no output written\n", o->scene, at,
+                signal_name(stop_signal));
+        return 128 + stop_signal;
+    }
+    if (why) {
+        fprintf(stderr, "tumble: %s: %s%s; raise it with %s\n", o->scene, at, why,
+                strncmp(why, "memory", 6) ? "--max-instructions" : "--max-memory");
+        return 1;
+    }
+    return 0;
 }
 
 /* Read the whole file: scenes load as text, never as bytecode. */
@@ -284,42 +417,145 @@ static double read_scene_number(lua_State *L, int idx, const char *key, double f
     return v;
 }
 
+/* What load_scene reads and finds. */
+typedef struct scene {
+    const options *o;
+    const char *text;
+    size_t size;
+    double duration, every;
+    int bad;
+} scene;
+
+/* Under lua_pcall, argument 1 the scene record: load the script as text,
+   run it, read its table (whose fields may run metamethods); returns the
+   world. */
+static int load_scene(lua_State *L)
+{
+    scene *s = lua_touserdata(L, 1);
+    const options *o = s->o;
+    int t;
+    lua_pushfstring(L, "@%s", o->scene);
+    if (luaL_loadbufferx(L, s->text, s->size, lua_tostring(L, -1), "t") != LUA_OK)
+        return lua_error(L);
+    lua_call(L, 0, 1);
+    if (!lua_istable(L, -1))
+        return luaL_error(L, "%s: the scene must return a table { world = w, duration = seconds }", o->scene);
+    t = lua_gettop(L);
+    lua_getfield(L, t, "world");
+    if (!luaL_testudata(L, -1, "tumble.world"))
+        return luaL_error(L, "%s: the scene's table has no 'world' (a tumble.world)", o->scene);
+    if (!tb_lua_to_world(L, -1))
+        return luaL_error(L, "%s: the scene's world is closed (a `local w <close>` closes it when the script "
+                             "returns: scenes that return their world must not use <close>)", o->scene);
+    s->duration = o->until >= 0 ? o->until : read_scene_number(L, t, "duration", -1, &s->bad);
+    s->every = o->every >= 0 ? o->every : read_scene_number(L, t, "record_every", 1.0 / 60, &s->bad);
+    lua_pushvalue(L, t + 1);
+    return 1;
+}
+
+/* Under lua_pcall: the whole standard library (--trust) and the module,
+   then math.randomseed(0). Lua 5.4 seeds math.random from the clock: the
+   fixed seed makes scenes repeatable. */
+static int open_libraries(lua_State *L)
+{
+    if (lua_toboolean(L, 1)) {
+        luaL_openlibs(L);
+        luaL_requiref(L, "tumble", luaopen_tumble, 0);
+    }
+    lua_getglobal(L, "math");
+    lua_getfield(L, -1, "randomseed");
+    lua_pushinteger(L, 0);
+    lua_call(L, 1, 0);
+    return 0;
+}
+
+/* Prepare the state: the sandbox in the scene's folder, or --trust's
+   libraries. Returns 0 or the exit status. */
+static int prepare_state(lua_State *L, const options *o)
+{
+    int rc = LUA_OK;
+    if (!o->trust) {
+        char folder[4096];
+        const char *slash = strrchr(o->scene, '/');
+        if (!slash)
+            snprintf(folder, sizeof folder, ".");
+        else
+            snprintf(folder, sizeof folder, "%.*s", slash == o->scene ? 1 : (int)(slash - o->scene), o->scene);
+        rc = tb_lua_sandbox(L, folder);
+    }
+    if (rc == LUA_OK) {
+        lua_pushcfunction(L, open_libraries);
+        lua_pushboolean(L, o->trust);
+        rc = lua_pcall(L, 1, 0, 0);
+    }
+    if (rc != LUA_OK) {
+        int stopped = report_stop(L, o, NULL);
+        return stopped ? stopped : die_with_lua_error(L, "cannot prepare Lua: ");
+    }
+    lua_settop(L, 0);
+    return 0;
+}
+
+/* Make the temporary output next to out_path, named out_path.part.XXXXXX
+   (mkstemp), with the permissions a new file gets. */
+static FILE *open_temp(const char *out_path)
+{
+    mode_t mask = umask(0);
+    FILE *f;
+    int fd;
+    umask(mask);
+    snprintf(temp_path, sizeof temp_path, "%s.part.XXXXXX", out_path);
+    fd = mkstemp(temp_path);
+    if (fd < 0)
+        return NULL;
+    temp_made = 1;
+    if (fchmod(fd, 0666 & ~mask) != 0 || !(f = fdopen(fd, "w"))) {
+        close(fd);
+        unlink(temp_path);
+        temp_made = 0;
+        return NULL;
+    }
+    return f;
+}
+
+static void remove_temp(void)
+{
+    if (temp_made)
+        remove(temp_path);
+    temp_made = 0;
+}
+
 static int run_scene(lua_State *L, const options *o)
 {
-    char out_path[4096], part_path[4200];
-    size_t size, cap = 0;
-    char *text;
+    char out_path[4096];
+    size_t cap = 0;
     tb_world *w;
     tb_energy e0, e1;
-    double dt, duration, every, t0, wall, *tracer_vel = NULL;
+    double dt, duration, every, t0, wall, *tracer_vel = NULL, n;
     long steps, step, every_steps, rows = 0, r, substeps;
-    int scene_idx, world_idx, bad = 0, have_advice;
+    int world_idx, have_advice, rc, failed, unwritten;
     tb_advice advice;
+    scene s;
     FILE *f;
 
-    text = read_file(o->scene, &size);
-    if (!text)
+    memset(&s, 0, sizeof s);
+    s.o = o;
+    s.text = read_file(o->scene, &s.size);
+    if (!s.text)
         return die(1, "cannot read scene '%s'", o->scene);
     lua_pushcfunction(L, add_traceback);
-    lua_pushfstring(L, "@%s", o->scene);
-    if (luaL_loadbufferx(L, text, size, lua_tostring(L, -1), "t") != LUA_OK) {
-        free(text);
+    lua_pushcfunction(L, load_scene);
+    lua_pushlightuserdata(L, &s);
+    rc = lua_pcall(L, 1, 1, 1);
+    free((char *)s.text);
+    if ((rc != LUA_OK || tb_lua_limit_error(L) || stop_signal) && (failed = report_stop(L, o, NULL)) != 0)
+        return failed;
+    if (rc != LUA_OK)
         return die_with_lua_error(L, "");
-    }
-    free(text);
-    if (lua_pcall(L, 0, 1, 1) != LUA_OK)
-        return die_with_lua_error(L, "");
-    if (!lua_istable(L, -1))
-        return die(1, "%s: the scene must return a table { world = w, duration = seconds }", o->scene);
-    scene_idx = lua_gettop(L);
-    lua_getfield(L, scene_idx, "world");
     world_idx = lua_gettop(L);
-    if (!luaL_testudata(L, world_idx, "tumble.world"))
-        return die(1, "%s: the scene's table has no 'world' (a tumble.world)", o->scene);
     w = tb_lua_to_world(L, world_idx);
-    if (!w)
-        return die(1, "%s: the scene's world is closed (a `local w <close>` closes it when the "
-                      "script returns: scenes that return their world must not use <close>)", o->scene);
+    if (!w) /* the table's metamethods closed it after handing it over */
+        return die(1, "%s: the scene's world is closed", o->scene);
 
     if (o->integrator && tb_world_set_integrator(w, o->integrator) != TB_OK)
         return die(1, "%s", tb_world_message(w));
@@ -331,28 +567,32 @@ static int run_scene(lua_State *L, const options *o)
         != TB_OK)
         return die(1, "%s", tb_world_message(w));
     dt = o->dt > 0 ? o->dt : tb_lua_world_dt(L, world_idx);
-    duration = o->until >= 0 ? o->until : read_scene_number(L, scene_idx, "duration", -1, &bad);
-    every = o->every >= 0 ? o->every : read_scene_number(L, scene_idx, "record_every", 1.0 / 60, &bad);
-    if (bad || duration < 0)
+    duration = s.duration;
+    every = s.every;
+    if (s.bad || duration < 0)
         return die(1, "%s: the scene's table needs 'duration' (and 'record_every', if given) as seconds >= 0",
                    o->scene);
-    steps = (long)ceil(duration / dt - 1e-9);
-    every_steps = every > 0 ? (long)floor(every / dt + 0.5) : 1;
-    if (every_steps < 1)
-        every_steps = 1;
+    n = ceil(duration / dt - 1e-9);
+    if (!(n <= MAX_STEPS)) {
+        fprintf(stderr, "tumble: %s: a duration of %g s at dt %g s is %.3g steps; the command takes at most 1e9 "
+                        "(shorten the duration or lengthen the step)\n", o->scene, duration, dt, n);
+        return 1;
+    }
+    steps = n > 0 ? (long)n : 0;
+    n = every > 0 ? floor(every / dt + 0.5) : 1;
+    every_steps = n >= 1 ? (n <= MAX_STEPS ? (long)n : (long)MAX_STEPS + 1) : 1;
 
     if (o->out)
         snprintf(out_path, sizeof out_path, "%s", o->out);
     else
         make_out_path(o->scene, out_path, sizeof out_path);
-    snprintf(part_path, sizeof part_path, "%s.part", out_path);
     /* Before running: would this step blow up? Warn, but run as asked. */
     have_advice = tb_world_advise(w, dt, &advice) == TB_OK;
     if (have_advice && advice.exceeded)
         fprintf(stderr, "tumble: warning: %s\n", advice.text);
-    f = fopen(part_path, "w");
+    f = open_temp(out_path);
     if (!f)
-        return die(1, "cannot write '%s'", part_path);
+        return die(1, "cannot write a temporary file next to '%s'", out_path);
     fprintf(f, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n");
 
     e0 = tb_world_energy(w);
@@ -361,7 +601,7 @@ static int run_scene(lua_State *L, const options *o)
     for (step = 1; r >= 0 && step <= steps; ++step) {
         rows += r;
         r = 0;
-        if (tb_lua_step(L, world_idx, dt) != TB_OK) {
+        if (stop_signal || tb_lua_limit_error(L) || tb_lua_step(L, world_idx, dt) != TB_OK) {
             r = -1;
             break;
         }
@@ -370,21 +610,29 @@ static int run_scene(lua_State *L, const options *o)
     }
     wall = read_clock() - t0;
     free(tracer_vel);
-    if (r < 0 || ferror(f) | fclose(f)) {
-        remove(part_path);
+    failed = r < 0 || stop_signal || tb_lua_limit_error(L);
+    unwritten = ferror(f) | fclose(f);
+    if (failed || unwritten) {
+        remove_temp();
+        if ((rc = report_stop(L, o, w)) != 0)
+            return rc;
         if (r < 0)
             fprintf(stderr, "tumble: %s: at t = %.17g s: %s\n", o->scene, tb_world_time(w), tb_world_message(w));
         else
-            fprintf(stderr, "tumble: error writing '%s'\n", part_path);
+            fprintf(stderr, "tumble: error writing '%s'\n", temp_path);
         return 1;
     }
     rows += r;
-    if (rename(part_path, out_path)) {
-        remove(part_path);
+    if (rename(temp_path, out_path)) {
+        remove_temp();
         return die(1, "cannot rename to '%s'", out_path);
     }
+    temp_made = 0;
     e1 = tb_world_energy(w);
     if (!o->quiet) {
+        unsigned long long executed;
+        size_t peak;
+        char budget[64];
         printf("scene       %s\n", o->scene);
         if (tb_world_auto_choice(w, &substeps))
             printf("integrator  auto: %s, %ld substep%s per step, dt %.6g s, tolerance %g\n",
@@ -402,6 +650,19 @@ static int run_scene(lua_State *L, const options *o)
             printf("energy      %.9g J -> %.9g J, relative drift n/a (starts at 0)\n", e0.total, e1.total);
         if (have_advice)
             printf("stability   %s\n", advice.text);
+        tb_lua_usage(L, &executed, &peak);
+        if (o->max_instructions > 0)
+            snprintf(budget, sizeof budget, "%llu of %.0f", executed, o->max_instructions);
+        else if (o->max_memory > 0)
+            snprintf(budget, sizeof budget, "%llu (no limit)", executed);
+        else
+            snprintf(budget, sizeof budget, "not counted");
+        printf("lua         %s, instructions %s, peak memory %.3g MiB", o->trust ? "trusted" : "sandboxed", budget,
+               (double)peak / (1024 * 1024));
+        if (o->max_memory > 0)
+            printf(" of %.4g MiB\n", o->max_memory / (1024 * 1024));
+        else
+            printf(" (no limit)\n");
         printf("wrote       %s (%ld rows)\n", out_path, rows);
     }
     return 0;
@@ -410,23 +671,23 @@ static int run_scene(lua_State *L, const options *o)
 int main(int argc, char **argv)
 {
     options o;
+    tb_lua_limits limits;
     lua_State *L;
     int rc = parse_arguments(argc, argv, &o);
     if (rc)
         return rc < 0 ? 0 : rc;
-    L = luaL_newstate();
+    catch_signals();
+    memset(&limits, 0, sizeof limits);
+    limits.instructions = (unsigned long long)o.max_instructions;
+    limits.memory = (size_t)o.max_memory;
+    limits.stop = &stop_signal;
+    L = tb_lua_newstate(&limits);
     if (!L)
-        return die(1, "%s", "cannot create a Lua state (out of memory)");
-    luaL_openlibs(L);
-    luaL_requiref(L, "tumble", luaopen_tumble, 0);
-    lua_pop(L, 1);
-    /* Lua 5.4 seeds math.random from the clock: make scenes repeatable. */
-    lua_getglobal(L, "math");
-    lua_getfield(L, -1, "randomseed");
-    lua_pushinteger(L, 0);
-    lua_call(L, 1, 0);
-    lua_settop(L, 0);
-    rc = run_scene(L, &o);
+        return die(1, "%s", o.max_memory > 0 ? "cannot create a Lua state within the memory budget; raise it with "
+                                               "--max-memory" : "cannot create a Lua state (out of memory)");
+    rc = prepare_state(L, &o);
+    if (!rc)
+        rc = run_scene(L, &o);
     lua_close(L);
     return rc;
 }
