@@ -599,7 +599,7 @@ static int handle_tostring(lua_State *L)
     tl_handle *h = to_handle(L, 1);
     if (!h)
         return luaL_typeerror(L, 1, "tumble handle");
-    lua_pushfstring(L, "%s %d.%d", handle_mt[h->kind], (int)h->index1, (int)h->generation);
+    lua_pushfstring(L, "%s %I.%I", handle_mt[h->kind], (lua_Integer)h->index1, (lua_Integer)h->generation);
     return 1;
 }
 
@@ -1181,19 +1181,21 @@ static int world_shape(lua_State *L)
 /* world:contacts{ hertz, damping_ratio, max_push, restitution_threshold,
    slop, velocity_iterations, velocity_tolerance, position_iterations,
    stack_iterations, particle_radius, particle_friction,
-   particle_restitution, sleep_speed, sleep_time }:
-   change the contact settings (sleep_time = math.huge: never sleep) */
+   particle_restitution, sleep_speed, sleep_time, substeps }:
+   change the contact settings (sleep_time = math.huge: never sleep;
+   substeps > 0: the soft-step solver) */
 static const char *const contact_options[] = { "hertz", "damping_ratio", "max_push", "restitution_threshold",
                                                "slop", "velocity_iterations", "velocity_tolerance",
                                                "position_iterations", "stack_iterations",
                                                "particle_radius", "particle_friction", "particle_restitution",
-                                               "sleep_speed", "sleep_time", NULL };
+                                               "sleep_speed", "sleep_time", "substeps", NULL };
 
 static int world_contacts(lua_State *L)
 {
     tl_world *lw = check_world(L, 1);
     tb_contact_settings cs = tb_world_contact_settings(lw->world);
     double vi = cs.velocity_iterations, pi = cs.position_iterations, si = cs.stack_iterations;
+    double ss = cs.substeps;
     check_options(L, 2, "world:contacts", contact_options);
     opt_number(L, 2, "hertz", "world:contacts", &cs.hertz);
     opt_number(L, 2, "damping_ratio", "world:contacts", &cs.damping_ratio);
@@ -1209,9 +1211,11 @@ static int world_contacts(lua_State *L)
     opt_number(L, 2, "particle_restitution", "world:contacts", &cs.particle_restitution);
     opt_number(L, 2, "sleep_speed", "world:contacts", &cs.sleep_speed);
     opt_number(L, 2, "sleep_time", "world:contacts", &cs.sleep_time);
+    opt_number(L, 2, "substeps", "world:contacts", &ss);
     cs.velocity_iterations = vi >= 0 && vi < 1e6 ? (int)vi : 0;
     cs.position_iterations = pi >= 0 && pi < 1e6 ? (int)pi : -1;
     cs.stack_iterations = si >= 0 && si < 1e6 ? (int)si : -1;
+    cs.substeps = ss >= 0 && ss < 1e6 ? (int)ss : -1;
     if (tb_world_set_contact_settings(lw->world, &cs) != TB_OK)
         return raise_world_error(L, lw, "world:contacts");
     return 0;
