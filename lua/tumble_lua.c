@@ -1847,8 +1847,17 @@ int tb_lua_usage(lua_State *L, unsigned long long *instructions, size_t *peak_me
 #define PATH_SIZE 4096
 #define resolve_path(path, buf) _fullpath((buf), (path), PATH_SIZE)
 #define is_absolute(name) ((name)[0] == '/' || (name)[0] == '\\' || ((name)[0] && (name)[1] == ':'))
+#define is_regular_file(path) 1
 #else
 #include <limits.h>
+#include <sys/stat.h>
+/* Only regular files: opening a FIFO would wait in C, out of the budget's
+   reach, for a writer that never comes. */
+static int is_regular_file(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISREG(st.st_mode);
+}
 #ifdef PATH_MAX
 #define PATH_SIZE PATH_MAX
 #else
@@ -1891,6 +1900,10 @@ static const char *push_path_in_folder(lua_State *L, int folder_idx, const char 
     lua_pop(L, 1);
     if (strncmp(real, folder, n) || !(real[n] == '/' || (n && folder[n - 1] == '/'))) {
         *why = "outside the scene's folder (the sandbox reads files only there)";
+        return NULL;
+    }
+    if (!is_regular_file(real)) {
+        *why = "not a regular file";
         return NULL;
     }
     return lua_pushstring(L, real);
