@@ -87,8 +87,8 @@ static const char world_tag = 'w', handle_tag = 'h';
 static const char anchor_key = 0;
 
 /* The budgets' allocator (below): the world's memory goes through it too. */
-static void *budget_alloc(void *ud, void *ptr, size_t osize, size_t nsize);
-static void *budget_alloc_for_world(void *ud, void *ptr, size_t osize, size_t nsize);
+static void *allocate_counted(void *ud, void *ptr, size_t osize, size_t nsize);
+static void *allocate_for_world(void *ud, void *ptr, size_t osize, size_t nsize);
 
 /* ------------------------------------------------------------ helpers -- */
 
@@ -890,7 +890,7 @@ static int module_world(lua_State *L)
     lua_pop(L, 1);
     /* The world's memory counts against the Lua state's allocator; under a
        memory budget, a request the budget refuses ends the run. */
-    def.allocator.realloc = lw->alloc == budget_alloc ? budget_alloc_for_world : (tb_realloc_fn *)lw->alloc;
+    def.allocator.realloc = lw->alloc == allocate_counted ? allocate_for_world : (tb_realloc_fn *)lw->alloc;
     def.allocator.user = lw->alloc_ud;
     if (tb_world_create(&def, &lw->world, message, sizeof message) != TB_OK)
         return luaL_error(L, "tumble.world: %s", message);
@@ -1655,8 +1655,8 @@ static void set_trip(tl_budget *b, int why)
         snprintf(b->message, sizeof b->message, "instruction budget exceeded: more than %llu Lua instructions",
                  b->limits.instructions);
     else if (why == TRIP_MEMORY)
-        snprintf(b->message, sizeof b->message, "memory budget exceeded: more than %lu bytes",
-                 (unsigned long)b->limits.memory);
+        snprintf(b->message, sizeof b->message, "memory budget exceeded: more than %llu bytes",
+                 (unsigned long long)b->limits.memory);
     else
         snprintf(b->message, sizeof b->message, "stopped by the host");
 }
@@ -1707,12 +1707,12 @@ static void *serve(tl_budget *b, void *ptr, size_t osize, size_t nsize, int from
     return p;
 }
 
-static void *budget_alloc(void *ud, void *ptr, size_t osize, size_t nsize)
+static void *allocate_counted(void *ud, void *ptr, size_t osize, size_t nsize)
 {
     return serve(ud, ptr, osize, nsize, 0);
 }
 
-static void *budget_alloc_for_world(void *ud, void *ptr, size_t osize, size_t nsize)
+static void *allocate_for_world(void *ud, void *ptr, size_t osize, size_t nsize)
 {
     return serve(ud, ptr, osize, nsize, 1);
 }
@@ -1720,13 +1720,13 @@ static void *budget_alloc_for_world(void *ud, void *ptr, size_t osize, size_t ns
 static tl_budget *get_budget(lua_State *L)
 {
     void *ud;
-    return lua_getallocf(L, &ud) == budget_alloc ? ud : NULL;
+    return lua_getallocf(L, &ud) == allocate_counted ? ud : NULL;
 }
 
 /* The count hook: counts, and once a budget has run out raises an error
    and re-arms itself to run at every instruction, so the error comes back
    at the first instruction after any pcall that caught it. */
-static void budget_hook(lua_State *L, lua_Debug *ar)
+static void count_instructions(lua_State *L, lua_Debug *ar)
 {
     tl_budget *b = get_budget(L);
     if (!b)
@@ -1747,7 +1747,7 @@ static void budget_hook(lua_State *L, lua_Debug *ar)
         b->where_known = 1;
         snprintf(b->message + n, sizeof b->message - n, " (at %s:%d)", ar->short_src, ar->currentline);
     }
-    lua_sethook(L, budget_hook, LUA_MASKCOUNT, 1);
+    lua_sethook(L, count_instructions, LUA_MASKCOUNT, 1);
     lua_pushstring(L, b->message);
     lua_error(L);
 }
@@ -1756,20 +1756,20 @@ static void set_hook(lua_State *L, const tl_budget *b)
 {
     const unsigned long long n = b->limits.instructions;
     if (n || b->limits.memory)
-        lua_sethook(L, budget_hook, LUA_MASKCOUNT, n && n < HOOK_COUNT ? (int)n : HOOK_COUNT);
+        lua_sethook(L, count_instructions, LUA_MASKCOUNT, n && n < HOOK_COUNT ? (int)n : HOOK_COUNT);
     else
         lua_sethook(L, NULL, 0, 0);
 }
 
 /* What luaL_newstate installs, for a state made with lua_newstate. */
-static int budget_panic(lua_State *L)
+static int report_panic(lua_State *L)
 {
     fprintf(stderr, "PANIC: unprotected error in call to Lua API (%s)\n",
             lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : "error object is not a string");
     return 0;
 }
 
-static void budget_warn(void *ud, const char *message, int to_continue)
+static void print_warning(void *ud, const char *message, int to_continue)
 {
     tl_budget *b = ud;
     if (!b->warn_continued && message[0] == '@') {
@@ -1797,14 +1797,14 @@ lua_State *tb_lua_newstate(const tb_lua_limits *limits)
         return NULL;
     if (limits)
         b->limits = *limits;
-    L = lua_newstate(budget_alloc, b);
+    L = lua_newstate(allocate_counted, b);
     if (!L) {
         free(b);
         return NULL;
     }
     b->opened = 1;
-    lua_atpanic(L, budget_panic);
-    lua_setwarnf(L, budget_warn, b);
+    lua_atpanic(L, report_panic);
+    lua_setwarnf(L, print_warning, b);
     set_hook(L, b);
     return L;
 }
@@ -1851,8 +1851,17 @@ int tb_lua_usage(lua_State *L, unsigned long long *instructions, size_t *peak_me
 #define PATH_SIZE 4096
 #define resolve_path(path, buf) _fullpath((buf), (path), PATH_SIZE)
 #define is_absolute(name) ((name)[0] == '/' || (name)[0] == '\\' || ((name)[0] && (name)[1] == ':'))
+#define is_regular_file(path) 1
 #else
 #include <limits.h>
+#include <sys/stat.h>
+/* Only regular files: opening a FIFO would wait in C, out of the budget's
+   reach, for a writer that never comes. */
+static int is_regular_file(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISREG(st.st_mode);
+}
 #ifdef PATH_MAX
 #define PATH_SIZE PATH_MAX
 #else
@@ -1895,6 +1904,10 @@ static const char *push_path_in_folder(lua_State *L, int folder_idx, const char 
     lua_pop(L, 1);
     if (strncmp(real, folder, n) || !(real[n] == '/' || (n && folder[n - 1] == '/'))) {
         *why = "outside the scene's folder (the sandbox reads files only there)";
+        return NULL;
+    }
+    if (!is_regular_file(real)) {
+        *why = "not a regular file";
         return NULL;
     }
     return lua_pushstring(L, real);
@@ -2036,7 +2049,7 @@ static int sandbox_collectgarbage(lua_State *L)
    (closed by coroutine.close or coroutine.wrap) would run without a count.
    So then the sandbox's xpcall passes the error on without calling the
    handler, and its coroutine.close and coroutine.wrap do not close. */
-static int budget_ran_out(lua_State *L)
+static int is_over_budget(lua_State *L)
 {
     tl_budget *b = get_budget(L);
     return b && b->trip;
@@ -2045,7 +2058,7 @@ static int budget_ran_out(lua_State *L)
 /* The message handler xpcall gets: upvalue 1 is the script's. */
 static int sandbox_handler(lua_State *L)
 {
-    if (budget_ran_out(L))
+    if (is_over_budget(L))
         return 1;
     lua_pushvalue(L, lua_upvalueindex(1));
     lua_insert(L, 1);
@@ -2093,7 +2106,7 @@ static int sandbox_wrapped(lua_State *L)
     }
     lua_xmove(co, L, 1); /* the error */
     status = lua_status(co);
-    if (status != LUA_OK && status != LUA_YIELD && !budget_ran_out(L)) {
+    if (status != LUA_OK && status != LUA_YIELD && !is_over_budget(L)) {
         status = lua_resetthread(co); /* close its to-be-closed variables */
         lua_xmove(co, L, 1);
     }

@@ -525,7 +525,8 @@ static void remove_temp(void)
     temp_made = 0;
 }
 
-static int run_scene(lua_State *L, const options *o)
+/* Run the scene whose text is in s (read by main). */
+static int run_scene(lua_State *L, const options *o, scene *s)
 {
     char out_path[4096];
     size_t cap = 0;
@@ -535,19 +536,12 @@ static int run_scene(lua_State *L, const options *o)
     long steps, step, every_steps, rows = 0, r, substeps;
     int world_idx, have_advice, rc, failed, unwritten;
     tb_advice advice;
-    scene s;
     FILE *f;
 
-    memset(&s, 0, sizeof s);
-    s.o = o;
-    s.text = read_file(o->scene, &s.size);
-    if (!s.text)
-        return die(1, "cannot read scene '%s'", o->scene);
     lua_pushcfunction(L, add_traceback);
     lua_pushcfunction(L, load_scene);
-    lua_pushlightuserdata(L, &s);
+    lua_pushlightuserdata(L, s);
     rc = lua_pcall(L, 1, 1, 1);
-    free((char *)s.text);
     if ((rc != LUA_OK || tb_lua_limit_error(L) || stop_signal) && (failed = report_stop(L, o, NULL)) != 0)
         return failed;
     if (rc != LUA_OK)
@@ -567,9 +561,9 @@ static int run_scene(lua_State *L, const options *o)
         != TB_OK)
         return die(1, "%s", tb_world_message(w));
     dt = o->dt > 0 ? o->dt : tb_lua_world_dt(L, world_idx);
-    duration = s.duration;
-    every = s.every;
-    if (s.bad || duration < 0)
+    duration = s->duration;
+    every = s->every;
+    if (s->bad || duration < 0)
         return die(1, "%s: the scene's table needs 'duration' (and 'record_every', if given) as seconds >= 0",
                    o->scene);
     n = ceil(duration / dt - 1e-9);
@@ -673,21 +667,30 @@ int main(int argc, char **argv)
     options o;
     tb_lua_limits limits;
     lua_State *L;
+    scene s;
     int rc = parse_arguments(argc, argv, &o);
     if (rc)
         return rc < 0 ? 0 : rc;
+    memset(&s, 0, sizeof s);
+    s.o = &o;
+    s.text = read_file(o.scene, &s.size);
+    if (!s.text)
+        return die(1, "cannot read scene '%s'", o.scene);
     catch_signals();
     memset(&limits, 0, sizeof limits);
     limits.instructions = (unsigned long long)o.max_instructions;
     limits.memory = (size_t)o.max_memory;
     limits.stop = &stop_signal;
     L = tb_lua_newstate(&limits);
-    if (!L)
+    if (!L) {
+        free((char *)s.text);
         return die(1, "%s", o.max_memory > 0 ? "cannot create a Lua state within the memory budget; raise it with "
                                                "--max-memory" : "cannot create a Lua state (out of memory)");
+    }
     rc = prepare_state(L, &o);
     if (!rc)
-        rc = run_scene(L, &o);
+        rc = run_scene(L, &o, &s);
+    free((char *)s.text);
     lua_close(L);
     return rc;
 }

@@ -355,6 +355,8 @@ static void the_sandbox_keeps_to_the_scenes_folder(void **state)
         { "open_up", "assert(io.open('../x.lua'))\n", "outside the scene's folder" },
         { "open_link", "assert(io.open('link_out'))\n", "outside the scene's folder" },
         { "open_write", "io.open('x.txt', 'w')\n", "for reading only" },
+        { "open_fifo", "assert(io.open('fifo'))\n", "not a regular file" },
+        { "open_folder", "assert(io.open('.'))\n", "scene's folder" },
         { "open_append", "io.open('x.txt', 'a+')\n", "for reading only" },
         { "lines_out", "for l in io.lines('/etc/passwd') do end\n", "outside the scene's folder" },
         { "lines_stdin", "for l in io.lines() do end\n", "bad argument" },
@@ -374,6 +376,9 @@ static void the_sandbox_keeps_to_the_scenes_folder(void **state)
     write_file("../outside.txt", "secret\n");
     unlink(link);
     assert_int_equal(symlink(target, link), 0);
+    work_path(link, sizeof link, "fifo");
+    unlink(link);
+    assert_int_equal(mkfifo(link, 0600), 0);
     for (k = 0; k < sizeof escapes / sizeof escapes[0]; ++k) {
         char name[64];
         snprintf(name, sizeof name, "escape_%s", escapes[k].name);
