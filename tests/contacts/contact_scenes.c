@@ -64,3 +64,23 @@ void awake(tb_world *w)
     s.sleep_time = INFINITY;
     assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
 }
+
+int ball_apexes(tb_world *w, tb_body_id id, double r, double hz, double sampled[2], double top[2])
+{
+    double previous_v = 0, previous_top = 0;
+    int n = 0, i;
+    for (i = 0; i < 4 * hz && n < 2; ++i) {
+        double x[3], v[3];
+        assert_int_equal(tb_world_step(w, 1 / hz), TB_OK);
+        tb_body_position(w, id, x);
+        tb_body_velocity(w, id, v);
+        if (previous_v > 0 && v[2] <= 0) {
+            if (sampled)
+                sampled[n] = x[2] - r;
+            top[n++] = previous_top;
+        }
+        previous_top = x[2] - r + (v[2] > 0 ? v[2] * v[2] / (2 * G) : 0);
+        previous_v = v[2];
+    }
+    return n;
+}

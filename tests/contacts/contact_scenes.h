@@ -21,6 +21,13 @@ tb_body_id add_box(tb_world *w, const double centre[3], double edge, double fric
    restitution. */
 tb_body_id add_ball(tb_world *w, const double centre[3], double radius, double restitution);
 
+/* Steps ball `id` (radius r) at rate hz until it has passed two apexes,
+   at most 4 s. For each, `sampled` (may be NULL) is the height of its
+   lowest point at the first step past the top (ODE's reading) and `top`
+   the top of the ballistic arc through the last rising step, z + v^2 / 2g
+   (exact between contacts). Returns how many apexes it saw. */
+int ball_apexes(tb_world *w, tb_body_id id, double r, double hz, double sampled[2], double top[2]);
+
 /* Uniform in [0, 1) from a 64-bit LCG (Knuth's MMIX constants). */
 double uniform(uint64_t *state);
 

@@ -23,21 +23,7 @@ static void drop_ball(double hz, double sampled[2], double top[2])
     tb_world *w = world_on_plane(0.6, 0);
     const double start[3] = { 0, 0, 1.1 };
     tb_body_id id = add_ball(w, start, 0.1, 0.5);
-    double previous_v = 0, previous_top = 0;
-    int n = 0, i;
-    for (i = 0; i < 4 * hz && n < 2; ++i) {
-        double x[3], v[3];
-        assert_int_equal(tb_world_step(w, 1 / hz), TB_OK);
-        tb_body_position(w, id, x);
-        tb_body_velocity(w, id, v);
-        if (previous_v > 0 && v[2] <= 0) {
-            sampled[n] = x[2] - 0.1;
-            top[n++] = previous_top;
-        }
-        previous_top = x[2] - 0.1 + (v[2] > 0 ? v[2] * v[2] / (2 * G) : 0);
-        previous_v = v[2];
-    }
-    assert_int_equal(n, 2);
+    assert_int_equal(ball_apexes(w, id, 0.1, hz, sampled, top), 2);
     tb_world_destroy(w);
 }
 
