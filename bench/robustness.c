@@ -32,7 +32,9 @@
      energy after 1 s, as shares of the striker's (target: >= 95% and
      within 5%, never above).
 
-   Each scene prints its mean milliseconds per step too. */
+   Each scene prints its mean milliseconds per step too. Scene names
+   (wall, tower, lever, plate, cradle, heap) on the command line run only
+   those. */
 #define _POSIX_C_SOURCE 199309L
 #define BENCH_NAME "bench_robustness"
 #include "bench.h"
@@ -399,19 +401,41 @@ static void cradle(int balls)
     tb_world_destroy(w);
 }
 
-int main(void)
+/* Scene names on the command line run only those scenes. */
+static int wanted(int argc, char **argv, const char *name)
+{
+    int i;
+    if (argc < 2)
+        return 1;
+    for (i = 1; i < argc; ++i)
+        if (strcmp(argv[i], name) == 0)
+            return 1;
+    return 0;
+}
+
+int main(int argc, char **argv)
 {
     printf("bench_robustness: contact scenes at 60 Hz, default settings (targets in the source's header)\n");
     bench_print_build();
-    wall(5.0);
-    wall(sqrt(2 * 1.35 / 10));
-    tower(0);
-    tower(8);
-    lever(100);
-    lever(1000);
-    plate(20);
-    cradle(2);
-    cradle(5);
-    heap(2000);
+    if (wanted(argc, argv, "wall")) {
+        wall(5.0);
+        wall(sqrt(2 * 1.35 / 10));
+    }
+    if (wanted(argc, argv, "tower")) {
+        tower(0);
+        tower(8);
+    }
+    if (wanted(argc, argv, "lever")) {
+        lever(100);
+        lever(1000);
+    }
+    if (wanted(argc, argv, "plate"))
+        plate(20);
+    if (wanted(argc, argv, "cradle")) {
+        cradle(2);
+        cradle(5);
+    }
+    if (wanted(argc, argv, "heap"))
+        heap(2000);
     return 0;
 }

@@ -365,9 +365,13 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
         along = tb__dot3(old->tilt_impulse, e->normal);
         for (k = 0; k < 3; ++k)
             e->tilt_impulse[k] = old->tilt_impulse[k] - along * e->normal[k];
+        along = tb__dot3(old->rolling_impulse, e->normal);
+        for (k = 0; k < 3; ++k)
+            e->rolling_impulse[k] = old->rolling_impulse[k] - along * e->normal[k];
     } else {
         e->friction_impulse[0] = e->friction_impulse[1] = e->friction_impulse[2] = e->twist_impulse = 0;
         e->tilt_impulse[0] = e->tilt_impulse[1] = e->tilt_impulse[2] = 0;
+        e->rolling_impulse[0] = e->rolling_impulse[1] = e->rolling_impulse[2] = 0;
     }
     return TB_OK;
 }

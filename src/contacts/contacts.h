@@ -227,6 +227,7 @@ typedef struct tb__entry {
     double twist_impulse;      /* N m s, about the normal */
     double tilt_impulse[3];    /* N m s, world, in the contact plane: the tilts', kept from
                                   step to step */
+    double rolling_impulse[3]; /* N m s, world: the soft step's rolling resistance, kept */
     int count;
     int touching;
     int asleep;                /* carried over unsolved: both sides sleep or are static */
@@ -352,6 +353,8 @@ struct tb__contacts {
     size_t soft_row_count, soft_row_cap;
     struct tb__soft_body *soft_bodies;
     size_t soft_body_cap;
+    struct tb__soft_patch *soft_patches;
+    size_t soft_patch_count, soft_patch_cap;
     int prepared;              /* entries hold this step's contacts, to solve */
     int solved;                /* entries hold the last step's solved contacts */
 };

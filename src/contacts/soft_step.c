@@ -8,21 +8,28 @@
       velocity for particles);
    2. warm starts: every row's impulse of the last substep (of last step,
       for the first) is applied again;
-   3. solves every row once, the normal rows soft (a spring-damper of
-      `hertz` and `damping_ratio` on the overlap, pushing at most
-      `max_push`), speculative where the points are still apart;
-   4. moves positions: x by the velocity, q by the torque-free turn of L
-      (tb__rotation_split2): symplectic Euler over the substep;
-   5. relaxes: every row once more, rigid and without the push, so that the
-      push moves positions and leaves no speed.
+   3. solves every patch once (below), the normal rows soft (a
+      spring-damper of `hertz` and `damping_ratio` on the overlap, pushing
+      at most `max_push`), speculative where the points are still apart;
+   4. moves positions by the mean of the substep's start and end
+      velocities (x by v, q by the torque-free turn of L:
+      tb__rotation_split2), which is exact for a constant force: free
+      flight, a slide under Coulomb friction (soft_step_slides_to_v2_
+      over_2_mu_g);
+   5. relaxes: every patch once more, its touching points rigid and
+      without the push, so that the push moves positions and leaves no
+      speed; points still apart are left to the next substep's solve.
    After the substeps, points that struck faster than
    `restitution_threshold` are bounced by their normal rows, toward e times
-   the approach speed they struck at.
-   Rows are per point: a normal row (impulse >= 0) and two friction rows
-   within the circle mu times the point's normal impulse. Every row keeps
-   the arms of the start of the step (the Jacobian is that of the start
-   pose); the separation is recomputed every substep from the bodies'
-   displacements and first-order turns at those arms. */
+   the approach speed they struck at (ball_bounces_near_e_squared).
+   A patch is one manifold: a normal row per point (impulse >= 0), then,
+   at the centre of its points, friction (two rows within the circle mu
+   times the points' normal impulses), twist (within mu times the sum of
+   each point's impulse times its lever from the centre) and rolling
+   resistance (about the tangents, within rho times the normal impulse).
+   Every row keeps the arms of the start of the step (the Jacobian is that
+   of the start pose); the separation is recomputed every substep from the
+   bodies' displacements and first-order turns at those arms. */
 #include "contacts/contacts.h"
 
 #include <math.h>
@@ -32,27 +39,48 @@ typedef struct tb__soft_body {
     double x[3], q[4];          /* m: pose now */
     double P[3], L[3];          /* N s, N m s: momenta now (particles: P only) */
     double v[3], w[3];          /* m/s, rad/s: velocities now */
+    double v_start[3], l_start[3]; /* m/s, N m s: velocity and L at the substep's start */
     double kick_p[3], kick_l[3];/* N s, N m s: external change of P, L per substep */
     double inv_world[9];        /* R diag(invI) R^T at q (0 for particles) */
     double shift[3], turn[3];   /* m, rad: x - x0 and the first-order turn from q0 */
 } tb__soft_body;
 
-enum { TB__SOFT_NORMAL, TB__SOFT_T1, TB__SOFT_T2, TB__SOFT_ROWS };
+/* A manifold: its points' normal rows, then friction (two rows at the
+   centre of the points), twist (about the normal, within mu times the
+   points' normal impulses times their levers from the centre) and
+   rolling resistance (about the tangents, within rho times the normal
+   impulse), solved together after the points. */
+typedef struct tb__soft_patch {
+    tb__entry *entry;
+    int32_t a, b;
+    size_t first, count;        /* its rows */
+    double tangent[2][3];
+    double ca[3], cb[3];        /* m: the centre of the points from each side's centre */
+    double arm_a[2][3], arm_b[2][3]; /* centre x tangent */
+    double tangent_mass[3];     /* the 2 x 2 inverse of J M^-1 J^T: xx, xy, yy */
+    double twist_mass;
+    double rolling_mass[3];     /* 2 x 2 inverse, about the tangents */
+    double friction, rolling;
+    double friction_impulse[2], twist_impulse, rolling_impulse[2]; /* N s, N m s: this substep's */
+} tb__soft_patch;
 
 typedef struct tb__soft_row {
     tb__point *point;
     int32_t a, b;               /* solver bodies, -1: the static world */
-    double dir[TB__SOFT_ROWS][3];            /* normal (a to b), tangents */
-    double arm_a[TB__SOFT_ROWS][3], arm_b[TB__SOFT_ROWS][3]; /* r x d at each side */
+    double normal[3];           /* a to b */
+    double arm_a[3], arm_b[3];  /* r x normal at each side */
     double ra[3], rb[3];        /* m: the point from each centre at the start */
-    double mass[TB__SOFT_ROWS]; /* 1 / (J M^-1 J^T), at the start pose */
-    double impulse[TB__SOFT_ROWS]; /* N s: accumulated in the current substep */
+    double mass;                /* 1 / (J M^-1 J^T), at the start pose */
+    double impulse;             /* N s: accumulated in the current substep */
     double separation;          /* m: at the start of the step */
+    double rate_start;          /* m/s: normal velocity at the substep's start */
+    double lever;               /* m: from the patch's centre (a's side) */
     double friction, restitution;
     double approach;            /* m/s (< 0): normal velocity at which the point struck */
     double most;                /* N s: the largest normal impulse of any substep */
     int struck;                 /* the normal row has pushed in some substep */
 } tb__soft_row;
+
 
 /* R diag(inv) R^T for the unit quaternion q */
 static void world_inverse(const double q[4], const double inv[3], double out[9])
@@ -99,10 +127,10 @@ static void push(tb__contacts *c, int32_t i, const double j[3], const double r[3
 }
 
 /* A scalar impulse along row d of row o, equal and opposite on its sides. */
-static void push_row(tb__contacts *c, const tb__soft_row *o, int d, double lambda)
+static void push_row(tb__contacts *c, const tb__soft_row *o, double lambda)
 {
     double j[3];
-    j[0] = lambda * o->dir[d][0], j[1] = lambda * o->dir[d][1], j[2] = lambda * o->dir[d][2];
+    j[0] = lambda * o->normal[0], j[1] = lambda * o->normal[1], j[2] = lambda * o->normal[2];
     if (o->b >= 0)
         push(c, o->b, j, o->rb);
     if (o->a >= 0) {
@@ -112,16 +140,16 @@ static void push_row(tb__contacts *c, const tb__soft_row *o, int d, double lambd
 }
 
 /* The relative velocity of b against a along row d */
-static double rate(const tb__contacts *c, const tb__soft_row *o, int d)
+static double rate(const tb__contacts *c, const tb__soft_row *o)
 {
     double r = 0;
     if (o->b >= 0) {
         const tb__soft_body *s = &c->soft_bodies[o->b];
-        r += tb__dot3(o->dir[d], s->v) + tb__dot3(o->arm_b[d], s->w);
+        r += tb__dot3(o->normal, s->v) + tb__dot3(o->arm_b, s->w);
     }
     if (o->a >= 0) {
         const tb__soft_body *s = &c->soft_bodies[o->a];
-        r -= tb__dot3(o->dir[d], s->v) + tb__dot3(o->arm_a[d], s->w);
+        r -= tb__dot3(o->normal, s->v) + tb__dot3(o->arm_a, s->w);
     }
     return r;
 }
@@ -133,12 +161,12 @@ static double kick_rate(const tb__contacts *c, const tb__soft_row *o)
     if (o->b >= 0) {
         const tb__soft_body *s = &c->soft_bodies[o->b];
         tb__mul(s->inv_world, s->kick_l, dw);
-        r += c->bodies[o->b].inv_mass * tb__dot3(o->dir[0], s->kick_p) + tb__dot3(o->arm_b[0], dw);
+        r += c->bodies[o->b].inv_mass * tb__dot3(o->normal, s->kick_p) + tb__dot3(o->arm_b, dw);
     }
     if (o->a >= 0) {
         const tb__soft_body *s = &c->soft_bodies[o->a];
         tb__mul(s->inv_world, s->kick_l, dw);
-        r -= c->bodies[o->a].inv_mass * tb__dot3(o->dir[0], s->kick_p) + tb__dot3(o->arm_a[0], dw);
+        r -= c->bodies[o->a].inv_mass * tb__dot3(o->normal, s->kick_p) + tb__dot3(o->arm_a, dw);
     }
     return r;
 }
@@ -151,14 +179,14 @@ static double separation_now(const tb__contacts *c, const tb__soft_row *o)
     if (o->b >= 0) {
         const tb__soft_body *b = &c->soft_bodies[o->b];
         tb__cross(b->turn, o->rb, d);
-        s += o->dir[0][0] * (b->shift[0] + d[0]) + o->dir[0][1] * (b->shift[1] + d[1]) +
-             o->dir[0][2] * (b->shift[2] + d[2]);
+        s += o->normal[0] * (b->shift[0] + d[0]) + o->normal[1] * (b->shift[1] + d[1]) +
+             o->normal[2] * (b->shift[2] + d[2]);
     }
     if (o->a >= 0) {
         const tb__soft_body *a = &c->soft_bodies[o->a];
         tb__cross(a->turn, o->ra, d);
-        s -= o->dir[0][0] * (a->shift[0] + d[0]) + o->dir[0][1] * (a->shift[1] + d[1]) +
-             o->dir[0][2] * (a->shift[2] + d[2]);
+        s -= o->normal[0] * (a->shift[0] + d[0]) + o->normal[1] * (a->shift[1] + d[1]) +
+             o->normal[2] * (a->shift[2] + d[2]);
     }
     return s;
 }
@@ -185,74 +213,183 @@ static soft softness(double hertz, double zeta, double hs)
     return s;
 }
 
-/* One pass over the rows: each point's normal row, then its friction
-   rows within the circle mu times its normal impulse. With bias, the
-   normal row is soft and pushes overlaps out; without (the relax), it is
-   rigid and aims at no approach. A point still apart (s > 0) lets its
-   gap close within the substep, never more. */
-static void solve_rows(tb__contacts *c, double hs, const soft *sf, int bias)
+/* Angular impulse t (N m s, world) on solver body i (>= 0) */
+static void turn_body(tb__contacts *c, int32_t i, const double t[3], double sign)
 {
-    const double max_push = c->settings.max_push;
-    size_t i;
-    for (i = 0; i < c->soft_row_count; ++i) {
-        tb__soft_row *o = &c->soft_rows[i];
-        const double s = separation_now(c, o), vn = rate(c, o, TB__SOFT_NORMAL);
-        double target, mass_scale = 1, impulse_scale = 0, lambda, total, t1, t2, limit, len;
-        if (s > 0) {
-            target = s / hs;
-        } else if (bias) {
-            target = fmax(sf->bias_rate * s, -max_push);
-            mass_scale = sf->mass_scale;
-            impulse_scale = sf->impulse_scale;
-        } else {
-            target = 0;
-        }
-        lambda = -o->mass[0] * mass_scale * (vn + target) - impulse_scale * o->impulse[0];
-        total = fmax(o->impulse[0] + lambda, 0);
-        lambda = total - o->impulse[0];
-        o->impulse[0] = total;
-        push_row(c, o, TB__SOFT_NORMAL, lambda);
-        if (total > 0 && !o->struck) {
-            /* the speed it struck at: from the start of this substep (u, s)
-               under the kick's acceleration a, u^2 - 2 a s at the surface,
-               within what the substep's velocities span */
-            const double kick = kick_rate(c, o), u = vn - kick, a = kick / hs;
-            double approach = vn;
-            if (s > 0) {
-                const double fastest = fmin(u, u + kick);
-                approach = fmax(-sqrt(fmax(u * u - 2 * a * s, 0)), fastest);
-            }
-            o->struck = 1;
-            o->approach = fmin(approach, 0);
-        }
-        o->most = fmax(o->most, total);
-        /* friction */
-        limit = o->friction * total;
-        t1 = o->impulse[1] - o->mass[1] * rate(c, o, TB__SOFT_T1);
-        t2 = o->impulse[2] - o->mass[2] * rate(c, o, TB__SOFT_T2);
-        len = sqrt(t1 * t1 + t2 * t2);
-        if (len > limit) {
-            const double f = limit > 0 ? limit / len : 0;
-            t1 *= f, t2 *= f;
-        }
-        push_row(c, o, TB__SOFT_T1, t1 - o->impulse[1]);
-        push_row(c, o, TB__SOFT_T2, t2 - o->impulse[2]);
-        o->impulse[1] = t1, o->impulse[2] = t2;
+    tb__soft_body *s = &c->soft_bodies[i];
+    double dw[3];
+    int k;
+    if (c->bodies[i].tier != TB__BODIES)
+        return;
+    tb__mul(s->inv_world, t, dw);
+    for (k = 0; k < 3; ++k) {
+        s->L[k] += sign * t[k];
+        s->w[k] += sign * dw[k];
     }
 }
 
-static double row_mass(const tb__contacts *c, const tb__soft_row *o, int d)
+/* An angular impulse lambda about axis d, equal and opposite on a patch's sides */
+static void turn_patch(tb__contacts *c, const tb__soft_patch *p, const double d[3], double lambda)
+{
+    const double t[3] = { lambda * d[0], lambda * d[1], lambda * d[2] };
+    if (p->b >= 0)
+        turn_body(c, p->b, t, 1);
+    if (p->a >= 0)
+        turn_body(c, p->a, t, -1);
+}
+
+/* The relative spin of b against a about axis d */
+static double spin(const tb__contacts *c, const tb__soft_patch *p, const double d[3])
+{
+    double r = 0;
+    if (p->b >= 0)
+        r += tb__dot3(d, c->soft_bodies[p->b].w);
+    if (p->a >= 0)
+        r -= tb__dot3(d, c->soft_bodies[p->a].w);
+    return r;
+}
+
+/* A friction impulse (along the tangents) at the patch's centre */
+static void push_centre(tb__contacts *c, const tb__soft_patch *p, double l1, double l2)
+{
+    double j[3];
+    int k;
+    for (k = 0; k < 3; ++k)
+        j[k] = l1 * p->tangent[0][k] + l2 * p->tangent[1][k];
+    if (p->b >= 0)
+        push(c, p->b, j, p->cb);
+    if (p->a >= 0) {
+        j[0] = -j[0], j[1] = -j[1], j[2] = -j[2];
+        push(c, p->a, j, p->ca);
+    }
+}
+
+/* The relative velocity of b against a at the centre along tangent d */
+static double slip(const tb__contacts *c, const tb__soft_patch *p, int d)
+{
+    double r = 0;
+    if (p->b >= 0) {
+        const tb__soft_body *s = &c->soft_bodies[p->b];
+        r += tb__dot3(p->tangent[d], s->v) + tb__dot3(p->arm_b[d], s->w);
+    }
+    if (p->a >= 0) {
+        const tb__soft_body *s = &c->soft_bodies[p->a];
+        r -= tb__dot3(p->tangent[d], s->v) + tb__dot3(p->arm_a[d], s->w);
+    }
+    return r;
+}
+
+/* A point's normal row; its accumulated impulse. With bias, soft: it
+   pushes overlaps out; without (the relax), rigid and aiming at no
+   approach. A point still apart (s > 0) lets its gap close within the
+   substep, never more. Positions move by the mean of a substep's start and
+   end velocities, so the row aims the end velocity at twice the mean it
+   wants less the start's. */
+static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const soft *sf, int bias)
+{
+    const double max_push = c->settings.max_push;
+    const double s = separation_now(c, o), vn = rate(c, o);
+    double target, mass_scale = 1, impulse_scale = 0, lambda, total;
+    if (s > 0 && bias) {
+        target = 2 * s / hs + o->rate_start;
+    } else if (s > 0) {
+        return o->impulse;
+    } else if (bias) {
+        target = 2 * fmax(sf->bias_rate * s, -max_push) + o->rate_start;
+        mass_scale = sf->mass_scale;
+        impulse_scale = sf->impulse_scale;
+    } else {
+        target = 0;
+    }
+    lambda = -o->mass * mass_scale * (vn + target) - impulse_scale * o->impulse;
+    total = fmax(o->impulse + lambda, 0);
+    lambda = total - o->impulse;
+    o->impulse = total;
+    push_row(c, o, lambda);
+    if (total > 0 && !o->struck) {
+        /* the speed it struck at: from the start of this substep (u, s)
+           under the kick's acceleration a, u^2 - 2 a s at the surface,
+           within what the substep's velocities span */
+        const double kick = kick_rate(c, o), u = vn - kick, a = kick / hs;
+        double approach = vn;
+        if (s > 0) {
+            const double fastest = fmin(u, u + kick);
+            approach = fmax(-sqrt(fmax(u * u - 2 * a * s, 0)), fastest);
+        }
+        o->struck = 1;
+        o->approach = fmin(approach, 0);
+    }
+    o->most = fmax(o->most, total);
+    return total;
+}
+
+/* A pair of rows that share a disc: the accumulated impulse (acc) less
+   mass (2 x 2: xx, xy, yy) times the rates (r1, r2), cut back to the disc
+   of radius limit, into out. */
+static void disc_step(const double mass[3], const double acc[2], double r1, double r2, double limit, double out[2])
+{
+    double len;
+    out[0] = acc[0] - (mass[0] * r1 + mass[1] * r2);
+    out[1] = acc[1] - (mass[1] * r1 + mass[2] * r2);
+    len = sqrt(out[0] * out[0] + out[1] * out[1]);
+    if (len > limit) {
+        const double f = limit > 0 ? limit / len : 0;
+        out[0] *= f, out[1] *= f;
+    }
+}
+
+/* One pass over the patches: each one's points, then its twist, rolling
+   resistance and friction. */
+static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias)
+{
+    size_t i, k;
+    for (i = 0; i < c->soft_patch_count; ++i) {
+        tb__soft_patch *p = &c->soft_patches[i];
+        const double *n = c->soft_rows[p->first].normal;
+        double total = 0, twist_limit = 0, t1, t2;
+        for (k = 0; k < p->count; ++k) {
+            tb__soft_row *o = &c->soft_rows[p->first + k];
+            const double f = solve_normal(c, o, hs, sf, bias);
+            total += f;
+            twist_limit += o->lever * f;
+        }
+        if (p->friction > 0) {
+            const double old = p->twist_impulse, most = p->friction * twist_limit;
+            const double next = fmin(fmax(old - p->twist_mass * spin(c, p, n), -most), most);
+            p->twist_impulse = next;
+            turn_patch(c, p, n, next - old);
+        }
+        if (p->rolling > 0) {
+            double t[2];
+            disc_step(p->rolling_mass, p->rolling_impulse, spin(c, p, p->tangent[0]), spin(c, p, p->tangent[1]),
+                      p->rolling * total, t);
+            t1 = t[0], t2 = t[1];
+            turn_patch(c, p, p->tangent[0], t1 - p->rolling_impulse[0]);
+            turn_patch(c, p, p->tangent[1], t2 - p->rolling_impulse[1]);
+            p->rolling_impulse[0] = t1, p->rolling_impulse[1] = t2;
+        }
+        {
+            double t[2];
+            disc_step(p->tangent_mass, p->friction_impulse, slip(c, p, 0), slip(c, p, 1), p->friction * total, t);
+            t1 = t[0], t2 = t[1];
+        }
+        push_centre(c, p, t1 - p->friction_impulse[0], t2 - p->friction_impulse[1]);
+        p->friction_impulse[0] = t1, p->friction_impulse[1] = t2;
+    }
+}
+
+static double row_mass(const tb__contacts *c, const tb__soft_row *o)
 {
     double k = 0, t[3];
     if (o->b >= 0) {
         const tb__soft_body *s = &c->soft_bodies[o->b];
-        tb__mul(s->inv_world, o->arm_b[d], t);
-        k += c->bodies[o->b].inv_mass + tb__dot3(o->arm_b[d], t);
+        tb__mul(s->inv_world, o->arm_b, t);
+        k += c->bodies[o->b].inv_mass + tb__dot3(o->arm_b, t);
     }
     if (o->a >= 0) {
         const tb__soft_body *s = &c->soft_bodies[o->a];
-        tb__mul(s->inv_world, o->arm_a[d], t);
-        k += c->bodies[o->a].inv_mass + tb__dot3(o->arm_a[d], t);
+        tb__mul(s->inv_world, o->arm_a, t);
+        k += c->bodies[o->a].inv_mass + tb__dot3(o->arm_a, t);
     }
     return k > 0 ? 1 / k : 0;
 }
@@ -296,62 +433,163 @@ static void load(tb_world *w, tb__contacts *c, int n)
 /* The rows of every point of the awake entries, in key order; warm
    started from the impulses kept last step (a step's total, cut into n
    substeps and scaled by h / h_last). */
+/* 2 x 2 symmetric inverse of (xx, xy, yy) */
+static void invert2(const double k[3], double out[3])
+{
+    const double det = k[0] * k[2] - k[1] * k[1];
+    if (det > 0 && isfinite(det)) {
+        out[0] = k[2] / det, out[1] = -k[1] / det, out[2] = k[0] / det;
+    } else {
+        out[0] = out[1] = out[2] = 0;
+    }
+}
+
+/* d1 . (the sides' inverse world inertia) d2 */
+static double angular_inverse(const tb__contacts *c, const tb__soft_patch *p, const double d1[3], const double d2[3])
+{
+    double k = 0, t[3];
+    if (p->b >= 0) {
+        tb__mul(c->soft_bodies[p->b].inv_world, d2, t);
+        k += tb__dot3(d1, t);
+    }
+    if (p->a >= 0) {
+        tb__mul(c->soft_bodies[p->a].inv_world, d2, t);
+        k += tb__dot3(d1, t);
+    }
+    return k;
+}
+
+/* A patch's centre, arms and masses, at the start pose */
+static void set_up_patch(tb__contacts *c, tb__soft_patch *p)
+{
+    double k[3], im = 0, t[3];
+    size_t r;
+    int d, e, q;
+    memset(p->ca, 0, sizeof p->ca);
+    memset(p->cb, 0, sizeof p->cb);
+    for (r = 0; r < p->count; ++r)
+        for (q = 0; q < 3; ++q) {
+            p->ca[q] += c->soft_rows[p->first + r].ra[q] / (double)p->count;
+            p->cb[q] += c->soft_rows[p->first + r].rb[q] / (double)p->count;
+        }
+    for (r = 0; r < p->count; ++r) {
+        tb__soft_row *o = &c->soft_rows[p->first + r];
+        double dr[3];
+        for (q = 0; q < 3; ++q) /* a static side's arms are 0 */
+            dr[q] = p->a >= 0 ? o->ra[q] - p->ca[q] : o->rb[q] - p->cb[q];
+        o->lever = sqrt(tb__dot3(dr, dr));
+    }
+    for (d = 0; d < 2; ++d) {
+        tb__cross(p->ca, p->tangent[d], p->arm_a[d]);
+        tb__cross(p->cb, p->tangent[d], p->arm_b[d]);
+    }
+    if (p->a >= 0)
+        im += c->bodies[p->a].inv_mass;
+    if (p->b >= 0)
+        im += c->bodies[p->b].inv_mass;
+    for (d = 0; d < 2; ++d)
+        for (e = d; e < 2; ++e) {
+            double sum = d == e ? im : 0;
+            if (p->b >= 0) {
+                tb__mul(c->soft_bodies[p->b].inv_world, p->arm_b[e], t);
+                sum += tb__dot3(p->arm_b[d], t);
+            }
+            if (p->a >= 0) {
+                tb__mul(c->soft_bodies[p->a].inv_world, p->arm_a[e], t);
+                sum += tb__dot3(p->arm_a[d], t);
+            }
+            k[d + e] = sum;
+        }
+    invert2(k, p->tangent_mass);
+    {
+        const double *n = c->soft_rows[p->first].normal;
+        const double kt = angular_inverse(c, p, n, n);
+        p->twist_mass = kt > 0 ? 1 / kt : 0;
+    }
+    k[0] = angular_inverse(c, p, p->tangent[0], p->tangent[0]);
+    k[1] = angular_inverse(c, p, p->tangent[0], p->tangent[1]);
+    k[2] = angular_inverse(c, p, p->tangent[1], p->tangent[1]);
+    invert2(k, p->rolling_mass);
+}
+
+/* The rows of every point of the awake entries, in key order, and a patch
+   per entry; warm started from the impulses kept last step (a step's
+   total, cut into n substeps and scaled by h / h_last). */
 static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
 {
     const double scale = c->kept_h > 0 ? h / c->kept_h / n : 0;
-    size_t i, count = 0;
+    size_t i, count = 0, patches = 0;
     tb_status st;
     for (i = 0; i < c->entry_count; ++i)
-        if (!c->entries[i].asleep)
-            count += (size_t)c->entries[i].count;
-    if ((st = tb__reserve(w, (void **)&c->soft_rows, &c->soft_row_cap, count + 1, sizeof *c->soft_rows)) != TB_OK)
+        if (!c->entries[i].asleep && c->entries[i].count > 0)
+            count += (size_t)c->entries[i].count, ++patches;
+    if ((st = tb__reserve(w, (void **)&c->soft_rows, &c->soft_row_cap, count + 1, sizeof *c->soft_rows)) != TB_OK ||
+        (st = tb__reserve(w, (void **)&c->soft_patches, &c->soft_patch_cap, patches + 1, sizeof *c->soft_patches)) !=
+            TB_OK)
         return st;
-    c->soft_row_count = 0;
+    c->soft_row_count = c->soft_patch_count = 0;
     for (i = 0; i < c->entry_count; ++i) {
         tb__entry *e = &c->entries[c->order[i].index];
+        tb__soft_patch *pa;
         int k, d;
-        if (e->asleep)
+        if (e->asleep || e->count == 0)
             continue;
+        pa = &c->soft_patches[c->soft_patch_count++];
+        pa->entry = e;
+        pa->a = e->body_a, pa->b = e->body_b;
+        pa->first = c->soft_row_count;
+        pa->count = (size_t)e->count;
+        memcpy(pa->tangent, e->tangent, sizeof pa->tangent);
+        pa->friction = e->friction;
+        pa->rolling = e->rolling;
+        for (d = 0; d < 2; ++d) {
+            pa->friction_impulse[d] = scale * tb__dot3(e->friction_impulse, e->tangent[d]);
+            pa->rolling_impulse[d] = scale * tb__dot3(e->rolling_impulse, e->tangent[d]);
+        }
+        pa->twist_impulse = scale * e->twist_impulse;
         for (k = 0; k < e->count; ++k) {
             tb__point *p = &e->point[k];
             tb__soft_row *o = &c->soft_rows[c->soft_row_count++];
             o->point = p;
             o->a = e->body_a, o->b = e->body_b;
-            memcpy(o->dir[0], e->normal, sizeof o->dir[0]);
-            memcpy(o->dir[1], e->tangent[0], sizeof o->dir[1]);
-            memcpy(o->dir[2], e->tangent[1], sizeof o->dir[2]);
+            memcpy(o->normal, e->normal, sizeof o->normal);
             memcpy(o->ra, p->ra, sizeof o->ra);
             memcpy(o->rb, p->rb, sizeof o->rb);
-            for (d = 0; d < TB__SOFT_ROWS; ++d) {
-                tb__cross(o->ra, o->dir[d], o->arm_a[d]);
-                tb__cross(o->rb, o->dir[d], o->arm_b[d]);
-                o->mass[d] = row_mass(c, o, d);
-            }
+            tb__cross(o->ra, o->normal, o->arm_a);
+            tb__cross(o->rb, o->normal, o->arm_b);
+            o->mass = row_mass(c, o);
             o->separation = p->separation;
             o->friction = e->friction;
             o->restitution = e->restitution;
             o->approach = 0;
             o->most = 0;
             o->struck = 0;
-            o->impulse[0] = scale * p->normal_impulse;
-            o->impulse[1] = scale * tb__dot3(p->friction_impulse, o->dir[1]);
-            o->impulse[2] = scale * tb__dot3(p->friction_impulse, o->dir[2]);
+            o->impulse = scale * p->normal_impulse;
             p->speed = 0;
         }
+        set_up_patch(c, pa);
     }
     return TB_OK;
 }
 
-/* Every row's accumulated impulse applied again */
+/* Every row's and patch's accumulated impulse applied again */
 static void warm_start(tb__contacts *c)
 {
     size_t i;
     for (i = 0; i < c->soft_row_count; ++i) {
         const tb__soft_row *o = &c->soft_rows[i];
-        int d;
-        for (d = 0; d < TB__SOFT_ROWS; ++d)
-            if (o->impulse[d] != 0)
-                push_row(c, o, d, o->impulse[d]);
+        if (o->impulse != 0)
+            push_row(c, o, o->impulse);
+    }
+    for (i = 0; i < c->soft_patch_count; ++i) {
+        const tb__soft_patch *p = &c->soft_patches[i];
+        push_centre(c, p, p->friction_impulse[0], p->friction_impulse[1]);
+        if (p->twist_impulse != 0)
+            turn_patch(c, p, c->soft_rows[p->first].normal, p->twist_impulse);
+        if (p->rolling_impulse[0] != 0 || p->rolling_impulse[1] != 0) {
+            turn_patch(c, p, p->tangent[0], p->rolling_impulse[0]);
+            turn_patch(c, p, p->tangent[1], p->rolling_impulse[1]);
+        }
     }
 }
 
@@ -359,6 +597,12 @@ static void warm_start(tb__contacts *c)
 static void kick(tb__contacts *c)
 {
     size_t i;
+    for (i = 0; i < c->soft_row_count; ++i)
+        c->soft_rows[i].rate_start = rate(c, &c->soft_rows[i]);
+    for (i = 0; i < c->body_count; ++i) {
+        memcpy(c->soft_bodies[i].v_start, c->soft_bodies[i].v, sizeof c->soft_bodies[i].v);
+        memcpy(c->soft_bodies[i].l_start, c->soft_bodies[i].L, sizeof c->soft_bodies[i].L);
+    }
     for (i = 0; i < c->body_count; ++i) {
         tb__soft_body *s = &c->soft_bodies[i];
         const double im = c->bodies[i].inv_mass;
@@ -382,12 +626,14 @@ static void drift(tb__contacts *c, double hs)
         const tb__solver_body *b = &c->bodies[i];
         tb__soft_body *s = &c->soft_bodies[i];
         int k;
+        double mean_l[3];
         for (k = 0; k < 3; ++k) {
-            s->x[k] += hs * s->v[k];
+            s->x[k] += 0.5 * hs * (s->v_start[k] + s->v[k]);
             s->shift[k] = s->x[k] - b->x0[k];
+            mean_l[k] = 0.5 * (s->l_start[k] + s->L[k]);
         }
         if (b->tier == TB__BODIES) {
-            tb__rotation_split2(s->q, s->L, b->inv_inertia, hs);
+            tb__rotation_split2(s->q, mean_l, b->inv_inertia, hs);
             tb__normalise(s->q);
             first_turn(s->q, b->q0, s->turn);
             world_inverse(s->q, b->inv_inertia, s->inv_world);
@@ -407,10 +653,10 @@ static void restitution(tb__contacts *c)
         double lambda, total;
         if (o->restitution == 0 || !o->struck || o->approach > -threshold || o->most == 0)
             continue;
-        lambda = -o->mass[0] * (rate(c, o, TB__SOFT_NORMAL) + o->restitution * o->approach);
-        total = fmax(o->impulse[0] + lambda, 0);
-        push_row(c, o, TB__SOFT_NORMAL, total - o->impulse[0]);
-        o->impulse[0] = total;
+        lambda = -o->mass * (rate(c, o) + o->restitution * o->approach);
+        total = fmax(o->impulse + lambda, 0);
+        push_row(c, o, total - o->impulse);
+        o->impulse = total;
     }
 }
 
@@ -441,11 +687,21 @@ static void store(tb_world *w, tb__contacts *c, int n)
         const tb__soft_row *o = &c->soft_rows[i];
         tb__point *p = o->point;
         int k;
-        p->normal_impulse = n * o->impulse[0];
+        p->normal_impulse = n * o->impulse;
         for (k = 0; k < 3; ++k)
-            p->friction_impulse[k] = n * (o->impulse[1] * o->dir[1][k] + o->impulse[2] * o->dir[2][k]);
+            p->friction_impulse[k] = 0;
         p->active = o->most > 0;
         p->speed = o->struck && o->approach < 0 && p->active ? -o->approach : 0;
+    }
+    for (i = 0; i < c->soft_patch_count; ++i) {
+        const tb__soft_patch *pa = &c->soft_patches[i];
+        tb__entry *e = pa->entry;
+        int k;
+        for (k = 0; k < 3; ++k) {
+            e->friction_impulse[k] = n * (pa->friction_impulse[0] * pa->tangent[0][k] + pa->friction_impulse[1] * pa->tangent[1][k]);
+            e->rolling_impulse[k] = n * (pa->rolling_impulse[0] * pa->tangent[0][k] + pa->rolling_impulse[1] * pa->tangent[1][k]);
+        }
+        e->twist_impulse = n * pa->twist_impulse;
     }
 }
 
@@ -465,9 +721,9 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
     for (i = 0; i < n; ++i) {
         kick(c);
         warm_start(c);
-        solve_rows(c, hs, &sf, 1);
+        solve_patches(c, hs, &sf, 1);
         drift(c, hs);
-        solve_rows(c, hs, &sf, 0);
+        solve_patches(c, hs, &sf, 0);
     }
     restitution(c);
     store(w, c, n);
@@ -478,6 +734,7 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
 
 void tb__soft_free(tb_world *w, tb__contacts *c)
 {
+    tb__alloc(w, c->soft_patches, c->soft_patch_cap * sizeof *c->soft_patches, 0);
     tb__alloc(w, c->soft_rows, c->soft_row_cap * sizeof *c->soft_rows, 0);
     tb__alloc(w, c->soft_bodies, c->soft_body_cap * sizeof *c->soft_bodies, 0);
 }

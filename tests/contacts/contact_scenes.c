@@ -65,6 +65,49 @@ void awake(tb_world *w)
     assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
 }
 
+double slide(double hz, int substeps, tb_world **kept, tb_body_id *box)
+{
+    tb_world *w = world_on_plane(0.5, 0);
+    const double start[3] = { 0, 0, 0.5 };
+    const double v0[3] = { 5, 0, 0 };
+    tb_body_id id = add_box(w, start, 1, 0.5);
+    tb_contact_settings s = tb_world_contact_settings(w);
+    double x[3], v[3];
+    int i;
+    s.substeps = substeps;
+    assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
+    assert_int_equal(tb_body_set_velocity(w, id, v0), TB_OK);
+    for (i = 0; i < 3 * hz; ++i) {
+        assert_int_equal(tb_world_step(w, 1 / hz), TB_OK);
+        tb_body_velocity(w, id, v);
+        if (v[0] <= 1e-6)
+            break;
+    }
+    tb_body_position(w, id, x);
+    if (kept)
+        *kept = w, *box = id;
+    else
+        tb_world_destroy(w);
+    return x[0];
+}
+
+tb_world *spun_box(int substeps, tb_body_id *box, double *expected)
+{
+    const double mu = 0.5, h = 1.0 / 60, r = sqrt(0.5), inertia = 1.0 / 6;
+    const double start[3] = { 0, 0, 0.5 }, spin[3] = { 0, 0, 10 };
+    tb_world *w = world_on_plane(mu, 0);
+    tb_contact_settings s = tb_world_contact_settings(w);
+    int i;
+    *box = add_box(w, start, 1, mu);
+    *expected = 10 - 12 * mu * G * r * h / inertia;
+    s.substeps = substeps;
+    assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
+    assert_int_equal(tb_body_set_angular_velocity(w, *box, spin), TB_OK);
+    for (i = 0; i < 12; ++i)
+        assert_int_equal(tb_world_step(w, h), TB_OK);
+    return w;
+}
+
 int ball_apexes(tb_world *w, tb_body_id id, double r, double hz, double sampled[2], double top[2])
 {
     double previous_v = 0, previous_top = 0;

@@ -28,6 +28,19 @@ tb_body_id add_ball(tb_world *w, const double centre[3], double radius, double r
    (exact between contacts). Returns how many apexes it saw. */
 int ball_apexes(tb_world *w, tb_body_id id, double r, double hz, double sampled[2], double top[2]);
 
+/* A 1 m cube (1 kg) set on a plane, both mu = 0.5, pushed at 5 m/s along
+   x and stepped at hz with `substeps` (0: the default solver) until it
+   stops (3 s at most): the distance it slid. kept: the world and the box
+   are handed back instead of destroyed. */
+double slide(double hz, int substeps, tb_world **kept, tb_body_id *box);
+
+/* A unit cube (1 kg, I_z = 1/6 kg m^2) set on a plane, both mu = 0.5,
+   spun at 10 rad/s about the vertical and stepped 12 times at 60 Hz with
+   `substeps`: the world, the box, and the closed-form spin after those
+   steps under a twist friction of mu m g r (r = sqrt(1/2) m),
+   10 - 12 mu g r h / I_z. */
+tb_world *spun_box(int substeps, tb_body_id *box, double *expected);
+
 /* Uniform in [0, 1) from a 64-bit LCG (Knuth's MMIX constants). */
 double uniform(uint64_t *state);
 

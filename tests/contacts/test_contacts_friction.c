@@ -15,33 +15,10 @@
    sqrt(mu_a mu_b) = 0.5) stops after v^2 / (2 mu g) = 2.548 m. Friction
    acts through each step (trapezoidal), so the only error is the last step,
    in which the box stops part-way: at most mu g h^2 / 2 (0.68 mm at 60 Hz). */
-static double slide(double hz, tb_world **kept, tb_body_id *box)
-{
-    tb_world *w = world_on_plane(0.5, 0);
-    const double start[3] = { 0, 0, 0.5 };
-    const double v0[3] = { 5, 0, 0 };
-    tb_body_id id = add_box(w, start, 1, 0.5);
-    double x[3], v[3];
-    int i;
-    assert_int_equal(tb_body_set_velocity(w, id, v0), TB_OK);
-    for (i = 0; i < 3 * hz; ++i) {
-        assert_int_equal(tb_world_step(w, 1 / hz), TB_OK);
-        tb_body_velocity(w, id, v);
-        if (v[0] <= 1e-6)
-            break;
-    }
-    tb_body_position(w, id, x);
-    if (kept)
-        *kept = w, *box = id;
-    else
-        tb_world_destroy(w);
-    return x[0];
-}
-
 static void box_slides_to_v2_over_2_mu_g(void **state)
 {
     const double truth = 25 / (2 * 0.5 * G);
-    const double d60 = slide(60, NULL, NULL), d240 = slide(240, NULL, NULL);
+    const double d60 = slide(60, 0, NULL, NULL), d240 = slide(240, 0, NULL, NULL);
     const double o60 = ode_slide_distance(60, 5, 0.5), o240 = ode_slide_distance(240, 5, 0.5);
     (void)state;
     print_message("slide: truth %.6f m | 60 Hz: tumble %.9f, ODE %.4f | 240 Hz: tumble %.5f, ODE %.4f\n", truth, d60,
@@ -65,17 +42,11 @@ static void box_slides_to_v2_over_2_mu_g(void **state)
    digit); 1e-12 relative is asserted. The cube must not slide meanwhile. */
 static void spinning_box_stops_as_its_corners_rub(void **state)
 {
-    const double mu = 0.5, h = 1.0 / 60, r = sqrt(0.5), inertia = 1.0 / 6;
-    const double start[3] = { 0, 0, 0.5 }, spin[3] = { 0, 0, 10 };
-    const double expected = 10 - 12 * mu * G * r * h / inertia;
-    tb_world *w = world_on_plane(mu, 0);
-    tb_body_id id = add_box(w, start, 1, mu);
-    double wv[3], x[3];
+    double expected, wv[3], x[3];
+    tb_body_id id;
+    tb_world *w = spun_box(0, &id, &expected);
     int i;
     (void)state;
-    assert_int_equal(tb_body_set_angular_velocity(w, id, spin), TB_OK);
-    for (i = 0; i < 12; ++i)
-        assert_int_equal(tb_world_step(w, h), TB_OK);
     tb_body_angular_velocity(w, id, wv);
     tb_body_position(w, id, x);
     print_message("spinning box: %.15f rad/s after 0.2 s (corner friction: %.15f), centre moved %.2e m\n", wv[2],
@@ -83,7 +54,7 @@ static void spinning_box_stops_as_its_corners_rub(void **state)
     assert_rel(wv[2], expected, 1e-12);
     assert_below(sqrt(x[0] * x[0] + x[1] * x[1]), 1e-9);
     for (i = 0; i < 30; ++i)
-        assert_int_equal(tb_world_step(w, h), TB_OK);
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
     tb_body_angular_velocity(w, id, wv);
     assert_below(fabs(wv[2]), 1e-9); /* at rest, 0.4 s after the start */
     tb_world_destroy(w);
@@ -106,7 +77,7 @@ static void box_rests_without_drift(void **state)
     double x0[3], x[3], v[3], wv[3], drift;
     int i;
     (void)state;
-    slide(60, &w, &id);
+    slide(60, 0, &w, &id);
     awake(w);
     for (i = 0; i < 60; ++i) /* settle for a second */
         assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);

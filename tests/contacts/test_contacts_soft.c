@@ -34,11 +34,12 @@ static double horizontal(const double a[3], const double b[3])
    restitution 0.5: the apexes (the top of the ballistic arc through the
    last rising step, z + v^2 / 2g) against e^2 h = 0.25 and e^4 h = 0.0625.
    A point bounces after the substeps toward e times the speed it struck
-   at, taken from the energy over the gap its substep closed. Symplectic
-   Euler over a substep moves the ball a drift of g hs t / 2 behind the
-   parabola (hs = h / 4), so z + v^2 / 2g is off by up to hs v / 2 (9 mm
-   at the first impact's 4.4 m/s) while the ball flies; bound: 2%, where
-   the issue asks for 0.1% and ODE is 6% and 35% off. */
+   at, taken from the energy over the gap its substep closed, and positions
+   move by the mean of each substep's start and end velocities, exact
+   under gravity alone. What is left is the soft overlap the ball sinks
+   into while it rests on the plane for the rest of the impact's step.
+   Bound: the issue's 1e-3 (ODE is 6% and 35% off; measured 5.7e-5 and
+   2.9e-4). */
 static void ball_bounces_near_e_squared(void **state)
 {
     const double truth[2] = { 0.25, 0.0625 };
@@ -53,17 +54,61 @@ static void ball_bounces_near_e_squared(void **state)
     for (i = 0; i < 2; ++i) {
         print_message("apex %d: truth %.4f, soft step %.6f (%.2e relative)\n", i + 1, truth[i], top[i],
                       fabs(top[i] - truth[i]) / truth[i]);
-        assert_rel(top[i], truth[i], 2e-2);
+        assert_rel(top[i], truth[i], 1e-3);
     }
     tb_world_destroy(w);
 }
 
+/* A 1 m cube at 5 m/s with mu = 0.5 slides v^2 / (2 mu g) = 2.548 m.
+   Positions move by the mean of each substep's velocities, so a constant
+   friction force is met exactly; the box stops part-way through a substep
+   (mu g hs^2 / 2 = 0.04 mm). What is left is the soft contact: the box
+   settles into its overlap in the first steps, and the friction limit,
+   mu times the normal impulse, follows the load while it does. Bound: 2e-3
+   relative, a guard on what it reaches (measured 8.8e-4 at 60 Hz; the
+   issue's 1e-4 is met by the default solver, not yet by this one). */
+static void soft_step_slides_to_v2_over_2_mu_g(void **state)
+{
+    const double truth = 25 / (2 * 0.5 * G), d = slide(HZ, 4, NULL, NULL);
+    (void)state;
+    print_message("soft slide: truth %.6f m, soft step %.6f m (%.2e relative)\n", truth, d, fabs(d - truth) / truth);
+    assert_rel(d, truth, 2e-3);
+}
+
+/* A unit cube (1 kg, I_z = 1/6 kg m^2) spinning at 10 rad/s about the
+   vertical on the plane, mu = 0.5: the patch's twist row brakes it with mu
+   m g r, r = sqrt(1/2) m (each corner's lever from the centre), so after
+   12 steps at 60 Hz the spin is 10 - 12 mu g r h / I_z = 5.838 rad/s.
+   Bound: 1e-4 relative, for the load's first steps while the box settles
+   into its overlap (measured 5.3e-6); and the box stays in place. */
+static void soft_step_spinning_box_stops_as_its_corners_rub(void **state)
+{
+    double expected, wv[3], x[3];
+    tb_body_id id;
+    tb_world *w = spun_box(4, &id, &expected);
+    int i;
+    (void)state;
+    tb_body_angular_velocity(w, id, wv);
+    tb_body_position(w, id, x);
+    print_message("soft spinning box: %.9f rad/s after 0.2 s (twist friction: %.9f), centre moved %.2e m\n", wv[2],
+                  expected, hypot(x[0], x[1]));
+    assert_rel(wv[2], expected, 1e-4);
+    assert_below(hypot(x[0], x[1]), 1e-4);
+    for (i = 0; i < 30; ++i)
+        assert_int_equal(tb_world_step(w, 1 / HZ), TB_OK);
+    tb_body_angular_velocity(w, id, wv);
+    assert_below(fabs(wv[2]), 1e-6); /* at rest, 0.4 s after the start */
+    tb_world_destroy(w);
+}
+
 /* A unit box set on the plane, 10 s awake: it settles into the soft
-   overlap where the contact's spring holds its weight, g / omega^2 =
-   0.28 mm at 30 Hz, and stays there. The first steps start without warm
-   starts, and the four points, met one after the other, shift it
-   sideways a little before they share the load. Bounds: 0.3 mm below its
-   place, 0.1 mm sideways, and within 1 um after the first second. */
+   overlap where the contact's spring holds its weight. The push aims the
+   end velocity of a substep at twice the mean it wants (positions move by
+   the mean), so the overlap is half the spring's g / omega^2: 0.138 mm at
+   30 Hz, asserted to 1%. The first steps start without warm starts, and
+   the four points, met one after the other, shift it sideways a little
+   before they share the load. Bounds: 0.1 mm sideways, and within 1 um
+   after the first second (measured 7.4e-6 m and 2.9e-8 m). */
 static void box_rests_still(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -84,21 +129,21 @@ static void box_rests_still(void **state)
             moved = fmax(moved, sqrt(horizontal(x, settled) * horizontal(x, settled) +
                                      (x[2] - settled[2]) * (x[2] - settled[2])));
     }
-    print_message("box at rest 10 s: deepest %.4e m below its place (g / omega^2 = %.4e m), drift %.3e m, moved "
-                  "%.3e m after 1 s\n", sink, G / pow(2 * PI * 30, 2), drift, moved);
-    assert_below(sink, 3e-4);
+    print_message("box at rest 10 s: deepest %.4e m below its place (g / 2 omega^2 = %.4e m), drift %.3e m, moved "
+                  "%.3e m after 1 s\n", sink, G / (2 * pow(2 * PI * 30, 2)), drift, moved);
+    assert_rel(sink, G / (2 * pow(2 * PI * 30, 2)), 1e-2);
     assert_below(drift, 1e-4);
     assert_below(moved, 1e-6);
     tb_world_destroy(w);
 }
 
 /* A column of 10 unit boxes, 10 s awake. Each contact holds the weight
-   above it in a soft overlap (k boxes: k g / omega^2), so the top sinks
-   by the sum, 55 g / omega^2 = 15 mm at 30 Hz, and more while the load
+   above it in a soft overlap (k boxes: k g / 2 omega^2), so the top sinks
+   by the sum, 55 g / 2 omega^2 = 7.6 mm at 30 Hz, and more while the load
    first travels down (the scene starts without warm starts). The points
    met one after the other shift the boxes sideways while the load
-   settles, and a box goes on creeping slowly. Bounds: the top 3 cm down,
-   any box 2 cm sideways, and within 1 mm from 5 s to 10 s. */
+   settles. Bounds: the top 2 cm down, any box 1 cm sideways, and within
+   0.3 mm from 5 s to 10 s (measured 13.8 mm, 3.3 mm and 0.08 mm). */
 static void column_of_ten_stands(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -126,11 +171,11 @@ static void column_of_ten_stands(void **state)
                                          (x[2] - settled[i][2]) * (x[2] - settled[i][2])));
         }
     }
-    print_message("column of 10, 10 s awake: top sank at most %.4f m (55 g / omega^2 = %.4f m), any box wandered "
-                  "%.3e m, moved %.3e m from 5 s on\n", sink, 55 * G / pow(2 * PI * 30, 2), wander, moved);
-    assert_below(sink, 0.03);
-    assert_below(wander, 0.02);
-    assert_below(moved, 1e-3);
+    print_message("column of 10, 10 s awake: top sank at most %.4f m (55 g / 2 omega^2 = %.4f m), any box wandered "
+                  "%.3e m, moved %.3e m from 5 s on\n", sink, 55 * G / (2 * pow(2 * PI * 30, 2)), wander, moved);
+    assert_below(sink, 0.02);
+    assert_below(wander, 0.01);
+    assert_below(moved, 3e-4);
     tb_world_destroy(w);
 }
 
@@ -230,8 +275,8 @@ static void random_heap_never_gains_energy(void **state)
    asks for >= 95% and within 5% of the energy, never above; this solver
    bounces each point that struck once, after the substeps, and the balls
    already touching never struck, so the blow spreads over the row. Bounds:
-   what it reaches (the last ball above 25% of the striker's speed) and no
-   energy gained. */
+   what it reaches (the last ball above 60% of the striker's speed;
+   measured 0.658) and no energy gained. */
 static void newtons_cradle(void **state)
 {
     tb_world_def def = tb_default_world_def();
@@ -268,13 +313,15 @@ static void newtons_cradle(void **state)
     e1 = tb_world_energy(w).total;
     print_message("cradle of 5, e = 1: last ball at %.4f of the striker's speed, energy %.4f of the start\n", v[0],
                   e1 / e0);
-    assert_true(v[0] > 0.25);
+    assert_true(v[0] > 0.6);
     assert_below(e1, e0 * (1 + 1e-9));
     tb_world_destroy(w);
 }
 
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(ball_bounces_near_e_squared),
+    cmocka_unit_test(soft_step_slides_to_v2_over_2_mu_g),
+    cmocka_unit_test(soft_step_spinning_box_stops_as_its_corners_rub),
     cmocka_unit_test(box_rests_still),
     cmocka_unit_test(column_of_ten_stands),
     cmocka_unit_test(offset_tower_keeps_above_the_ground),
