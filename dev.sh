@@ -4,6 +4,8 @@
 #   ./dev.sh run     install what is missing, build, run the default scene
 #   ./dev.sh test    install what is missing, build, run the whole test suite
 #   ./dev.sh asan    the same suite built with AddressSanitizer + UBSan
+#   ./dev.sh fuzz    the libFuzzer targets under ASan + UBSan, FUZZ_SECONDS
+#                    (default 60) each, from fuzz/corpus (needs Clang)
 #   ./dev.sh bench   build and run the benchmarks (not part of the tests)
 #   ./dev.sh charts  rerun the work-precision benchmark and redraw docs/charts
 #
@@ -13,9 +15,9 @@ cd "$(dirname "$0")"
 
 packages=(build-essential cmake pkg-config liblua5.4-dev lua5.4 libcmocka-dev libode-dev gnuplot-nox)
 
-install_missing() {
+install_missing() { # [extra packages]
     local missing=() p sudo=""
-    for p in "${packages[@]}"; do
+    for p in "${packages[@]}" "$@"; do
         dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
     done
     ((${#missing[@]})) || return 0
@@ -48,6 +50,33 @@ asan)
     build asan
     ctest --preset asan
     ;;
+fuzz)
+    install_missing clang-14 libclang-rt-14-dev
+    build fuzz
+    # Each target runs on a copy of its seed corpus and regressions; an input
+    # that fails is left as crash-*, leak-* or timeout-* in the work folder,
+    # and belongs in fuzz/regressions/<target>/ once fixed.
+    work=$(mktemp -d)
+    status=0
+    for target in fuzz_api fuzz_scene; do
+        mkdir -p "$work/$target"
+        cp fuzz/corpus/$target/* fuzz/regressions/$target/* "$work/$target/" 2>/dev/null || true
+        if [ "$target" = fuzz_scene ]; then cp scenes/*.lua "$work/$target/"; fi
+        dict=()
+        [ -f fuzz/$target.dict ] && dict=(-dict=fuzz/$target.dict)
+        echo "dev.sh: $target for ${FUZZ_SECONDS:-60} s"
+        ./build/fuzz/fuzz/$target "$work/$target" "${dict[@]}" -max_total_time="${FUZZ_SECONDS:-60}" \
+            -timeout=20 -rss_limit_mb=2048 -artifact_prefix="$work/" -print_final_stats=1 2>&1 |
+            grep -E "^(stat::number_of_executed_units|==[0-9]+==ERROR|SUMMARY)" || true
+        if [ -n "$(find "$work" -maxdepth 1 \( -name 'crash-*' -o -name 'leak-*' -o -name 'timeout-*' -o -name 'oom-*' \))" ]; then
+            echo "dev.sh: $target found failing inputs in $work" >&2
+            status=1
+            break
+        fi
+    done
+    [ "$status" -eq 0 ] && rm -rf "$work"
+    exit "$status"
+    ;;
 bench)
     install_missing
     build default
@@ -65,7 +94,7 @@ charts)
     gnuplot bench/workprecision.gp
     ;;
 *)
-    sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'
+    sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'
     exit 2
     ;;
 esac

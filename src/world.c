@@ -55,6 +55,7 @@ tb_status tb_world_create(const tb_world_def *def, tb_world **world, char *messa
             memset(w, 0, sizeof *w);
             w->allocator = def->allocator;
             w->id_tag = tb__ids_new_tag();
+            tb__state_init(w);
             w->method = tb__method_find(def->integrator ? def->integrator : "verlet");
             memcpy(w->gravity, def->gravity, sizeof w->gravity);
             w->linear_drag = def->linear_drag;
@@ -76,10 +77,7 @@ void tb_world_destroy(tb_world *w)
     size_t sizes[3] = { sizeof(double), sizeof(double), 3 * sizeof(double) };
     if (!w)
         return;
-    if (w->scratch)
-        tb__alloc(w, w->scratch, w->scratch_count * w->y_size * sizeof(double), 0);
-    if (w->y)
-        tb__alloc(w, w->y, w->y_size * sizeof(double), 0);
+    tb__state_free(w);
     tb__bodies_free(w);
     tb__contacts_free(w);
     arrays[0] = (void **)&w->particle_mass;

@@ -667,6 +667,35 @@ static void out_of_memory_is_a_status_not_a_crash(void **state)
     fail_msg("no run completed within 200 allocations");
 }
 
+/* A world with nothing in it steps under every integrator, with the guard
+   on and off, and its time advances: the empty state and its scratch are a
+   sentinel, not an allocation of zero bytes (which the allocator may
+   answer with NULL, once read as out of memory). The same after its only
+   particle is removed. */
+static void empty_world_steps_under_every_method(void **state)
+{
+    int k;
+    (void)state;
+    for (k = 0; k < tb_integrator_count(); ++k) {
+        tb_world_def def = tb_default_world_def();
+        tb_particle_def p = tb_default_particle_def();
+        tb_particle_id id;
+        tb_world *w;
+        int guard;
+        def.integrator = tb_integrator_name(k);
+        assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+        for (guard = 0; guard < 2; ++guard) {
+            assert_int_equal(tb_world_set_guard(w, guard ? INFINITY : 0), TB_OK);
+            assert_int_equal(tb_world_step(w, 0.01), TB_OK);
+        }
+        assert_int_equal(tb_world_add_particle(w, &p, &id), TB_OK);
+        assert_int_equal(tb_world_remove_particle(w, id), TB_OK);
+        assert_int_equal(tb_world_step(w, 0.01), TB_OK);
+        assert_rel(tb_world_time(w), 0.03, 1e-12);
+        tb_world_destroy(w);
+    }
+}
+
 static void worlds_are_independent(void **state)
 {
     tb_world *a = make_world("symplectic_euler"), *b = make_world("symplectic_euler");
@@ -701,6 +730,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(structural_changes_are_refused_while_stepping),
     cmocka_unit_test(allocator_hooks_see_every_byte),
     cmocka_unit_test(out_of_memory_is_a_status_not_a_crash),
+    cmocka_unit_test(empty_world_steps_under_every_method),
     cmocka_unit_test(worlds_are_independent),
 };
 TB_TEST_MAIN(tests)

@@ -396,7 +396,10 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
             return status;
         out = *pairs;
     }
-    sap_sort_pairs(out, found, out + found, counts, n);
+    /* no pairs: nothing to sort, and out may be NULL (fuzz_api's
+       regressions) */
+    if (found > 1)
+        sap_sort_pairs(out, found, out + found, counts, n);
     *count = found;
     return TB_OK;
 }

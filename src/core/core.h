@@ -48,6 +48,9 @@ enum tb__quantity {
 };
 
 /* Lay y out for `cap` objects of `tier`, the other tiers keeping theirs. */
+/* A new world's empty state; and freeing the state and scratch for good */
+void tb__state_init(tb_world *w);
+void tb__state_free(tb_world *w);
 tb_status tb__state_resize(tb_world *w, enum tb__tier tier, size_t cap);
 tb_status tb__state_scratch(tb_world *w, size_t count);
 double *tb__scratch_vector(tb_world *w, size_t k);

@@ -34,12 +34,35 @@ static int segments(const tb_world *w, size_t off[TB__QUANTITY_COUNT], size_t le
     return n;
 }
 
+/* An empty state (and its scratch) points here rather than at NULL, so
+   that y + offset stays defined arithmetic before the first object
+   (fuzz_api's regressions). Nothing is ever written to it: every loop over
+   an empty state runs zero times. */
+static double empty_state[1];
+
 static void free_scratch(tb_world *w)
 {
-    if (w->scratch)
+    if (w->scratch && w->scratch != empty_state)
         tb__alloc(w, w->scratch, w->scratch_count * w->y_size * sizeof(double), 0);
-    w->scratch = NULL;
+    w->scratch = empty_state;
     w->scratch_count = 0;
+}
+
+void tb__state_init(tb_world *w)
+{
+    w->y = empty_state;
+    w->y_size = 0;
+    w->scratch = empty_state;
+    w->scratch_count = 0;
+}
+
+void tb__state_free(tb_world *w)
+{
+    free_scratch(w);
+    if (w->y && w->y != empty_state)
+        tb__alloc(w, w->y, w->y_size * sizeof(double), 0);
+    w->y = NULL;
+    w->scratch = NULL;
 }
 
 tb_status tb__state_resize(tb_world *w, enum tb__tier tier, size_t cap)
@@ -51,14 +74,14 @@ tb_status tb__state_resize(tb_world *w, enum tb__tier tier, size_t cap)
         off[k] = size;
         size += quantities[k].width * (quantities[k].tier == tier ? cap : cap_of(w, quantities[k].tier));
     }
-    y = tb__alloc(w, NULL, 0, size * sizeof(double));
+    y = size ? tb__alloc(w, NULL, 0, size * sizeof(double)) : empty_state;
     if (!y)
         return tb__fail(w, TB_ERR_MEMORY, "out of memory for a state of %zu doubles", size);
-    if (w->y) {
+    free_scratch(w); /* its vectors have the old state's size */
+    if (w->y && w->y != empty_state) {
         for (k = 0; k < TB__QUANTITY_COUNT; ++k)
             memcpy(y + off[k], w->y + w->off[k],
                    quantities[k].width * count_of(w, quantities[k].tier) * sizeof(double));
-        free_scratch(w);
         tb__alloc(w, w->y, w->y_size * sizeof(double), 0);
     }
     w->y = y;
@@ -72,6 +95,11 @@ tb_status tb__state_scratch(tb_world *w, size_t count)
     double *s;
     if (w->scratch_count >= count)
         return TB_OK;
+    if (count * w->y_size == 0) { /* an empty state: nothing to hold */
+        free_scratch(w);
+        w->scratch_count = count;
+        return TB_OK;
+    }
     s = tb__alloc(w, NULL, 0, count * w->y_size * sizeof(double));
     if (!s)
         return tb__fail(w, TB_ERR_MEMORY, "out of memory for %zu integrator vectors", count);
