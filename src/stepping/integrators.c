@@ -163,6 +163,7 @@ static const double DP_A[7][6] = {
 static const double DP_E[7] = { 71.0 / 57600, 0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200, 22.0 / 525,
                                 -1.0 / 40 };
 #define DP_MAX_SUBSTEPS 1000000
+#define DP_SETTLE 100
 
 static tb_status dopri5(tb_world *w, double H)
 {
@@ -188,6 +189,17 @@ static tb_status dopri5(tb_world *w, double H)
             return tb__fail(w, TB_ERR_ARGUMENT,
                             "dopri5: the substep fell to %g s at t = %.17g s: too stiff for tolerance %g "
                             "(try implicit_euler)", step, t, w->tolerance);
+        /* Past DP_SETTLE substeps the controller has found the size this
+           state allows; a step that would need more than DP_MAX_SUBSTEPS of
+           it is refused now rather than after them (seconds of work for
+           the same refusal: test_integrators.dopri5_refuses_a_stiff_step_
+           quickly) */
+        if (substeps > DP_SETTLE && substeps + (H - done) / step > DP_MAX_SUBSTEPS)
+            return tb__fail(w, TB_ERR_ARGUMENT,
+                            "dopri5: tolerance %g needs substeps of about %g s at t = %.17g s, %.3g of them for "
+                            "the rest of this step (at most %d): too stiff (try implicit_euler, a looser "
+                            "tolerance or a shorter step)", w->tolerance, step, t, (H - done) / step,
+                            DP_MAX_SUBSTEPS);
         if (!have_k1 && (st = tb__derive(w, t, y, k[0])) != TB_OK)
             return st;
         have_k1 = 1;

@@ -181,6 +181,39 @@ static void verlet_energy_stays_bounded(void **state)
     check_bounded("verlet", 0.0025 / (1 - 0.0025) * (1 + 1e-9));
 }
 
+static tb_status count_calls(const tb_force_args *args, void *user)
+{
+    (void)args;
+    ++*(long *)user;
+    return TB_OK;
+}
+
+/* A spring of w = 1e10 rad/s under dopri5 at 1/60 s: its stability bound
+   (|h w| about 3.3) needs substeps of about 3e-10 s, 5e7 of them, past
+   the 1e6 it takes. It is refused with that reason once the controller
+   has settled, after a few hundred force evaluations (counted through a
+   callback) instead of the 6e6 it took to reach the cap; the world is
+   left as it was. The same scene at w = 1e4 takes its ~1000 substeps. */
+static void dopri5_refuses_a_stiff_step_quickly(void **state)
+{
+    tb_particle_id id;
+    tb_world *world = oscillator("dopri5", 1e10, 1, 0, &id);
+    long calls = 0;
+    double x[3];
+    (void)state;
+    assert_int_equal(tb_world_add_force(world, count_calls, &calls, NULL), TB_OK);
+    assert_int_equal(tb_world_step(world, 1.0 / 60), TB_ERR_ARGUMENT);
+    print_message("dopri5 on w = 1e10: refused after %ld force evaluations: %s\n", calls, tb_world_message(world));
+    assert_non_null(strstr(tb_world_message(world), "too stiff"));
+    assert_in_range(calls, 1, 7 * 1000);
+    assert_int_equal(tb_particle_position(world, id, x), TB_OK);
+    assert_true(x[0] == 1 && tb_world_time(world) == 0);
+    tb_world_destroy(world);
+    world = oscillator("dopri5", 1e4, 1, 0, &id);
+    assert_int_equal(tb_world_step(world, 1.0 / 60), TB_OK);
+    tb_world_destroy(world);
+}
+
 /* dopri5 controls the local error per substep to the tolerance (relative
    to 1 + |y|); over T = 5 s of the oscillator (w = 2, taken in outer steps
    of 0.5 s, h w = 1) the global error must follow the tolerance down, in
@@ -323,6 +356,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(auto_picks_from_what_the_scene_contains),
     cmocka_unit_test(dopri5_error_follows_tolerance),
     cmocka_unit_test(dopri5_moves_tracers),
+    cmocka_unit_test(dopri5_refuses_a_stiff_step_quickly),
     cmocka_unit_test(euler_is_first_order),
     cmocka_unit_test(symplectic_euler_is_first_order),
     cmocka_unit_test(verlet_is_second_order),
