@@ -136,7 +136,7 @@ TB_API double tb_world_guard(const tb_world *world);
    puts the world back exactly: stepping on continues bit-identically to
    the run that took the snapshot, ids made since are stale and ids
    removed since are live again. Its memory comes from the world's
-   allocator; it outlives nothing: destroy it before its world.
+   allocator, which it keeps: it may outlive its world.
    Taking one (tb_world_snapshot) and restoring one are refused while the
    world is stepping (TB_ERR_BUSY); a snapshot of another world is refused
    (TB_ERR_ARGUMENT); out of memory (TB_ERR_MEMORY), the world is
