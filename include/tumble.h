@@ -143,6 +143,12 @@ TB_API double tb_world_guard(const tb_world *world);
    unchanged. The world's message, guard snapshot and integrator scratch
    are its own and stay. */
 TB_API tb_status tb_world_snapshot(tb_world *world, tb_snapshot **snapshot);
+/* Take a snapshot of this world again into an existing one, reusing its
+   memory where the world's arrays still fit (a rollback host keeping a
+   ring of snapshots allocates nothing once they have grown). Out of
+   memory, the snapshot is left empty: tb_world_restore refuses it until it
+   is taken again. */
+TB_API tb_status tb_world_snapshot_into(tb_world *world, tb_snapshot *snapshot);
 TB_API tb_status tb_world_restore(tb_world *world, const tb_snapshot *snapshot);
 /* Free a snapshot (NULL is ignored). */
 TB_API void tb_snapshot_destroy(tb_snapshot *snapshot);

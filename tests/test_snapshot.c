@@ -198,6 +198,12 @@ static void restore_continues_bit_identically(void **unused)
     steps(w, 90, H);
     record(w, &again);
     assert_same_state(&first, &again);
+    /* taken again in its own memory at the end, restored after more steps */
+    assert_int_equal(tb_world_snapshot_into(w, s), TB_OK);
+    assert_true(tb_snapshot_time(s) == tb_world_time(w));
+    steps(w, 10, H);
+    assert_int_equal(tb_world_restore(w, s), TB_OK);
+    assert_true(tb_world_hash(w) == first.hash);
     tb_snapshot_destroy(s);
     tb_world_destroy(w);
 }
@@ -309,6 +315,43 @@ static void failed_allocations_leave_the_world_unchanged(void **unused)
     }
     assert_true(failures >= 10); /* one per array at least */
     full = s;
+    /* taken again into a snapshot of a smaller world, whose blocks are too
+       small: out of memory it is left empty, and refused */
+    {
+        tb_world *tiny;
+        tb_snapshot *small;
+        memset(&wd, 0, sizeof wd);
+        tiny = scene(&def, &wd);
+        steps(tiny, 60, H);
+        assert_int_equal(tb_world_snapshot(tiny, &small), TB_OK);
+        tb_world_destroy(tiny);
+        assert_int_equal(tb_world_snapshot_into(w, small), TB_ERR_ARGUMENT); /* another world's */
+        tb_snapshot_destroy(small);
+    }
+    failures = 0;
+    for (k = 0;; ++k) {
+        tb_status st;
+        assert_int_equal(tb_world_snapshot(w, &s), TB_OK);
+        steps(w, 1, H);
+        {   /* a body more: the arrays outgrow the snapshot's blocks */
+            const double at[3] = { -8, -8, 0.5 + 0.01 * (double)k }, none[3] = { 0, 0, 0 };
+            add_body(w, TB_SHAPE_BOX, at, none, 0.3);
+        }
+        b.fail_after = b.allocations + k;
+        st = tb_world_snapshot_into(w, s);
+        b.fail_after = -1;
+        if (st == TB_OK) {
+            tb_snapshot_destroy(s);
+            break;
+        }
+        assert_int_equal(st, TB_ERR_MEMORY);
+        assert_int_equal(tb_world_restore(w, s), TB_ERR_ARGUMENT);
+        assert_non_null(strstr(tb_world_message(w), "empty"));
+        tb_snapshot_destroy(s);
+        ++failures;
+    }
+    assert_true(failures >= 1);
+    assert_int_equal(tb_world_restore(w, full), TB_OK);
     /* restore into a world that has shed bodies and grown past its
        capacities since */
     {

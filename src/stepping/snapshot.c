@@ -15,14 +15,19 @@
 
 #include <string.h>
 
+/* list_blocks lists 71 arrays: room for a few more */
+#define MAX_BLOCKS 96
+
 struct tb_snapshot {
     tb_world world;        /* the world's struct; its arrays are this snapshot's blocks */
     tb__contacts contacts; /* the contacts' struct; zero when world.contacts is NULL */
-    int roomy;             /* blocks hold the world's whole capacity, so the guard's
-                              snapshot is taken again into them without allocating;
-                              otherwise each holds only its used bytes */
+    int roomy;             /* a new block holds the world's whole capacity, so the
+                              guard's snapshot is taken again into the same memory
+                              until an array grows; otherwise what is used */
     int partial;           /* the guard's: arrays no step writes are not copied */
     int has_contacts;      /* the world had a contacts struct */
+    int valid;             /* holds a whole take (0: the last one ran out of memory) */
+    size_t held[MAX_BLOCKS]; /* bytes allocated for each block (list_blocks' order) */
 };
 
 /* One array of a world (or of a snapshot's copy of one). */
@@ -32,8 +37,6 @@ typedef struct block {
     size_t size;           /* bytes the world allocates for it */
     int steady;            /* no step writes it (constants, ids, shapes) */
 } block;
-
-#define MAX_BLOCKS 72
 
 static void add(block *b, size_t *n, void *at, size_t used, size_t size, int steady)
 {
@@ -70,13 +73,19 @@ static void list_blocks_of(block *b, size_t *n, tb__list *list)
      (set_up_batches), island_scratch (sleep.c), the motion block (cleared
      by load_bodies) and the soft step's rows, bodies and patches
      (set_up_rows). The batches and soft rows also point into the entries,
-     which a copy could not keep. */
+     which a copy could not keep.
+   The previous entries are listed, but with nothing used once solved. */
 static size_t list_blocks(tb_world *w, tb__contacts *c, block *b)
 {
     const size_t np = w->particle_count, pc = w->particle_cap;
     const size_t ns = w->spring_count, sc = w->spring_cap;
     const size_t nb = w->body_count, bc = w->body_cap;
     const size_t nx = c->proxy_count, xc = c->proxy_cap;
+    /* the entries before last step's: once a step has solved its contacts,
+       the next one's tb__contacts_prepare makes its own entries the
+       previous ones before it reads any, so these are dead (their arrays
+       are kept, not their contents); a step that never solved keeps them */
+    const size_t previous = c->solved ? 0 : c->previous_count;
     size_t n = 0;
     int k;
     add(b, &n, &w->y, w->y_size * sizeof(double), w->y_size * sizeof(double), 0);
@@ -123,12 +132,11 @@ static size_t list_blocks(tb_world *w, tb__contacts *c, block *b)
     add(b, &n, &c->geoms, nx * sizeof(tb__geom), xc * sizeof(tb__geom), 0);
     add(b, &n, &c->pairs, c->pair_count * sizeof(tb__pair), c->pair_cap * sizeof(tb__pair), 0);
     add(b, &n, &c->entries, c->entry_count * sizeof(tb__entry), c->entry_cap * sizeof(tb__entry), 0);
-    add(b, &n, &c->previous, c->previous_count * sizeof(tb__entry), c->previous_cap * sizeof(tb__entry), 0);
+    add(b, &n, &c->previous, previous * sizeof(tb__entry), c->previous_cap * sizeof(tb__entry), 0);
     add(b, &n, &c->order, c->entry_count * sizeof(tb__key), c->order_cap * sizeof(tb__key), 0);
-    add(b, &n, &c->previous_order, c->previous_count * sizeof(tb__key), c->previous_order_cap * sizeof(tb__key),
-        0);
+    add(b, &n, &c->previous_order, previous * sizeof(tb__key), c->previous_order_cap * sizeof(tb__key), 0);
     add(b, &n, &c->starts, c->starts_count * sizeof(uint32_t), c->starts_cap * sizeof(uint32_t), 0);
-    add(b, &n, &c->previous_starts, c->previous_starts_count * sizeof(uint32_t),
+    add(b, &n, &c->previous_starts, (c->solved ? 0 : c->previous_starts_count) * sizeof(uint32_t),
         c->previous_starts_cap * sizeof(uint32_t), 0);
     add(b, &n, &c->bodies, c->body_count * sizeof(tb__solver_body), c->body_cap * sizeof(tb__solver_body), 0);
     add(b, &n, &c->body_map, c->body_map_cap * sizeof(int32_t), c->body_map_cap * sizeof(int32_t), 0);
@@ -157,17 +165,15 @@ static void carry_scratch(tb__contacts *dst, const tb__contacts *src)
     dst->soft_patches = src->soft_patches, dst->soft_patch_cap = src->soft_patch_cap, dst->soft_patch_count = 0;
 }
 
-/* A snapshot's blocks, as allocated. */
+/* A snapshot's blocks: where it keeps each pointer, and the bytes it
+   holds of what it copied (the sizes are the world's at the take). */
 static size_t snapshot_blocks(tb_snapshot *s, block *b)
 {
     const size_t n = list_blocks(&s->world, &s->contacts, b);
     size_t i;
-    for (i = 0; i < n; ++i) {
+    for (i = 0; i < n; ++i)
         if (s->partial && b[i].steady)
-            b[i].used = b[i].size = 0;
-        else if (!s->roomy)
-            b[i].size = b[i].used;
-    }
+            b[i].used = 0;
     return n;
 }
 
@@ -178,9 +184,11 @@ static void free_blocks(tb_snapshot *s)
     size_t i;
     for (i = 0; i < n; ++i) {
         if (*b[i].at)
-            tb__alloc(&s->world, *b[i].at, b[i].size, 0);
+            tb__alloc(&s->world, *b[i].at, s->held[i], 0);
         *b[i].at = NULL;
+        s->held[i] = 0;
     }
+    s->valid = 0;
 }
 
 static void free_snapshot(tb_snapshot *s)
@@ -193,18 +201,22 @@ static void free_snapshot(tb_snapshot *s)
     tb__alloc(&owner, s, sizeof *s, 0);
 }
 
-/* Copy world w into snapshot s, whose blocks (from an earlier take, or
-   none) are reused where their sizes fit. Out of memory: TB_ERR_MEMORY, s
-   freed. */
+/* Copy world w into snapshot s, into the blocks of its last take where
+   they are large enough (a roomy snapshot allocates a block at the
+   world's capacity, an exact one at what it uses). Out of memory:
+   TB_ERR_MEMORY, s left empty (valid 0), w untouched. */
 static tb_status take(tb_world *w, tb_snapshot *s)
 {
     static const tb__contacts none;
     block from[MAX_BLOCKS], had[MAX_BLOCKS], to[MAX_BLOCKS];
     void *kept[MAX_BLOCKS];
+    size_t held[MAX_BLOCKS];
     size_t n, i;
     n = snapshot_blocks(s, had);
-    for (i = 0; i < n; ++i)
+    for (i = 0; i < n; ++i) {
         kept[i] = *had[i].at;
+        held[i] = s->held[i];
+    }
     s->world = *w;
     s->world.rollback = NULL;
     s->world.scratch = NULL;
@@ -214,32 +226,37 @@ static tb_status take(tb_world *w, tb_snapshot *s)
     s->has_contacts = w->contacts != NULL;
     s->contacts = w->contacts ? *w->contacts : none;
     carry_scratch(&s->contacts, &none);
-    /* the blocks as this world needs them, the old ones' sizes in had */
     n = snapshot_blocks(s, to);
     list_blocks(w, w->contacts ? w->contacts : (tb__contacts *)&none, from);
-    for (i = 0; i < n; ++i)
+    for (i = 0; i < n; ++i) {
         *to[i].at = NULL;
+        s->held[i] = 0;
+    }
     for (i = 0; i < n; ++i) {
         void *p = kept[i];
-        if (p && had[i].size != to[i].size) {
-            tb__alloc(w, p, had[i].size, 0);
+        size_t size = held[i];
+        if (p && size < to[i].used) {
+            tb__alloc(w, p, size, 0);
             p = NULL;
         }
         kept[i] = NULL;
-        if (!p && to[i].size)
-            p = tb__alloc(w, NULL, 0, to[i].size);
-        if (!p && to[i].size) {
-            size_t j;
-            for (j = i + 1; j < n; ++j) /* what remains of the earlier take */
-                if (kept[j])
-                    tb__alloc(w, kept[j], had[j].size, 0);
-            free_snapshot(s);
-            return tb__fail(w, TB_ERR_MEMORY, "out of memory for a snapshot (%zu bytes)", to[i].size);
+        if (!p && to[i].used) {
+            size = s->roomy ? to[i].size : to[i].used;
+            if (!(p = tb__alloc(w, NULL, 0, size))) {
+                size_t j;
+                for (j = i + 1; j < n; ++j) /* what remains of the last take */
+                    if (kept[j])
+                        tb__alloc(w, kept[j], held[j], 0);
+                free_blocks(s);
+                return tb__fail(w, TB_ERR_MEMORY, "out of memory for a snapshot (%zu bytes)", size);
+            }
         }
         *to[i].at = p;
+        s->held[i] = p ? size : 0;
         if (to[i].used)
             memcpy(p, *from[i].at, to[i].used);
     }
+    s->valid = 1;
     return TB_OK;
 }
 
@@ -368,8 +385,10 @@ tb_status tb_world_snapshot(tb_world *w, tb_snapshot **out)
         return st;
     if (!(s = new_snapshot(w)))
         return tb__fail(w, TB_ERR_MEMORY, "out of memory for a snapshot");
-    if ((st = take(w, s)) != TB_OK)
+    if ((st = take(w, s)) != TB_OK) {
+        free_snapshot(s);
         return st;
+    }
     *out = s;
     return TB_OK;
 }
@@ -384,7 +403,22 @@ tb_status tb_world_restore(tb_world *w, const tb_snapshot *s)
         return st;
     if (s->world.id_tag != w->id_tag)
         return tb__fail(w, TB_ERR_ARGUMENT, "the snapshot was taken of another world");
+    if (!s->valid)
+        return tb__fail(w, TB_ERR_ARGUMENT, "the snapshot is empty: taking it again ran out of memory");
     return restore(w, s);
+}
+
+tb_status tb_world_snapshot_into(tb_world *w, tb_snapshot *s)
+{
+    tb_status st;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if (!s)
+        return tb__null(w, "tb_world_snapshot_into", "snapshot");
+    if ((st = tb__check_busy(w, "take a snapshot")) != TB_OK)
+        return st;
+    if (s->world.id_tag != w->id_tag || s->partial)
+        return tb__fail(w, TB_ERR_ARGUMENT, "the snapshot was taken of another world");
+    return take(w, s);
 }
 
 void tb_snapshot_destroy(tb_snapshot *s)
@@ -401,7 +435,7 @@ size_t tb_snapshot_size(const tb_snapshot *s)
     n = snapshot_blocks((tb_snapshot *)s, b);
     bytes = sizeof *s;
     for (i = 0; i < n; ++i)
-        bytes += b[i].size;
+        bytes += s->held[i];
     return bytes;
 }
 
@@ -420,11 +454,7 @@ tb_status tb__rollback_keep(tb_world *w)
         w->rollback->roomy = 1;
         w->rollback->partial = 1;
     }
-    if (take(w, w->rollback) != TB_OK) {
-        w->rollback = NULL; /* take freed it */
-        return TB_ERR_MEMORY;
-    }
-    return TB_OK;
+    return take(w, w->rollback);
 }
 
 const double *tb__rollback_state(const tb_world *w)
