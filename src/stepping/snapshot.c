@@ -2,8 +2,9 @@
    hash. A snapshot is a copy of the world's struct and of its contacts'
    struct whose arrays point to blocks of its own. Both structs' arrays are
    listed once, in one order, by list_blocks, which every copy, restore and
-   free walks, so an array added to the world and left out of the list is
-   the one place to look when a restore stops continuing bit-identically
+   free walks: an array added to either struct must be listed there, or
+   named there as scratch with the reason no step reads it before writing
+   it, for a restore to continue bit-identically
    (test_snapshot.restore_continues_bit_identically).
 
    It sits with the step because the guard rolls a refused step back with
