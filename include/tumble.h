@@ -160,8 +160,9 @@ TB_API double tb_snapshot_time(const tb_snapshot *snapshot);
    bit patterns in a fixed order: object counts, step count, time, the used
    state vector, sleep (rest times, islands) and every contact's warm
    starts. Two worlds built and stepped by the same calls in the same order
-   have the same hash on every machine with IEEE doubles (docs/guide.md,
-   Determinism). 0 for NULL. */
+   have the same hash, whatever the build type, compiler or instruction set
+   (test_snapshot.contact_scene_hash_is_recorded; docs/guide.md, section
+   14). 0 for NULL. */
 TB_API uint64_t tb_world_hash(const tb_world *world);
 
 /* -------------------------------------------------------------- tracers -- */
