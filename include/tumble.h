@@ -113,7 +113,7 @@ TB_API const char *tb_world_auto_choice(const tb_world *world, long *substeps);
 TB_API tb_status tb_world_step(tb_world *world, double h);
 
 /* The blow-up guard. energy_growth 0 (the default) turns it off, since it
-   copies the state every step; INFINITY undoes any step that leaves the
+   copies what a step can change every step; INFINITY undoes any step that leaves the
    state non-finite, a position, velocity, angular velocity or momentum
    past 1e150 (a runaway, far beyond what the input rule admits) or an
    orientation that is no longer a unit quaternion; a factor > 1 also undoes a step in which
