@@ -85,6 +85,7 @@ bench)
     ./build/default/bench/bench_rotation
     ./build/default/bench/bench_contacts
     ./build/default/bench/bench_robustness
+    ./build/default/bench/bench_snapshot
     ;;
 charts)
     install_missing

@@ -113,7 +113,7 @@ TB_API const char *tb_world_auto_choice(const tb_world *world, long *substeps);
 TB_API tb_status tb_world_step(tb_world *world, double h);
 
 /* The blow-up guard. energy_growth 0 (the default) turns it off, since it
-   copies the state every step; INFINITY undoes any step that leaves the
+   copies what a step can change every step; INFINITY undoes any step that leaves the
    state non-finite, a position, velocity, angular velocity or momentum
    past 1e150 (a runaway, far beyond what the input rule admits) or an
    orientation that is no longer a unit quaternion; a factor > 1 also undoes a step in which
@@ -121,10 +121,49 @@ TB_API tb_status tb_world_step(tb_world *world, double h);
    beyond what gravity released (forces that do work must fit in it; a
    world starting at rest is checked once it moves). Such a step returns
    TB_ERR_UNSTABLE, with the advisor's verdict naming the step, the object
-   and the cause; the world is back where the step began and steps again
-   (with a smaller step, or once the cause is fixed). */
+   and the cause; the world is back where the step began, solver caches
+   and sleep included (as tb_world_restore puts it back), and steps again
+   (with a smaller step, or once the cause is fixed). With the guard on, a
+   step copies what it can change first (about the cost of a snapshot,
+   without the constants). */
 TB_API tb_status tb_world_set_guard(tb_world *world, double energy_growth);
 TB_API double tb_world_guard(const tb_world *world);
+
+/* ------------------------------------------------------------ snapshots -- */
+/* A snapshot is a copy of everything the world owns: the state, the
+   objects and their ids, settings, the contact solver's caches and warm
+   starts, sleep, the last step's events, time and step count. Restoring it
+   puts the world back exactly: stepping on continues bit-identically to
+   the run that took the snapshot, ids made since are stale and ids
+   removed since are live again. Its memory comes from the world's
+   allocator, which it keeps: it may outlive its world.
+   Taking one (tb_world_snapshot) and restoring one are refused while the
+   world is stepping (TB_ERR_BUSY); a snapshot of another world is refused
+   (TB_ERR_ARGUMENT); out of memory (TB_ERR_MEMORY), the world is
+   unchanged. The world's message, guard snapshot and integrator scratch
+   are its own and stay. */
+TB_API tb_status tb_world_snapshot(tb_world *world, tb_snapshot **snapshot);
+/* Take a snapshot of this world again into an existing one, reusing its
+   memory where the world's arrays still fit (a rollback host keeping a
+   ring of snapshots allocates nothing once they have grown). Out of
+   memory, the snapshot is left empty: tb_world_restore refuses it until it
+   is taken again. */
+TB_API tb_status tb_world_snapshot_into(tb_world *world, tb_snapshot *snapshot);
+TB_API tb_status tb_world_restore(tb_world *world, const tb_snapshot *snapshot);
+/* Free a snapshot (NULL is ignored). */
+TB_API void tb_snapshot_destroy(tb_snapshot *snapshot);
+/* The bytes it holds, and the world time it was taken at (0 for NULL). */
+TB_API size_t tb_snapshot_size(const tb_snapshot *snapshot);
+TB_API double tb_snapshot_time(const tb_snapshot *snapshot);
+
+/* A 64-bit FNV-1a hash of what the next step's result depends on, over
+   bit patterns in a fixed order: object counts, step count, time, the used
+   state vector, sleep (rest times, islands) and every contact's warm
+   starts. Two worlds built and stepped by the same calls in the same order
+   have the same hash, whatever the build type, compiler or instruction set
+   (test_snapshot.contact_scene_hash_is_recorded; docs/guide.md, section
+   14). 0 for NULL. */
+TB_API uint64_t tb_world_hash(const tb_world *world);
 
 /* -------------------------------------------------------------- tracers -- */
 /* Tracers are massless points carried by the sum of the world's velocity

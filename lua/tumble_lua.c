@@ -4,7 +4,8 @@
    tb_world; tumble.particle, tumble.tracer, tumble.spring, tumble.body,
    tumble.shape, tumble.field and tumble.force are handles holding a value
    id and, as user value, their world (so a handle keeps its world alive and
-   every call checks the id).
+   every call checks the id). tumble.snapshot owns a tb_snapshot, freed when
+   it is collected, with its world as user value.
 
    The world's user value is a table holding its Lua callbacks under
    integer keys and the tables handed to them (reused from call to call);
@@ -41,6 +42,7 @@
 #include <string.h>
 
 #define WORLD_MT "tumble.world"
+#define SNAPSHOT_MT "tumble.snapshot"
 
 enum tl_handle_kind { H_PARTICLE, H_TRACER, H_SPRING, H_FIELD, H_FORCE, H_BODY, H_SHAPE, H_KINDS };
 static const char *const handle_mt[H_KINDS] = {
@@ -59,6 +61,8 @@ typedef struct tl_world {
     tl_callback *callbacks; /* what the core holds for each Lua callback */
     lua_Alloc alloc;  /* the state's allocator, which made them */
     void *alloc_ud;
+    int keeps_callbacks; /* a snapshot was taken: callbacks live until the
+                            world closes (forget_callback) */
 } tl_world;
 
 typedef struct tl_handle {
@@ -496,10 +500,15 @@ static int body_push(lua_State *L) { return apply_body_force(L, 0, "body:push");
 static int body_push_local(lua_State *L) { return apply_body_force(L, 1, "body:push_local"); }
 
 /* Forget a Lua callback of the world at world_idx: its function and the
-   record the core held. */
+   record the core held. Once the world has taken a snapshot, a restore
+   may bring back a force or field removed since, with its record as the
+   core's user pointer: both then stay until the world closes
+   (test_lua.snapshots_restore_and_hash). */
 static void forget_callback(lua_State *L, int world_idx, tl_world *lw, int key)
 {
     tl_callback **link = &lw->callbacks;
+    if (lw->keeps_callbacks)
+        return;
     while (*link && (*link)->key != key)
         link = &(*link)->next;
     if (*link) {
@@ -1474,6 +1483,96 @@ static int world_counts(lua_State *L)
     return 4;
 }
 
+/* ---- snapshots: a userdata owning a tb_snapshot, with its world as user
+   value (a restore must find the callbacks the world keeps) -------------- */
+
+typedef struct tl_snapshot {
+    const char *tag;       /* &snapshot_tag */
+    tb_snapshot *snapshot; /* NULL once collected */
+} tl_snapshot;
+
+static const char snapshot_tag = 's';
+
+/* The snapshot at idx, raising unless idx holds a live one. */
+static tl_snapshot *check_snapshot(lua_State *L, int idx)
+{
+    tl_snapshot *ls = luaL_testudata(L, idx, SNAPSHOT_MT);
+    if (!ls || lua_rawlen(L, idx) != sizeof *ls || ls->tag != &snapshot_tag)
+        luaL_typeerror(L, idx, SNAPSHOT_MT);
+    if (!ls->snapshot)
+        luaL_error(L, "tumble: the snapshot was freed");
+    return ls;
+}
+
+/* w:snapshot([s]): a new snapshot, or s taken again in its own memory.
+   A new userdata is made before the copy, so no error can lose it. */
+static int world_snapshot(lua_State *L)
+{
+    tl_world *lw = check_world(L, 1);
+    tl_snapshot *ls;
+    if (!lua_isnoneornil(L, 2)) {
+        ls = check_snapshot(L, 2);
+        if (tb_world_snapshot_into(lw->world, ls->snapshot) != TB_OK)
+            return raise_world_error(L, lw, "world:snapshot");
+        lw->keeps_callbacks = 1;
+        lua_settop(L, 2);
+        return 1;
+    }
+    ls = lua_newuserdatauv(L, sizeof *ls, 1);
+    ls->tag = &snapshot_tag;
+    ls->snapshot = NULL;
+    luaL_setmetatable(L, SNAPSHOT_MT);
+    lua_pushvalue(L, 1);
+    lua_setiuservalue(L, -2, 1);
+    if (tb_world_snapshot(lw->world, &ls->snapshot) != TB_OK)
+        return raise_world_error(L, lw, "world:snapshot");
+    lw->keeps_callbacks = 1;
+    return 1;
+}
+
+static int world_restore(lua_State *L)
+{
+    tl_world *lw = check_world(L, 1);
+    tl_snapshot *ls = check_snapshot(L, 2);
+    if (tb_world_restore(lw->world, ls->snapshot) != TB_OK)
+        return raise_world_error(L, lw, "world:restore");
+    return 0;
+}
+
+/* w:hash(): tb_world_hash as 16 hexadecimal digits (a Lua integer would
+   print negative for half the hashes) */
+static int world_hash(lua_State *L)
+{
+    char hex[17];
+    snprintf(hex, sizeof hex, "%016llx", (unsigned long long)tb_world_hash(check_world(L, 1)->world));
+    lua_pushstring(L, hex);
+    return 1;
+}
+
+static int snapshot_size(lua_State *L)
+{
+    lua_pushinteger(L, (lua_Integer)tb_snapshot_size(check_snapshot(L, 1)->snapshot));
+    return 1;
+}
+
+static int snapshot_time(lua_State *L)
+{
+    lua_pushnumber(L, tb_snapshot_time(check_snapshot(L, 1)->snapshot));
+    return 1;
+}
+
+static int snapshot_gc(lua_State *L)
+{
+    tl_snapshot *ls = luaL_testudata(L, 1, SNAPSHOT_MT);
+    if (ls && lua_rawlen(L, 1) == sizeof *ls && ls->tag == &snapshot_tag) {
+        tb_snapshot_destroy(ls->snapshot);
+        ls->snapshot = NULL;
+    }
+    return 0;
+}
+
+static const luaL_Reg snapshot_methods[] = { { "size", snapshot_size }, { "time", snapshot_time }, { NULL, NULL } };
+
 static const luaL_Reg world_methods[] = {
     { "particle", world_particle }, { "tracer", world_tracer }, { "spring", world_spring },
     { "body", world_body }, { "angular_momentum", world_angular_momentum },
@@ -1485,6 +1584,7 @@ static const luaL_Reg world_methods[] = {
     { "auto_choice", world_auto_choice },
     { "gravity", world_gravity }, { "set_gravity", world_set_gravity },
     { "energy", world_energy }, { "momentum", world_momentum }, { "counts", world_counts },
+    { "snapshot", world_snapshot }, { "restore", world_restore }, { "hash", world_hash },
     { "close", world_close }, { NULL, NULL }
 };
 
@@ -1533,6 +1633,10 @@ int luaopen_tumble(lua_State *L)
     lua_setfield(L, -2, "__close");
     lua_pushcfunction(L, world_tostring);
     lua_setfield(L, -2, "__tostring");
+    lua_pop(L, 1);
+    create_metatable(L, SNAPSHOT_MT, snapshot_methods);
+    lua_pushcfunction(L, snapshot_gc);
+    lua_setfield(L, -2, "__gc");
     lua_pop(L, 1);
     for (k = 0; k < H_KINDS; ++k) {
         create_metatable(L, handle_mt[k], kind_methods[k]);

@@ -164,6 +164,11 @@ struct tb_world {
     /* velocity fields for tracers (tb__field), user forces (tb__force) */
     tb__list fields;
     tb__list forces;
+
+    /* the guard's snapshot of the world before the step (snapshot.c),
+       taken again into the same memory every step; NULL until the guard
+       first runs */
+    struct tb_snapshot *rollback;
 };
 
 #endif

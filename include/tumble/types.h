@@ -15,6 +15,8 @@ extern "C" {
 
 /* A world: made by tb_world_create, freed by tb_world_destroy. */
 typedef struct tb_world tb_world;
+/* A copy of a whole world (tb_world_snapshot). */
+typedef struct tb_snapshot tb_snapshot;
 
 /* ---------------------------------------------------------------- world -- */
 

@@ -2,9 +2,10 @@
    longer finite, has run away past any plausible magnitude or holds an
    orientation that is no longer a unit quaternion, or (when asked) energy
    that grew faster than the physics allows, names the object and the likely
-   cause, and rolls the world back.
-   It is off by default because it needs a copy of the state every step;
-   the tumble command turns it on. */
+   cause, and rolls the world back to the snapshot the step took first
+   (snapshot.c).
+   It is off by default because it needs that copy every step; the tumble
+   command turns it on. */
 #include "stepping/stepping.h"
 #include "bodies/bodies.h"
 #include "forces/forces.h"
@@ -155,9 +156,10 @@ static void biggest_gain(const tb_world *w, const double *before, char *out, siz
         snprintf(out, size, "no particle or body moved");
 }
 
-tb_status tb__guard_check(tb_world *w, const double *before, double h)
+tb_status tb__guard_check(tb_world *w, double h)
 {
     char what[256], cause[TB_MESSAGE_SIZE];
+    const double *before = tb__rollback_state(w);
     tb_advice advice;
     if (!find_unsound(w, w->y, what, sizeof what)) {
         double p0, u0, p1, u1, allowed;
@@ -178,8 +180,11 @@ tb_status tb__guard_check(tb_world *w, const double *before, double h)
                      p0 > 0 ? p1 / p0 : INFINITY, w->guard, who);
         }
     }
-    /* back to the last good state, then ask the advisor why */
-    tb__state_copy(w, w->y, before);
+    /* back to the world before the step, caches and sleep included, then
+       ask the advisor why; out of memory to give a grown contact array its
+       old capacity back, the state at least */
+    if (tb__rollback(w) != TB_OK)
+        tb__state_copy(w, w->y, before);
     memset(&advice, 0, sizeof advice);
     {
         char was[256];

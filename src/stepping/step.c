@@ -124,12 +124,14 @@ void tb__split_extrapolate(const tb_world *w, double *saved)
 
 /* A step can fail inside a callback. Methods that write the state only after
    their last force evaluation leave it untouched by construction; the others
-   get a snapshot to roll back to, taken only when something can fail. The
-   guard needs the snapshot always. */
+   get a copy of the state to roll back to, taken only when something can
+   fail. The guard keeps a copy of all the step can change (snapshot.c), so
+   that a refused step, or a failed one, leaves no trace: not in the
+   contacts' caches, not in sleep (test_snapshot.refused_step_leaves_no_trace). */
 tb_status tb_world_step(tb_world *w, double h)
 {
     tb_status st;
-    int snapshot;
+    int snapshot, guard = w && w->guard != 0;
     double *saved = NULL;
     TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_scale(w, h, "step")) != TB_OK)
@@ -138,26 +140,33 @@ tb_status tb_world_step(tb_world *w, double h)
         return st;
     if ((st = refuse_split_with_tracers(w, w->method)) != TB_OK)
         return st;
-    snapshot = (w->method->updates_before_last_evaluation && w->forces.count > 0) || w->guard != 0;
+    snapshot = !guard && w->method->updates_before_last_evaluation && w->forces.count > 0;
+    if (guard && (st = tb__rollback_keep(w)) != TB_OK)
+        return st;
     if (snapshot) {
         if ((st = tb__state_scratch(w, (size_t)w->method->scratch + 1)) != TB_OK)
             return st;
         saved = tb__scratch_vector(w, (size_t)w->method->scratch);
         tb__state_copy(w, saved, w->y);
     }
-    if (tb__contacts_active(w) && (st = tb__contacts_prepare(w, h)) != TB_OK)
+    if (tb__contacts_active(w) && (st = tb__contacts_prepare(w, h)) != TB_OK) {
+        if (guard)
+            (void)tb__rollback(w); /* out of memory again: the state was not touched yet */
         return st;
+    }
     w->stepping = 1;
     st = w->method->step(w, h);
     w->stepping = 0;
     if (st != TB_OK) {
-        if (snapshot)
+        if (guard && tb__rollback(w) != TB_OK)
+            tb__state_copy(w, w->y, tb__rollback_state(w)); /* out of memory: the state at least */
+        else if (snapshot)
             tb__state_copy(w, w->y, saved);
         return st;
     }
     if (tb__contacts_active(w))
         tb__contacts_solve(w, h, tb__force_lever(w));
-    if (w->guard != 0 && (st = tb__guard_check(w, saved, h)) != TB_OK)
+    if (guard && (st = tb__guard_check(w, h)) != TB_OK)
         return st; /* rolled back, held forces kept */
     if (w->body_count && w->body_held) /* held forces last one step, as in ODE */
         memset(w->body_applied, 0, 6 * w->body_count * sizeof(double));

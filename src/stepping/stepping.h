@@ -56,11 +56,23 @@ tb_status tb__stiffest_mode(tb_world *w, double *omega, tb_spring_id *culprit);
 double tb__fastest_decay(const tb_world *w);
 /* Choose w->auto_method and w->auto_substeps for steps of h. */
 tb_status tb__auto_plan(tb_world *w, double h);
-/* After a step from the state `before`: TB_OK, or TB_ERR_UNSTABLE with a
-   message naming the step, the object and the likely cause (the caller
-   rolls back). */
-tb_status tb__guard_check(tb_world *w, const double *before, double h);
+/* After a step from the guard's snapshot (tb__rollback_keep): TB_OK, or
+   the world rolled back to the snapshot and TB_ERR_UNSTABLE with a message
+   naming the step, the object and the likely cause. */
+tb_status tb__guard_check(tb_world *w, double h);
 /* The energies of state y (any state vector of the world). */
 tb_energy tb__energy_of(const tb_world *w, const double *y);
+
+/* ---- snapshot.c: the guard's rollback ----------------------------------------
+   tb__rollback_keep copies what a step can change into w->rollback, into
+   the memory of the last copy (nothing allocated while no array grows);
+   tb__rollback_state is that copy's state vector (the layout of w->y: no
+   step resizes it); tb__rollback puts the world back as it was, all or
+   nothing (it allocates only to give an array the step grew its old
+   capacity back, so it can fail only then); tb__rollback_free frees it. */
+tb_status tb__rollback_keep(tb_world *w);
+const double *tb__rollback_state(const tb_world *w);
+tb_status tb__rollback(tb_world *w);
+void tb__rollback_free(tb_world *w);
 
 #endif

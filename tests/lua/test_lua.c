@@ -121,6 +121,50 @@ static void bad_input_from_lua_is_refused(void **state)
     lua_close(L);
 }
 
+/* w:snapshot(), w:restore(s) and w:hash() from Lua: a restored world
+   steps on to the same hash; a body made since is stale; a force removed
+   since comes back with its function; another world's snapshot is an
+   error; a snapshot is freed when collected. */
+static void snapshots_restore_and_hash(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{ dt = 1/60 }\n"
+                 "w:shape{ type = 'plane' }\n"
+                 "balls = {}\n"
+                 "for i = 1, 5 do\n"
+                 "  balls[i] = w:body{ sphere = 0.1, mass = 1, pos = {0.05 * i, 0, 0.2 + 0.25 * i} }\n"
+                 "  w:shape{ type = 'sphere', body = balls[i], radius = 0.1 }\n"
+                 "end\n"
+                 "calls = 0\n"
+                 "f = w:force(function(t, s, f) calls = calls + 1 end)\n"
+                 "for i = 1, 30 do w:step() end\n"
+                 "s = w:snapshot()\n"
+                 "assert(getmetatable(s) == 'tumble.snapshot')\n"
+                 "assert(s:time() == w:time() and s:size() > 5 * 13 * 8, s:size())\n"
+                 "h0 = w:hash()\n"
+                 "assert(#h0 == 16 and h0:match('^%x+$'), h0)\n"
+                 "for i = 1, 30 do w:step() end\n"
+                 "h1, calls1 = w:hash(), calls\n"
+                 "assert(h1 ~= h0)\n"
+                 "f:remove()\n"
+                 "extra = w:body{ sphere = 0.1, mass = 1, pos = {3, 0, 1} }\n"
+                 "w:restore(s)\n"
+                 "assert(w:hash() == h0)\n"
+                 "assert(not pcall(extra.pos, extra), 'a body made since the snapshot is stale')\n"
+                 "for i = 1, 30 do w:step() end\n"
+                 "assert(w:hash() == h1)\n"
+                 "assert(calls > calls1, 'the restored force runs its function')\n"
+                 "assert(w:snapshot(s) == s and s:time() == w:time(), 'taken again in place')\n"
+                 "for i = 1, 5 do w:step() end\n"
+                 "w:restore(s)\n"
+                 "assert(w:hash() == h1)\n");
+    expect_error(L, "other = tumble.world{}\n other:restore(s)", "another world");
+    expect_error(L, "w:restore(42)", "tumble.snapshot expected");
+    expect_ok(L, "s = nil\n collectgarbage()\n collectgarbage()\n w:close()\n");
+    lua_close(L);
+}
+
 static void metatables_are_locked_and_handles_print(void **state)
 {
     lua_State *L = new_state();
@@ -456,6 +500,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(random_calls_never_crash),
     cmocka_unit_test(metatables_are_locked_and_handles_print),
     cmocka_unit_test(close_and_collect),
+    cmocka_unit_test(snapshots_restore_and_hash),
     cmocka_unit_test(lua_force_gets_whole_arrays),
     cmocka_unit_test(lua_field_matches_builtin_vortex),
     cmocka_unit_test(callback_error_leaves_state_bit_identical),
