@@ -48,6 +48,10 @@ enum tb__quantity {
 };
 
 /* Lay y out for `cap` objects of `tier`, the other tiers keeping theirs. */
+/* An empty state vector (and its scratch) points at tb__empty_state, never
+   at NULL, so that y + offset is defined before the first object; it is
+   never written and never freed (state.c, snapshot.c). */
+extern double tb__empty_state[1];
 /* A new world's empty state; and freeing the state and scratch for good */
 void tb__state_init(tb_world *w);
 void tb__state_free(tb_world *w);

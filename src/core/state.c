@@ -38,28 +38,28 @@ static int segments(const tb_world *w, size_t off[TB__QUANTITY_COUNT], size_t le
    that y + offset stays defined arithmetic before the first object
    (fuzz_api's regressions). Nothing is ever written to it: every loop over
    an empty state runs zero times. */
-static double empty_state[1];
+double tb__empty_state[1];
 
 static void free_scratch(tb_world *w)
 {
-    if (w->scratch && w->scratch != empty_state)
+    if (w->scratch && w->scratch != tb__empty_state)
         tb__alloc(w, w->scratch, w->scratch_count * w->y_size * sizeof(double), 0);
-    w->scratch = empty_state;
+    w->scratch = tb__empty_state;
     w->scratch_count = 0;
 }
 
 void tb__state_init(tb_world *w)
 {
-    w->y = empty_state;
+    w->y = tb__empty_state;
     w->y_size = 0;
-    w->scratch = empty_state;
+    w->scratch = tb__empty_state;
     w->scratch_count = 0;
 }
 
 void tb__state_free(tb_world *w)
 {
     free_scratch(w);
-    if (w->y && w->y != empty_state)
+    if (w->y && w->y != tb__empty_state)
         tb__alloc(w, w->y, w->y_size * sizeof(double), 0);
     w->y = NULL;
     w->scratch = NULL;
@@ -74,11 +74,11 @@ tb_status tb__state_resize(tb_world *w, enum tb__tier tier, size_t cap)
         off[k] = size;
         size += quantities[k].width * (quantities[k].tier == tier ? cap : cap_of(w, quantities[k].tier));
     }
-    y = size ? tb__alloc(w, NULL, 0, size * sizeof(double)) : empty_state;
+    y = size ? tb__alloc(w, NULL, 0, size * sizeof(double)) : tb__empty_state;
     if (!y)
         return tb__fail(w, TB_ERR_MEMORY, "out of memory for a state of %zu doubles", size);
     free_scratch(w); /* its vectors have the old state's size */
-    if (w->y && w->y != empty_state) {
+    if (w->y && w->y != tb__empty_state) {
         for (k = 0; k < TB__QUANTITY_COUNT; ++k)
             memcpy(y + off[k], w->y + w->off[k],
                    quantities[k].width * count_of(w, quantities[k].tier) * sizeof(double));

@@ -330,13 +330,13 @@ static tb_status restore(tb_world *w, const tb_snapshot *s)
             if (s->partial && want[i].steady) {
                 p = *have[i].at; /* the same size: no step resizes it */
             } else if (fresh[i]) {
-                if (*have[i].at)
+                if (*have[i].at && *have[i].at != (void *)tb__empty_state)
                     tb__alloc(w, *have[i].at, have[i].size, 0);
                 p = fresh[i];
             } else if (cap[i].size) {
                 p = *have[i].at;
             } else {
-                if (*have[i].at)
+                if (*have[i].at && *have[i].at != (void *)tb__empty_state)
                     tb__alloc(w, *have[i].at, have[i].size, 0);
                 p = NULL;
             }
@@ -351,13 +351,15 @@ static tb_status restore(tb_world *w, const tb_snapshot *s)
     nw.stepping = 0;
     nw.rollback = w->rollback;
     nw.kick_seen = NULL; /* between steps it is always NULL (integrators.c clears it) */
+    if (!nw.y)
+        nw.y = tb__empty_state; /* an empty state (core.h) */
     if (nw.y_size == w->y_size) {
         nw.scratch = w->scratch;
         nw.scratch_count = w->scratch_count;
     } else {
-        if (w->scratch)
+        if (w->scratch && w->scratch != tb__empty_state)
             tb__alloc(w, w->scratch, w->scratch_count * w->y_size * sizeof(double), 0);
-        nw.scratch = NULL;
+        nw.scratch = tb__empty_state;
         nw.scratch_count = 0;
     }
     if (s->has_contacts) {
