@@ -13,11 +13,14 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 
-packages=(build-essential cmake pkg-config liblua5.4-dev lua5.4 libcmocka-dev libode-dev gnuplot-nox)
+# What building the library and the command and running a scene needs;
+# the tests, benchmarks and charts need the rest.
+run_packages=(build-essential cmake pkg-config liblua5.4-dev)
+packages=("${run_packages[@]}" lua5.4 libcmocka-dev libode-dev gnuplot-nox)
 
-install_missing() { # [extra packages]
+install_missing() { # packages
     local missing=() p sudo=""
-    for p in "${packages[@]}" "$@"; do
+    for p in "$@"; do
         dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
     done
     ((${#missing[@]})) || return 0
@@ -36,22 +39,22 @@ build() { # preset
 
 case "${1:-}" in
 run)
-    install_missing
-    build default
+    install_missing "${run_packages[@]}"
+    build run
     ./build/default/tumble run scenes/projectile.lua --out projectile.csv
     ;;
 test)
-    install_missing
+    install_missing "${packages[@]}"
     build default
     ctest --preset default
     ;;
 asan)
-    install_missing
+    install_missing "${packages[@]}"
     build asan
     ctest --preset asan
     ;;
 fuzz)
-    install_missing clang-14 libclang-rt-14-dev
+    install_missing "${packages[@]}" clang-14 libclang-rt-14-dev
     build fuzz
     # Each target runs on a copy of its seed corpus and regressions; an input
     # that fails is left as crash-*, leak-* or timeout-* in the work folder,
@@ -78,7 +81,7 @@ fuzz)
     exit "$status"
     ;;
 bench)
-    install_missing
+    install_missing "${packages[@]}"
     build default
     ./build/default/bench/bench_particles
     ./build/default/bench/bench_bodies
@@ -88,7 +91,7 @@ bench)
     ./build/default/bench/bench_snapshot
     ;;
 charts)
-    install_missing
+    install_missing "${packages[@]}"
     build default
     mkdir -p bench/out
     ./build/default/bench/bench_workprecision bench/out
