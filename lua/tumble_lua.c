@@ -1649,6 +1649,8 @@ int luaopen_tumble(lua_State *L)
     luaL_newlib(L, funcs);
     lua_pushfstring(L, "%d.%d.%d", TB_VERSION_MAJOR, TB_VERSION_MINOR, TB_VERSION_PATCH);
     lua_setfield(L, -2, "version");
+    lua_pushfstring(L, "tumble %d.%d.%d", TB_VERSION_MAJOR, TB_VERSION_MINOR, TB_VERSION_PATCH);
+    lua_setfield(L, -2, "_VERSION");
     return 1;
 }
 

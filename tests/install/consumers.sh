@@ -2,10 +2,10 @@
 # consumers.sh BUILD_DIR SOURCE_DIR: installs the build into a scratch
 # prefix and builds and runs a small program against it three ways (the
 # CMake package, pkg-config with the default static library, and
-# add_subdirectory of the source tree), then compiles the public headers
-# as C++. Run by ctest as install.consumers (docs/testing.md).
+# add_subdirectory of the source tree), compiles the public headers as
+# C++, and has a stock lua5.4 require the installed module. Run by ctest as install.consumers (docs/testing.md).
 set -euo pipefail
-build=$1 source=$2 here=$(cd "$(dirname "$0")" && pwd)
+build=$(cd "$1" && pwd) source=$(cd "$2" && pwd) here=$(cd "$(dirname "$0")" && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cmake --install "$build" --prefix "$work/prefix" > /dev/null
@@ -34,4 +34,7 @@ lua_cflags=$(pkg-config --cflags lua5.4 2>/dev/null || true)
 c++ -std=c++11 -Wall -Wextra -Wpedantic -Werror -I"$work/prefix/include" $lua_cflags "$here/headers.cpp" \
     -L"$libdir" -ltumble_lua -ltumble $(pkg-config --libs lua5.4) -lm -o "$work/cxx_app"
 "$work/cxx_app"
+echo "== lua5.4 requires the installed module"
+module=$(find "$work/prefix" -name tumble.so)
+LUA_CPATH="$(dirname "$module")/?.so" lua5.4 "$here/../lua/require_module.lua" "$(pkg-config --modversion tumble)"
 echo "consumers: all built and ran"
