@@ -14,6 +14,7 @@
 
 #include <lauxlib.h>
 #include <lualib.h>
+#include <errno.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -36,19 +37,22 @@
 
 static const char usage[] =
     "usage: tumble run SCENE.lua [--out FILE.csv] [--integrator NAME] [--dt SECONDS]\n"
-    "                            [--tol TOLERANCE] [--until SECONDS] [--every SECONDS]\n"
-    "                            [--trust] [--max-instructions N] [--max-memory BYTES]\n"
-    "                            [--quiet]\n"
+    "                            [--tol TOLERANCE] [--guard FACTOR] [--until SECONDS]\n"
+    "                            [--every SECONDS] [--trust] [--max-instructions N]\n"
+    "                            [--max-memory BYTES] [--quiet]\n"
     "       tumble --help | --version\n"
     "\n"
-    "Runs a scene script and writes its trajectory as CSV.\n"
+    "Runs a scene script and writes its trajectory as CSV. Options take their\n"
+    "value as the next argument or after '=' (--dt=0.01). On a terminal a\n"
+    "progress line shows on stderr while a run takes more than a second.\n"
     "\n"
     "  run SCENE.lua      the script builds a world and returns\n"
     "                     { world = w, duration = S, record_every = S }\n"
     "  --out FILE.csv     where to write the trajectory (default: the scene's\n"
     "                     name with .csv, in the current directory); written to\n"
     "                     a temporary FILE.csv.part.XXXXXX and renamed only when\n"
-    "                     the run succeeds\n"
+    "                     the run succeeds. --out - writes it to stdout (the\n"
+    "                     summary then goes to stderr)\n"
     "  --integrator NAME  override the scene's integrator: %s\n"
     "  --dt SECONDS       override the step (default: the world's dt, 1/60 s\n"
     "                     unless the scene says otherwise)\n"
@@ -183,47 +187,60 @@ static int parse_arguments(int argc, char **argv, options *o)
     if (strcmp(argv[1], "run"))
         return die(2, "unknown command '%s' (try tumble --help)", argv[1]);
     for (i = 2; i < argc; ++i) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL, *eq = strchr(a, '=');
+        char name[64];
+        int joined = 0; /* --opt=value: the value is in a, not the next argument */
+        if (a[0] == '-' && a[1] == '-' && eq) {
+            if ((size_t)(eq - a) >= sizeof name)
+                return die(2, "unknown option '%s' (try tumble --help)", a);
+            memcpy(name, a, (size_t)(eq - a));
+            name[eq - a] = 0;
+            a = name, v = eq + 1, joined = 1;
+            if (!strcmp(a, "--trust") || !strcmp(a, "--quiet") || !strcmp(a, "--help"))
+                return die(2, "%s takes no value", a);
+        }
+        if (!strcmp(a, "--help") || !strcmp(a, "-h"))
+            return print_usage(stdout), -1;
         if (!strcmp(a, "--out")) {
-            if (!v)
+            if (!v || !*v)
                 return die(2, "%s needs a file name", a);
-            o->out = v, ++i;
+            o->out = v, i += !joined;
         } else if (!strcmp(a, "--integrator")) {
-            if (!v)
+            if (!v || !*v)
                 return die(2, "%s needs a name", a);
-            o->integrator = v, ++i;
+            o->integrator = v, i += !joined;
         } else if (!strcmp(a, "--dt")) {
             if ((rc = parse_number(a, v, &o->dt, 0)))
                 return rc;
-            ++i;
+            i += !joined;
         } else if (!strcmp(a, "--tol")) {
             if ((rc = parse_number(a, v, &o->tol, 0)))
                 return rc;
-            ++i;
+            i += !joined;
         } else if (!strcmp(a, "--guard")) {
             if ((rc = parse_number(a, v, &o->guard, 0)))
                 return rc;
             if (!(o->guard > 1))
                 return die(2, "--guard must be a factor > 1 (got '%s')", v);
-            ++i;
+            i += !joined;
         } else if (!strcmp(a, "--until")) {
             if ((rc = parse_number(a, v, &o->until, 1)))
                 return rc;
-            ++i;
+            i += !joined;
         } else if (!strcmp(a, "--every")) {
             if ((rc = parse_number(a, v, &o->every, 1)))
                 return rc;
-            ++i;
+            i += !joined;
         } else if (!strcmp(a, "--trust")) {
             o->trust = 1;
         } else if (!strcmp(a, "--max-instructions")) {
             if ((rc = parse_budget(a, v, 1000, 1e18, &o->max_instructions)))
                 return rc;
-            ++i;
+            i += !joined;
         } else if (!strcmp(a, "--max-memory")) {
             if ((rc = parse_budget(a, v, 1024, (double)((size_t)-1 / 2), &o->max_memory)))
                 return rc;
-            ++i;
+            i += !joined;
         } else if (!strcmp(a, "--quiet")) {
             o->quiet = 1;
         } else if (a[0] == '-') {
@@ -534,9 +551,12 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     tb_energy e0, e1;
     double dt, duration, every, t0, wall, *tracer_vel = NULL, n;
     long steps, step, every_steps, rows = 0, r, substeps;
-    int world_idx, have_advice, rc, failed, unwritten;
+    int world_idx, have_advice, rc, failed, unwritten, to_stdout, write_error;
+    /* a progress line on a terminal, never into a pipe or a file */
+    const int progress = !o->quiet && isatty(STDERR_FILENO);
+    double shown;
     tb_advice advice;
-    FILE *f;
+    FILE *f, *report;
 
     lua_pushcfunction(L, add_traceback);
     lua_pushcfunction(L, load_scene);
@@ -584,14 +604,19 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     have_advice = tb_world_advise(w, dt, &advice) == TB_OK;
     if (have_advice && advice.exceeded)
         fprintf(stderr, "tumble: warning: %s\n", advice.text);
-    f = open_temp(out_path);
-    if (!f)
-        return die(1, "cannot write a temporary file next to '%s'", out_path);
+    to_stdout = !strcmp(out_path, "-");
+    report = to_stdout ? stderr : stdout;
+    f = to_stdout ? stdout : open_temp(out_path);
+    if (!f) {
+        fprintf(stderr, "tumble: cannot write a temporary file next to '%s': %s\n", out_path, strerror(errno));
+        return 1;
+    }
     fprintf(f, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n");
 
     e0 = tb_world_energy(w);
     t0 = read_clock();
     r = record_rows(f, L, world_idx, w, &tracer_vel, &cap);
+    shown = t0 + 1; /* a progress line from the first second on */
     for (step = 1; r >= 0 && step <= steps; ++step) {
         rows += r;
         r = 0;
@@ -601,11 +626,20 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         }
         if (step % every_steps == 0 || step == steps)
             r = record_rows(f, L, world_idx, w, &tracer_vel, &cap);
+        if (progress && step % 64 == 0 && read_clock() >= shown) {
+            const double spent = read_clock() - t0, rate = (double)step / spent;
+            fprintf(stderr, "\rtumble: t = %.4g of %.4g s, %.3g steps/s, about %.0f s left\033[K",
+                    tb_world_time(w), (double)steps * dt, rate, (double)(steps - step) / rate);
+            shown = read_clock() + 0.25;
+        }
     }
+    if (progress && shown > t0 + 1)
+        fprintf(stderr, "\r\033[K"); /* the line goes once the run ends */
     wall = read_clock() - t0;
     free(tracer_vel);
     failed = r < 0 || stop_signal || tb_lua_limit_error(L);
-    unwritten = ferror(f) | fclose(f);
+    unwritten = to_stdout ? (fflush(f) != 0) | ferror(f) : ferror(f) | fclose(f);
+    write_error = errno;
     if (failed || unwritten) {
         remove_temp();
         if ((rc = report_stop(L, o, w)) != 0)
@@ -613,13 +647,16 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         if (r < 0)
             fprintf(stderr, "tumble: %s: at t = %.17g s: %s\n", o->scene, tb_world_time(w), tb_world_message(w));
         else
-            fprintf(stderr, "tumble: error writing '%s'\n", temp_path);
+            fprintf(stderr, "tumble: error writing '%s': %s\n", to_stdout ? "stdout" : temp_path,
+                    strerror(write_error));
         return 1;
     }
     rows += r;
-    if (rename(temp_path, out_path)) {
+    if (!to_stdout && rename(temp_path, out_path)) {
+        const int why = errno;
         remove_temp();
-        return die(1, "cannot rename to '%s'", out_path);
+        fprintf(stderr, "tumble: cannot rename to '%s': %s\n", out_path, strerror(why));
+        return 1;
     }
     temp_made = 0;
     e1 = tb_world_energy(w);
@@ -627,23 +664,23 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         unsigned long long executed;
         size_t peak;
         char budget[64];
-        printf("scene       %s\n", o->scene);
+        fprintf(report, "scene       %s\n", o->scene);
         if (tb_world_auto_choice(w, &substeps))
-            printf("integrator  auto: %s, %ld substep%s per step, dt %.6g s, tolerance %g\n",
+            fprintf(report, "integrator  auto: %s, %ld substep%s per step, dt %.6g s, tolerance %g\n",
                    tb_world_auto_choice(w, NULL), substeps, substeps == 1 ? "" : "s", dt, tb_world_tolerance(w));
         else
-            printf("integrator  %s, dt %.6g s\n", tb_world_integrator(w), dt);
-        printf("objects     %zu particles, %zu tracers, %zu springs, %zu bodies\n", tb_world_particle_count(w),
+            fprintf(report, "integrator  %s, dt %.6g s\n", tb_world_integrator(w), dt);
+        fprintf(report, "objects     %zu particles, %zu tracers, %zu springs, %zu bodies\n", tb_world_particle_count(w),
                tb_world_tracer_count(w), tb_world_spring_count(w), tb_world_body_count(w));
-        printf("steps       %ld, simulated %.6g s, wall %.3f ms (%.3g us/step)\n", steps, tb_world_time(w),
+        fprintf(report, "steps       %ld, simulated %.6g s, wall %.3f ms (%.3g us/step)\n", steps, tb_world_time(w),
                1e3 * wall, steps ? 1e6 * wall / (double)steps : 0.0);
         if (e0.total != 0)
-            printf("energy      %.9g J -> %.9g J, relative drift %.3e\n", e0.total, e1.total,
+            fprintf(report, "energy      %.9g J -> %.9g J, relative drift %.3e\n", e0.total, e1.total,
                    (e1.total - e0.total) / fabs(e0.total));
         else
-            printf("energy      %.9g J -> %.9g J, relative drift n/a (starts at 0)\n", e0.total, e1.total);
+            fprintf(report, "energy      %.9g J -> %.9g J, relative drift n/a (starts at 0)\n", e0.total, e1.total);
         if (have_advice)
-            printf("stability   %s\n", advice.text);
+            fprintf(report, "stability   %s\n", advice.text);
         tb_lua_usage(L, &executed, &peak);
         if (o->max_instructions > 0)
             snprintf(budget, sizeof budget, "%llu of %.0f", executed, o->max_instructions);
@@ -651,13 +688,13 @@ static int run_scene(lua_State *L, const options *o, scene *s)
             snprintf(budget, sizeof budget, "%llu (no limit)", executed);
         else
             snprintf(budget, sizeof budget, "not counted");
-        printf("lua         %s, instructions %s, peak memory %.3g MiB", o->trust ? "trusted" : "sandboxed", budget,
+        fprintf(report, "lua         %s, instructions %s, peak memory %.3g MiB", o->trust ? "trusted" : "sandboxed", budget,
                (double)peak / (1024 * 1024));
         if (o->max_memory > 0)
-            printf(" of %.4g MiB\n", o->max_memory / (1024 * 1024));
+            fprintf(report, " of %.4g MiB\n", o->max_memory / (1024 * 1024));
         else
-            printf(" (no limit)\n");
-        printf("wrote       %s (%ld rows)\n", out_path, rows);
+            fprintf(report, " (no limit)\n");
+        fprintf(report, "wrote       %s (%ld rows)\n", to_stdout ? "stdout" : out_path, rows);
     }
     return 0;
 }

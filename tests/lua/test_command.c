@@ -356,6 +356,37 @@ static void overrides_and_help(void **state)
     assert_non_null(strstr(out_text, "t,kind,id,x,y,z,vx,vy,vz"));
     assert_non_null(strstr(out_text, "symplectic_euler"));
     assert_non_null(strstr(out_text, "--until"));
+    assert_non_null(strstr(out_text, "--guard"));
+    assert_int_equal(tumble("run --help"), 0);
+    assert_non_null(strstr(out_text, "--max-memory"));
+}
+
+/* Pipes and joined values: --opt=value takes the same values as
+   --opt value; --out - writes the CSV alone to stdout and the summary to
+   stderr (the projectile at --every 0.5 for 1 s: header and 3 rows); a
+   flag given a value is refused; an output that cannot be made names the
+   system's reason. */
+static void pipes_and_joined_values(void **state)
+{
+    char args[2048], *line;
+    int rows = 0;
+    (void)state;
+    snprintf(args, sizeof args, "run '%s/projectile.lua' --dt=0.01 --until=1 --every=0.5 --out=-", SCENES_DIR);
+    assert_int_equal(tumble(args), 0);
+    assert_true(!strncmp(out_text, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n", 46));
+    for (line = out_text; (line = strchr(line, '\n')) != NULL; ++line)
+        ++rows;
+    assert_int_equal(rows, 4);
+    assert_non_null(strstr(err_text, "steps       100"));
+    assert_non_null(strstr(err_text, "wrote       stdout (3 rows)"));
+    snprintf(args, sizeof args, "run '%s/projectile.lua' --quiet=1", SCENES_DIR);
+    assert_int_equal(tumble(args), 2);
+    assert_non_null(strstr(err_text, "--quiet takes no value"));
+    snprintf(args, sizeof args, "run '%s/projectile.lua' --out=", SCENES_DIR);
+    assert_int_equal(tumble(args), 2);
+    snprintf(args, sizeof args, "run '%s/projectile.lua' --out /nonexistent-folder/x.csv", SCENES_DIR);
+    assert_int_equal(tumble(args), 1);
+    assert_non_null(strstr(err_text, "No such file or directory"));
 }
 
 
@@ -410,6 +441,7 @@ static void contact_scenes(void **state)
 
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(contact_scenes),
+    cmocka_unit_test(pipes_and_joined_values),
     cmocka_unit_test(blow_up_is_stopped_and_auto_plans),
     cmocka_unit_test(projectile_scene),
     cmocka_unit_test(vortex_scene),
