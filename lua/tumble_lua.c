@@ -2120,6 +2120,48 @@ static int sandbox_load(lua_State *L)
     return call_original(L);
 }
 
+/* string.find, match, gmatch and gsub in the sandbox: Lua's matcher runs
+   in C, where the instruction budget cannot stop it, and with q
+   repetitions that backtrack ('*', '+', '-') it may try about n^(q + 1)
+   positions on a subject of n bytes (n^q when anchored with '^'): a single
+   repetition on 1e5 bytes passes, two on 2 KB, an anchored trim on 2 KB. Patterns whose bound passes
+   PATTERN_WORK are refused with the reason (test_sandbox.
+   costly_patterns_are_refused); a plain find and patterns without
+   repetitions pass untouched. Upvalues: the string library's function,
+   and whether it is find (whose fourth argument asks for a plain find). */
+#define PATTERN_WORK 1e10
+static int sandbox_pattern(lua_State *L)
+{
+    size_t n, m, k;
+    const char *subject = luaL_checklstring(L, 1, &n), *pattern = luaL_checklstring(L, 2, &m);
+    double work = m > 0 && pattern[0] == '^' ? 1 : (double)n + 1; /* anchored: one start */
+    int repeats = 0, in_set = 0;
+    (void)subject;
+    if (lua_toboolean(L, lua_upvalueindex(2)) && lua_toboolean(L, 4))
+        return call_original(L); /* string.find(s, p, init, true): no pattern */
+    for (k = 0; k < m; ++k) {
+        const char c = pattern[k];
+        if (c == '%' && k + 1 < m) {
+            if (!in_set && (pattern[k + 1] == 'b' || pattern[k + 1] == 'f'))
+                k += 2; /* %bxy, %f[set]: no repetition of their own */
+            else
+                ++k;
+        } else if (in_set) {
+            in_set = c != ']' || pattern[k - 1] == '[' || (pattern[k - 1] == '^' && pattern[k - 2] == '[');
+        } else if (c == '[') {
+            in_set = 1;
+        } else if ((c == '*' || c == '+' || c == '-') && k > 0) {
+            ++repeats;
+            work *= (double)n + 1;
+        }
+    }
+    if (repeats > 0 && work > PATTERN_WORK)
+        return luaL_error(L, "a pattern with %d repetition%s on a subject of %I bytes: the sandbox refuses "
+                             "matches that could take more than 1e10 steps (run with --trust to allow it)",
+                          repeats, repeats == 1 ? "" : "s", (lua_Integer)n);
+    return call_original(L);
+}
+
 /* setmetatable(t, mt) with no __gc in mt: finalizers run with the count
    hook off, so no budget could stop a loop in one. Lua marks a table for
    finalization only when its metatable has __gc at this call, so a __gc
@@ -2308,6 +2350,16 @@ static int open_sandbox(lua_State *L)
     open_library(L, g, loaded, LUA_STRLIBNAME, luaopen_string);
     lua_pushnil(L);
     lua_setfield(L, -2, "dump");
+    {
+        static const char *const matchers[] = { "find", "match", "gmatch", "gsub", NULL };
+        const int lib = lua_gettop(L);
+        for (k = 0; matchers[k]; ++k) {
+            lua_getfield(L, lib, matchers[k]);
+            lua_pushboolean(L, k == 0);
+            lua_pushcclosure(L, sandbox_pattern, 2);
+            lua_setfield(L, lib, matchers[k]);
+        }
+    }
     lua_pop(L, 1);
     lua_pushliteral(L, ""); /* lock the strings' metatable, which every string shares */
     if (lua_getmetatable(L, -1)) {

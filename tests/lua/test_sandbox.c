@@ -664,6 +664,31 @@ static void expect(lua_State *L, const char *code, const char *needle)
         fail_msg("unexpected error: %s", err);
 }
 
+/* Lua's pattern matcher runs in C, out of the instruction budget's reach:
+   the sandbox refuses matches whose bound n^(q + 1) (n^q anchored) passes
+   1e10 steps, with the reason, and lets plain finds, a repetition on 1e4
+   bytes and ordinary trims through. Without the check the first refused match
+   below runs for hours. */
+static void costly_patterns_are_refused(void **state)
+{
+    lua_State *L = tb_lua_newstate(NULL);
+    (void)state;
+    assert_non_null(L);
+    assert_int_equal(tb_lua_sandbox(L, NULL), LUA_OK);
+    expect(L, "local s = ('a'):rep(1e5)\n"
+              "assert(s:find('a', 1, true) == 1 and not s:find('b') and select(2, s:gsub('a', 'b')) == 1e5)\n"
+              "assert(('  hi  '):match('^%s*(.-)%s*$') == 'hi')\n"
+              "assert(#(('x'):rep(500)):match('^%s*(.-)%s*$') == 500)\n"
+              "local n = 0 for w in ('one two'):gmatch('%a+') do n = n + 1 end assert(n == 2)\n"
+              "assert(#s:sub(1, 1e4):match('a*') == 1e4)\n", NULL);
+    expect(L, "local s = ('a'):rep(1e5) return s:find(('a-'):rep(10) .. 'b')", "10 repetitions on a subject of 100000");
+    expect(L, "local s = ('a'):rep(1e5) return string.match(s, '.-.-b')", "the sandbox refuses");
+    expect(L, "local s = ('a'):rep(1e5) for w in s:gmatch('a*a*b') do end", "the sandbox refuses");
+    expect(L, "local s = ('a'):rep(1e5) return s:gsub('[a-]*a*b', '')", "the sandbox refuses");
+    expect(L, "local s = ('a'):rep(1e6) return s:find('a*b')", "1 repetition on a subject of 1000000");
+    lua_close(L);
+}
+
 /* The same limits through the binding: a budget that pcall cannot
    swallow, a memory budget, tb_lua_set_limits starting afresh, a
    sandbox with no folder, and a Lua force stepped by tb_lua_step. */
@@ -724,6 +749,7 @@ static void c_hosts_get_the_same_limits(void **state)
 
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(loops_end_at_the_instruction_budget),
+    cmocka_unit_test(costly_patterns_are_refused),
     cmocka_unit_test(finalizers_are_refused),
     cmocka_unit_test(memory_bombs_end_at_the_memory_budget),
     cmocka_unit_test(erroring_metamethods_on_the_returned_table),
