@@ -342,6 +342,15 @@ TB_API tb_shape_def tb_default_shape_def(void);
 TB_API tb_status tb_world_add_shape(tb_world *world, const tb_shape_def *def, tb_shape_id *id);
 TB_API tb_status tb_world_remove_shape(tb_world *world, tb_shape_id id);
 TB_API size_t tb_world_shape_count(const tb_world *world);
+/* The shape in slot 0 .. tb_world_shape_count() - 1, to walk them all (a
+   removal moves the last shape into the freed slot); the null id past the
+   end. */
+TB_API tb_shape_id tb_world_shape_at(const tb_world *world, size_t slot);
+/* What a shape is, as the world holds it: the definition it was added with
+   (the orientation normalised; a box's half_length 0, a capsule's
+   half_extents 0), so that a host can draw it at its body's pose.
+   TB_ERR_STALE_ID for a removed or foreign id. */
+TB_API tb_status tb_shape_definition(const tb_world *world, tb_shape_id id, tb_shape_def *def);
 
 TB_API tb_contact_settings tb_default_contact_settings(void);
 /* Refused: values outside the ranges tb_contact_settings gives or the

@@ -542,6 +542,51 @@ static void remove_temp(void)
     temp_made = 0;
 }
 
+/* The shapes beside the trajectory: FILE.csv's FILE.shapes.csv (or
+   FILE.shapes.csv beside any other name), one row per shape as the world
+   holds it at the end of the run: its id, type, body (the trajectory's
+   body id; 0: static), pose in the body's principal frame (static: world),
+   sizes (0 where the type has none) and a plane's normal and offset. Written through a temporary file
+   and renamed, as the trajectory is. Returns 0, or 1 with a message. */
+static int write_shapes(const char *out_path, tb_world *w)
+{
+    static const char *const types[] = { "sphere", "capsule", "box", "plane" };
+    char path[4200];
+    size_t n = strlen(out_path), i;
+    FILE *f;
+    int failed;
+    if (n >= 4 && !strcmp(out_path + n - 4, ".csv"))
+        n -= 4;
+    snprintf(path, sizeof path, "%.*s.shapes.csv", (int)n, out_path);
+    if (!(f = open_temp(path))) {
+        fprintf(stderr, "tumble: cannot write a temporary file next to '%s': %s\n", path, strerror(errno));
+        return 1;
+    }
+    fprintf(f, "shape,type,body,x,y,z,qw,qx,qy,qz,radius,half_length,hx,hy,hz,nx,ny,nz,offset\n");
+    for (i = 0; i < tb_world_shape_count(w); ++i) {
+        tb_shape_def d;
+        if (tb_shape_definition(w, tb_world_shape_at(w, i), &d) != TB_OK)
+            continue;
+        fprintf(f, "%u,%s,%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
+                   "%.17g,%.17g\n",
+                (unsigned)tb_world_shape_at(w, i).index1, types[d.type], (unsigned)d.body.index1, d.position[0],
+                d.position[1], d.position[2], d.orientation[0], d.orientation[1], d.orientation[2],
+                d.orientation[3], d.type == TB_SHAPE_SPHERE || d.type == TB_SHAPE_CAPSULE ? d.radius : 0,
+                d.half_length, d.half_extents[0], d.half_extents[1], d.half_extents[2],
+                d.type == TB_SHAPE_PLANE ? d.normal[0] : 0, d.type == TB_SHAPE_PLANE ? d.normal[1] : 0,
+                d.type == TB_SHAPE_PLANE ? d.normal[2] : 0, d.offset);
+    }
+    failed = ferror(f) | fclose(f);
+    if (failed || rename(temp_path, path)) {
+        const int why = errno;
+        remove_temp();
+        fprintf(stderr, "tumble: cannot write '%s': %s\n", path, strerror(why));
+        return 1;
+    }
+    temp_made = 0;
+    return 0;
+}
+
 /* Run the scene whose text is in s (read by main). */
 static int run_scene(lua_State *L, const options *o, scene *s)
 {
@@ -659,6 +704,8 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         return 1;
     }
     temp_made = 0;
+    if (!to_stdout && (rc = write_shapes(out_path, w)) != 0)
+        return rc;
     e1 = tb_world_energy(w);
     if (!o->quiet) {
         unsigned long long executed;
@@ -695,6 +742,8 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         else
             fprintf(report, " (no limit)\n");
         fprintf(report, "wrote       %s (%ld rows)\n", to_stdout ? "stdout" : out_path, rows);
+        if (!to_stdout && tb_world_shape_count(w))
+            fprintf(report, "shapes      %zu, beside it in .shapes.csv\n", tb_world_shape_count(w));
     }
     return 0;
 }

@@ -265,6 +265,49 @@ size_t tb_world_shape_count(const tb_world *w)
     return w->contacts ? w->contacts->shape_count : 0;
 }
 
+tb_shape_id tb_world_shape_at(const tb_world *w, size_t slot)
+{
+    tb_shape_id id = { 0, 0 };
+    if (w && w->contacts && slot < w->contacts->shape_count)
+        tb__ids_at(&w->contacts->ids, (uint32_t)slot, &id.index1, &id.generation);
+    return id;
+}
+
+tb_status tb_shape_definition(const tb_world *w, tb_shape_id id, tb_shape_def *def)
+{
+    const tb__shape *s;
+    uint32_t slot;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if (!def)
+        return tb__null((tb_world *)w, "tb_shape_definition", "the output");
+    if (!w->contacts || !tb__ids_lookup(&w->contacts->ids, id.index1, id.generation, &slot))
+        return tb__fail((tb_world *)w, TB_ERR_STALE_ID, "shape id %u.%u is null, removed or from another world",
+                        id.index1, id.generation);
+    s = &w->contacts->shapes[slot];
+    memset(def, 0, sizeof *def);
+    def->type = s->kind == TB__SHAPE_SPHERE    ? TB_SHAPE_SPHERE
+                : s->kind == TB__SHAPE_CAPSULE ? TB_SHAPE_CAPSULE
+                : s->kind == TB__SHAPE_BOX     ? TB_SHAPE_BOX
+                                               : TB_SHAPE_PLANE;
+    def->body.index1 = s->body;
+    def->body.generation = s->body ? s->body_generation : 0;
+    memcpy(def->position, s->pos, sizeof def->position);
+    memcpy(def->orientation, s->rot, sizeof def->orientation);
+    def->radius = s->radius;
+    if (s->kind == TB__SHAPE_BOX)
+        memcpy(def->half_extents, s->half, sizeof def->half_extents);
+    if (s->kind == TB__SHAPE_CAPSULE)
+        def->half_length = s->half[2];
+    memcpy(def->normal, s->normal, sizeof def->normal);
+    def->offset = s->offset;
+    def->friction = s->friction;
+    def->restitution = s->restitution;
+    def->rolling_resistance = s->rolling_resistance;
+    def->category = s->category;
+    def->mask = s->mask;
+    return TB_OK;
+}
+
 /* The most sweeps of each kind a step may take: far beyond any use (the
    defaults are 20, 3 and 0), and small enough that the solver's multiples
    of them stay ints. */

@@ -62,6 +62,69 @@ static void bad_shapes_are_refused(void **state)
     tb_world_destroy(w);
 }
 
+/* Every shape reads back as it was defined (a host draws from this):
+   walked by slot, each kind's fields equal the definition's, the
+   orientation normalised; a removed id, another world's id and a NULL
+   output are refused with the world's message. */
+static void shapes_read_back_as_defined(void **state)
+{
+    tb_world *w = world_on_plane(0.5, 0), *other = world_on_plane(0.5, 0);
+    const double start[3] = { 0, 0, 2 };
+    tb_body_id body = add_box(w, start, 1, 0.7);
+    tb_shape_def made[3], got;
+    tb_shape_id ids[3];
+    size_t k, found = 0;
+    (void)state;
+    for (k = 0; k < 3; ++k) {
+        made[k] = tb_default_shape_def();
+        made[k].body = body;
+        made[k].position[0] = 0.1 * (double)k;
+    }
+    made[0].type = TB_SHAPE_SPHERE, made[0].radius = 0.25, made[0].restitution = 0.5;
+    made[1].type = TB_SHAPE_CAPSULE, made[1].radius = 0.1, made[1].half_length = 0.3;
+    made[1].orientation[0] = sqrt(0.5) * (1 + 1e-8), made[1].orientation[1] = sqrt(0.5); /* normalised on the way in */
+    made[2].type = TB_SHAPE_BOX, made[2].half_extents[0] = 0.1, made[2].half_extents[1] = 0.2;
+    made[2].half_extents[2] = 0.3, made[2].rolling_resistance = 0.01, made[2].category = 4, made[2].mask = 6;
+    for (k = 0; k < 3; ++k)
+        assert_int_equal(tb_world_add_shape(w, &made[k], &ids[k]), TB_OK);
+    for (k = 0; k < tb_world_shape_count(w); ++k) {
+        const tb_shape_id id = tb_world_shape_at(w, k);
+        size_t j;
+        assert_int_equal(tb_shape_definition(w, id, &got), TB_OK);
+        for (j = 0; j < 3; ++j) {
+            if (id.index1 != ids[j].index1)
+                continue;
+            ++found;
+            assert_int_equal(got.type, made[j].type);
+            assert_true(got.body.index1 == body.index1 && got.body.generation == body.generation);
+            assert_true(got.position[0] == made[j].position[0] && got.radius == made[j].radius);
+            assert_true(got.restitution == made[j].restitution && got.friction == made[j].friction);
+            assert_true(got.rolling_resistance == made[j].rolling_resistance);
+            assert_true(got.category == made[j].category && got.mask == made[j].mask);
+        }
+    }
+    assert_int_equal(found, 3);
+    assert_int_equal(tb_shape_definition(w, ids[1], &got), TB_OK);
+    assert_rel(got.half_length, 0.3, 0);
+    assert_rel(got.orientation[0], made[1].orientation[0] / hypot(made[1].orientation[0], made[1].orientation[1]),
+               1e-15);
+    assert_rel(got.orientation[1], made[1].orientation[1] / hypot(made[1].orientation[0], made[1].orientation[1]),
+               1e-15);
+    assert_int_equal(tb_shape_definition(w, ids[2], &got), TB_OK);
+    assert_true(got.half_extents[0] == 0.1 && got.half_extents[1] == 0.2 && got.half_extents[2] == 0.3);
+    assert_int_equal(tb_shape_definition(w, tb_world_shape_at(w, 0), &got), TB_OK); /* the plane */
+    assert_int_equal(got.type, TB_SHAPE_PLANE);
+    assert_true(got.body.index1 == 0 && got.normal[2] == 1);
+    assert_int_equal(tb_world_shape_at(w, tb_world_shape_count(w)).index1, 0);
+    assert_int_equal(tb_shape_definition(w, ids[0], NULL), TB_ERR_ARGUMENT);
+    assert_int_equal(tb_shape_definition(other, ids[0], &got), TB_ERR_STALE_ID);
+    assert_int_equal(tb_world_remove_shape(w, ids[0]), TB_OK);
+    assert_int_equal(tb_shape_definition(w, ids[0], &got), TB_ERR_STALE_ID);
+    assert_non_null(strstr(tb_world_message(w), "removed"));
+    tb_world_destroy(w);
+    tb_world_destroy(other);
+}
+
 /* Three runs of 300 steps in which, between steps, bodies (a box, sphere
    or capsule, sometimes with a second shape), shapes and particles are
    added and removed at random, velocities, poses, forces and torques set
@@ -158,6 +221,7 @@ static void structural_churn_keeps_ids_honest(void **state)
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(structural_churn_keeps_ids_honest),
     cmocka_unit_test(bad_shapes_are_refused),
+    cmocka_unit_test(shapes_read_back_as_defined),
 };
 
 TB_TEST_MAIN(tests)

@@ -242,6 +242,44 @@ static void push_scene(void **state)
     assert_true(last[14] > 0); /* the thruster spun it up about +z */
 }
 
+/* The shapes beside the trajectory: bounce.lua (a plane and five balls of
+   0.1 m on bodies) writes bounce.shapes.csv with its header and a row per
+   shape: the plane static with its normal, each ball a sphere of radius
+   0.1 on a body whose id is one of the trajectory's body ids. */
+static void shapes_are_written_beside_the_trajectory(void **state)
+{
+    char args[2048], path[1100], line[1024];
+    FILE *f;
+    int rows = 0, spheres = 0, planes = 0;
+    (void)state;
+    snprintf(args, sizeof args, "run '%s/bounce.lua' --until 0.1 --out bounce.csv", SCENES_DIR);
+    assert_int_equal(tumble(args), 0);
+    assert_non_null(strstr(out_text, "shapes      6"));
+    work_path(path, sizeof path, "bounce.shapes.csv");
+    f = fopen(path, "r");
+    assert_non_null(f);
+    assert_non_null(fgets(line, sizeof line, f));
+    assert_string_equal(line, "shape,type,body,x,y,z,qw,qx,qy,qz,radius,half_length,hx,hy,hz,nx,ny,nz,offset\n");
+    while (fgets(line, sizeof line, f)) {
+        unsigned id, body;
+        char type[16];
+        double r, nz;
+        ++rows;
+        assert_int_equal(sscanf(line, "%u,%15[a-z],%u,%*g,%*g,%*g,%*g,%*g,%*g,%*g,%lg,%*g,%*g,%*g,%*g,%*g,%*g,%lg",
+                                &id, type, &body, &r, &nz), 5);
+        if (!strcmp(type, "plane")) {
+            ++planes;
+            assert_true(body == 0 && nz == 1);
+        } else {
+            ++spheres;
+            assert_string_equal(type, "sphere");
+            assert_true(body >= 1 && body <= 5 && r == 0.1);
+        }
+    }
+    fclose(f);
+    assert_true(rows == 6 && planes == 1 && spheres == 5);
+}
+
 /* The reference scenes of the work-precision benchmark run as scenes too. */
 static void reference_scenes_run(void **state)
 {
@@ -442,6 +480,7 @@ static void contact_scenes(void **state)
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(contact_scenes),
     cmocka_unit_test(pipes_and_joined_values),
+    cmocka_unit_test(shapes_are_written_beside_the_trajectory),
     cmocka_unit_test(blow_up_is_stopped_and_auto_plans),
     cmocka_unit_test(projectile_scene),
     cmocka_unit_test(vortex_scene),
