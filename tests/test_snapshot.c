@@ -8,6 +8,7 @@
 #include "counting_alloc.h"
 #include "contacts/contacts.h"
 #include "tumble.h"
+#include "contact_scenes.h"
 
 #include <math.h>
 #include <string.h>
@@ -37,28 +38,6 @@ static tb_status blow(const tb_force_args *a, void *user)
     return TB_OK;
 }
 
-static tb_body_id add_body(tb_world *w, tb_shape_type type, const double at[3], const double v[3], double size)
-{
-    tb_body_def b = tb_default_body_def();
-    tb_shape_def s = tb_default_shape_def();
-    const double edge[3] = { size, size, size };
-    tb_body_id id;
-    if (type == TB_SHAPE_BOX) {
-        assert_int_equal(tb_mass_box(1, edge, &b.mass, NULL), TB_OK);
-        s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = size / 2;
-    } else {
-        assert_int_equal(tb_mass_sphere(1, size / 2, &b.mass, NULL), TB_OK);
-        s.radius = size / 2;
-    }
-    memcpy(b.position, at, sizeof b.position);
-    memcpy(b.velocity, v, sizeof b.velocity);
-    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
-    s.type = type;
-    s.body = id;
-    assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
-    return id;
-}
-
 /* The contact scene: a plane; three boxes at rest on it apart from the
    rest (they fall asleep after 0.5 s); a stack of two boxes; boxes and
    spheres dropped from up to 2 m with some sideways speed; a chain of
@@ -81,16 +60,16 @@ static tb_world *scene(const tb_world_def *def, wind *wd)
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
     for (i = 0; i < 3; ++i) {
         const double at[3] = { 10 + 3 * i, 10, 0.25 };
-        add_body(w, TB_SHAPE_BOX, at, none, 0.5);
+        add_solid(w, TB_SHAPE_BOX, at, none, NULL, 0.5);
     }
     for (i = 0; i < 2; ++i) {
         const double at[3] = { 0, 0, 0.5 + 1.0 * i };
-        add_body(w, TB_SHAPE_BOX, at, none, 1);
+        add_solid(w, TB_SHAPE_BOX, at, none, NULL, 1);
     }
     for (i = 0; i < SCENE_BODIES - 5; ++i) {
         const double at[3] = { -2 + 0.45 * (i % 4), -0.3 * (i / 4), 0.4 + 0.3 * i };
         const double v[3] = { 0.2 * (i % 3) - 0.2, 0.1 * i, 0 };
-        add_body(w, i & 1 ? TB_SHAPE_SPHERE : TB_SHAPE_BOX, at, v, 0.4);
+        add_solid(w, i & 1 ? TB_SHAPE_SPHERE : TB_SHAPE_BOX, at, v, NULL, 0.4);
     }
     for (i = 0; i < 6; ++i) {
         tb_particle_def d = tb_default_particle_def();
@@ -226,7 +205,7 @@ static void restore_brings_back_ids(void **unused)
     assert_int_equal(tb_world_snapshot(w, &s), TB_OK);
     assert_int_equal(tb_world_remove_body(w, kept), TB_OK);
     assert_int_equal(tb_body_position(w, kept, x), TB_ERR_STALE_ID);
-    added = add_body(w, TB_SHAPE_SPHERE, at, none, 0.3);
+    added = add_solid(w, TB_SHAPE_SPHERE, at, none, NULL, 0.3);
     steps(w, 10, H);
     assert_int_equal(tb_world_restore(w, s), TB_OK);
     assert_int_equal(tb_body_position(w, kept, x), TB_OK);
@@ -335,7 +314,7 @@ static void failed_allocations_leave_the_world_unchanged(void **unused)
         steps(w, 1, H);
         {   /* a body more: the arrays outgrow the snapshot's blocks */
             const double at[3] = { -8, -8, 0.5 + 0.01 * (double)k }, none[3] = { 0, 0, 0 };
-            add_body(w, TB_SHAPE_BOX, at, none, 0.3);
+            add_solid(w, TB_SHAPE_BOX, at, none, NULL, 0.3);
         }
         b.fail_after = b.allocations + k;
         st = tb_world_snapshot_into(w, s);
@@ -361,7 +340,7 @@ static void failed_allocations_leave_the_world_unchanged(void **unused)
             assert_int_equal(tb_world_remove_body(w, tb_world_body_at(w, 0)), TB_OK);
         for (i = 0; i < 40; ++i) {
             const double at[3] = { 20 + 0.5 * i, -5, 0.2 };
-            add_body(w, TB_SHAPE_SPHERE, at, none, 0.4);
+            add_solid(w, TB_SHAPE_SPHERE, at, none, NULL, 0.4);
         }
         steps(w, 5, H);
     }

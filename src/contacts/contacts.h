@@ -42,8 +42,8 @@ typedef struct tb__point {
     double separation0;        /* its separation, when the shapes last collided */
     int active;                /* touching after the free motion: solved */
     int matched;               /* it touched last step too (warm started) */
-    double friction_impulse[3];/* N s, world: its friction over the step, kept from step to
-                                  step (the soft-step solver's; soft_step.c) */
+    double friction_impulse[3];/* always 0: both solvers keep friction per patch
+                                  (tb__entry.friction_impulse); the state hash reads it */
 } tb__point;
 
 /* The solver works on batches of up to TB__BATCH_LANES manifolds that

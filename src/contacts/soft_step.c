@@ -75,7 +75,7 @@ typedef struct tb__soft_row {
     double separation;          /* m: at the start of the step */
     double rate_start;          /* m/s: normal velocity at the substep's start */
     double lever;               /* m: from the patch's centre (a's side) */
-    double friction, restitution;
+    double restitution;
     double approach;            /* m/s (< 0): normal velocity at which the point struck */
     double most;                /* N s: the largest normal impulse of any substep */
     int struck;                 /* the normal row has pushed in some substep */
@@ -559,7 +559,6 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
             tb__cross(o->rb, o->normal, o->arm_b);
             o->mass = row_mass(c, o);
             o->separation = p->separation;
-            o->friction = e->friction;
             o->restitution = e->restitution;
             o->approach = 0;
             o->most = 0;

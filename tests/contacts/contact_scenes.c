@@ -65,6 +65,31 @@ void awake(tb_world *w)
     assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
 }
 
+tb_body_id add_solid(tb_world *w, tb_shape_type type, const double at[3], const double v[3], const double spin[3],
+                     double size)
+{
+    tb_body_def b = tb_default_body_def();
+    tb_shape_def s = tb_default_shape_def();
+    const double edge[3] = { size, size, size };
+    tb_body_id id;
+    if (type == TB_SHAPE_BOX) {
+        assert_int_equal(tb_mass_box(1, edge, &b.mass, NULL), TB_OK);
+        s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = size / 2;
+    } else {
+        assert_int_equal(tb_mass_sphere(1, size / 2, &b.mass, NULL), TB_OK);
+        s.radius = size / 2;
+    }
+    memcpy(b.position, at, sizeof b.position);
+    memcpy(b.velocity, v, sizeof b.velocity);
+    if (spin)
+        memcpy(b.angular_velocity, spin, sizeof b.angular_velocity);
+    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
+    s.type = type;
+    s.body = id;
+    assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
+    return id;
+}
+
 double slide(double hz, int substeps, tb_world **kept, tb_body_id *box)
 {
     tb_world *w = world_on_plane(0.5, 0);

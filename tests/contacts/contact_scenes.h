@@ -28,6 +28,11 @@ tb_body_id add_ball(tb_world *w, const double centre[3], double radius, double r
    (exact between contacts). Returns how many apexes it saw. */
 int ball_apexes(tb_world *w, tb_body_id id, double r, double hz, double sampled[2], double top[2]);
 
+/* A box (type TB_SHAPE_BOX, edge `size`) or ball (diameter `size`) of
+   density 1 at `at`, moving at v and spinning at spin (NULL: none). */
+tb_body_id add_solid(tb_world *w, tb_shape_type type, const double at[3], const double v[3], const double spin[3],
+                     double size);
+
 /* A 1 m cube (1 kg) set on a plane, both mu = 0.5, pushed at 5 m/s along
    x and stepped at hz with `substeps` (0: the default solver) until it
    stops (3 s at most): the distance it slid. kept: the world and the box

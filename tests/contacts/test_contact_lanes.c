@@ -5,11 +5,12 @@
 #include "test_main.h"
 #include "contacts/contacts.h"
 #include "tumble.h"
+#include "contact_scenes.h"
 
 #include <math.h>
 #include <string.h>
 
-static tb_world *world_on_plane(double restitution)
+static tb_world *plane_world(double restitution)
 {
     tb_world_def def = tb_default_world_def();
     tb_shape_def plane = tb_default_shape_def();
@@ -25,30 +26,6 @@ static tb_world *world_on_plane(double restitution)
     return w;
 }
 
-static tb_body_id add_body(tb_world *w, tb_shape_type type, const double at[3], const double v[3],
-                           const double spin[3], double size)
-{
-    tb_body_def b = tb_default_body_def();
-    tb_shape_def s = tb_default_shape_def();
-    const double edge[3] = { size, size, size };
-    tb_body_id id;
-    if (type == TB_SHAPE_BOX) {
-        assert_int_equal(tb_mass_box(1, edge, &b.mass, NULL), TB_OK);
-        s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = size / 2;
-    } else {
-        assert_int_equal(tb_mass_sphere(1, size / 2, &b.mass, NULL), TB_OK);
-        s.radius = size / 2;
-    }
-    memcpy(b.position, at, sizeof b.position);
-    memcpy(b.velocity, v, sizeof b.velocity);
-    memcpy(b.angular_velocity, spin, sizeof b.angular_velocity);
-    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
-    s.type = type;
-    s.body = id;
-    assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
-    return id;
-}
-
 /* A pyramid of `levels` unit cubes 1 cm apart, as the bench's. */
 static int add_pyramid(tb_world *w, int levels, tb_body_id *ids)
 {
@@ -57,7 +34,7 @@ static int add_pyramid(tb_world *w, int levels, tb_body_id *ids)
     for (level = 0; level < levels; ++level)
         for (i = 0; i < levels - level; ++i) {
             const double at[3] = { (i - (levels - level - 1) / 2.0) * 1.01, 0, 0.5 + level };
-            tb_body_id id = add_body(w, TB_SHAPE_BOX, at, none, none, 1);
+            tb_body_id id = add_solid(w, TB_SHAPE_BOX, at, none, none, 1);
             if (ids)
                 ids[n] = id;
             ++n;
@@ -73,7 +50,7 @@ static int add_pyramid(tb_world *w, int levels, tb_body_id *ids)
 #define SCENE_BODIES (15 + 6)
 static size_t run_scene(int isa, double out[SCENE_BODIES][13])
 {
-    tb_world *w = world_on_plane(0.6);
+    tb_world *w = plane_world(0.6);
     size_t bounces = 0;
     tb_body_id ids[SCENE_BODIES];
     int i;
@@ -81,7 +58,7 @@ static size_t run_scene(int isa, double out[SCENE_BODIES][13])
     for (i = 0; i < 6; ++i) {
         const double at[3] = { -3 + 1.2 * i, -2, 1 + 0.5 * i }, v[3] = { 0.3 * i - 1, 4, 1 },
                      spin[3] = { 5, -3 + i, 2 };
-        ids[15 + i] = add_body(w, i & 1 ? TB_SHAPE_SPHERE : TB_SHAPE_BOX, at, v, spin, 0.4);
+        ids[15 + i] = add_solid(w, i & 1 ? TB_SHAPE_SPHERE : TB_SHAPE_BOX, at, v, spin, 0.4);
     }
     w->contacts->isa = isa;
     for (i = 0; i < 120; ++i) {
@@ -210,7 +187,7 @@ static size_t compare_reused(const tb_world *w, double *separation, double *poin
    by the turn (under 0.5 mm over a reach of 0.87 m: 6e-4). */
 static void reused_manifolds_match_fresh_ones(void **state)
 {
-    tb_world *w = world_on_plane(0);
+    tb_world *w = plane_world(0);
     double separation = 0, point = 0, normal = 0;
     size_t reused = 0, entries = 0;
     int i;
@@ -234,14 +211,14 @@ static void reused_manifolds_match_fresh_ones(void **state)
    rolling at 2 m/s never keep a manifold, however long they touch. */
 static void moving_pairs_are_collided_afresh(void **state)
 {
-    tb_world *w = world_on_plane(0);
+    tb_world *w = plane_world(0);
     const double box[3] = { 0, 0, 0.5 }, ball[3] = { 0, 3, 0.25 }, slide[3] = { 5, 0, 0 }, roll[3] = { 2, 0, 0 },
                  none[3] = { 0, 0, 0 }, spin[3] = { 0, 8, 0 };
     size_t touching = 0;
     int i;
     (void)state;
-    add_body(w, TB_SHAPE_BOX, box, slide, none, 1);
-    add_body(w, TB_SHAPE_SPHERE, ball, roll, spin, 0.5);
+    add_solid(w, TB_SHAPE_BOX, box, slide, none, 1);
+    add_solid(w, TB_SHAPE_SPHERE, ball, roll, spin, 0.5);
     for (i = 0; i < 30; ++i) {
         size_t k;
         assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
@@ -264,7 +241,7 @@ static void moving_pairs_are_collided_afresh(void **state)
    solve at twice its cost. */
 static void resting_pyramid_sweeps_stop_early(void **state)
 {
-    tb_world *w = world_on_plane(0);
+    tb_world *w = plane_world(0);
     long total = 0;
     int i;
     (void)state;
