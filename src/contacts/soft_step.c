@@ -3,25 +3,29 @@
    those tb__contacts_prepare found at the start positions; the bodies
    and particles in them are moved again from the start of the step in
    substeps of h / n, each of which
-   1. adds 1/n of the step's external change of momentum (what the
-      world's method gave the free motion: P and L for bodies, the
-      velocity for particles);
+   1. adds half the substep's share of the step's external change of
+      momentum (what the world's method gave the free motion: P and L for
+      bodies, the velocity for particles);
    2. warm starts: every row's impulse of the last substep (of last step,
       for the first) is applied again;
    3. solves every patch once (below), the normal rows soft (a
       spring-damper of `hertz` and `damping_ratio` on the overlap, pushing
       at most `max_push`), speculative where the points are still apart;
-   4. moves positions by the mean of the substep's start and end
-      velocities (x by v, q by the torque-free turn of L:
-      tb__rotation_split2), which is exact for a constant force: free
-      flight, a slide under Coulomb friction (soft_step_slides_to_v2_
-      over_2_mu_g);
+      a patch whose point closes its gap within the substep (an impact) is
+      solved TB__IMPACT_PASSES times;
+   4. moves positions by the velocities the solve left (x by v, q by the
+      torque-free turn of L: tb__rotation_split2);
    5. relaxes: every patch once more, its touching points rigid and
       without the push, so that the push moves positions and leaves no
-      speed; points still apart are left to the next substep's solve.
-   After the substeps, points that struck faster than
-   `restitution_threshold` are bounced by their normal rows, toward e times
-   the approach speed they struck at (ball_bounces_near_e_squared).
+      speed; points still apart are left to the next substep's solve;
+   6. adds the other half of the substep's external change.
+   The kicks around the drift make it the leapfrog (kick, drift, kick),
+   exact for a constant force: free flight, a slide under Coulomb friction
+   (soft_step_slides_to_v2_over_2_mu_g), and the rows meet the velocity
+   the positions move by. After the substeps one more rigid pass (settle)
+   leaves a body at rest at rest, and points that struck faster than
+   `restitution_threshold` are bounced by their normal rows, toward e
+   times the approach speed they struck at (ball_bounces_near_e_squared).
    A patch is one manifold: a normal row per point (impulse >= 0), then,
    at the centre of its points, friction (two rows within the circle mu
    times the points' normal impulses), twist (within mu times the sum of
@@ -29,7 +33,7 @@
    resistance (about the tangents, within rho times the normal impulse).
    Every row keeps the arms of the start of the step (the Jacobian is that
    of the start pose); the separation is recomputed every substep from the
-   bodies' displacements and first-order turns at those arms. */
+   bodies' displacements and their turns since the start, exactly. */
 #include "contacts/contacts.h"
 
 #include <math.h>
@@ -39,10 +43,10 @@ typedef struct tb__soft_body {
     double x[3], q[4];          /* m: pose now */
     double P[3], L[3];          /* N s, N m s: momenta now (particles: P only) */
     double v[3], w[3];          /* m/s, rad/s: velocities now */
-    double v_start[3], l_start[3]; /* m/s, N m s: velocity and L at the substep's start */
     double kick_p[3], kick_l[3];/* N s, N m s: external change of P, L per substep */
     double inv_world[9];        /* R diag(invI) R^T at q (0 for particles) */
     double shift[3], turn[3];   /* m, rad: x - x0 and the first-order turn from q0 */
+    double delta[9];            /* the rotation from q0 to q */
 } tb__soft_body;
 
 /* A manifold: its points' normal rows, then friction (two rows at the
@@ -62,6 +66,7 @@ typedef struct tb__soft_patch {
     double rolling_mass[3];     /* 2 x 2 inverse, about the tangents */
     double friction, rolling;
     double friction_impulse[2], twist_impulse, rolling_impulse[2]; /* N s, N m s: this substep's */
+    double settled[2], settled_twist, settled_rolling[2]; /* what settle added */
 } tb__soft_patch;
 
 typedef struct tb__soft_row {
@@ -73,12 +78,12 @@ typedef struct tb__soft_row {
     double mass;                /* 1 / (J M^-1 J^T), at the start pose */
     double impulse;             /* N s: accumulated in the current substep */
     double separation;          /* m: at the start of the step */
-    double rate_start;          /* m/s: normal velocity at the substep's start */
     double lever;               /* m: from the patch's centre (a's side) */
     double restitution;
     double approach;            /* m/s (< 0): normal velocity at which the point struck */
     double most;                /* N s: the largest normal impulse of any substep */
     int struck;                 /* the normal row has pushed in some substep */
+    double settled;             /* N s: what settle added */
 } tb__soft_row;
 
 
@@ -103,6 +108,15 @@ static void first_turn(const double q[4], const double q0[4], double out[3])
     tb__quat_mul(q, q0c, dq);
     for (k = 0; k < 3; ++k)
         out[k] = (dq[0] < 0 ? -2 : 2) * dq[k + 1];
+}
+
+/* The rotation from q0 to q: R(q) R(q0)^T */
+static void rotation_since(const double q[4], const double q0[4], double out[9])
+{
+    const double q0c[4] = { q0[0], -q0[1], -q0[2], -q0[3] };
+    double dq[4];
+    tb__quat_mul(q, q0c, dq);
+    tb__matrix_of(dq, out);
 }
 
 /* Solver body i (>= 0) receives impulse j (N s, world) at arm r. */
@@ -178,15 +192,15 @@ static double separation_now(const tb__contacts *c, const tb__soft_row *o)
     double s = o->separation, d[3];
     if (o->b >= 0) {
         const tb__soft_body *b = &c->soft_bodies[o->b];
-        tb__cross(b->turn, o->rb, d);
-        s += o->normal[0] * (b->shift[0] + d[0]) + o->normal[1] * (b->shift[1] + d[1]) +
-             o->normal[2] * (b->shift[2] + d[2]);
+        tb__mul(b->delta, o->rb, d);
+        s += o->normal[0] * (b->shift[0] + d[0] - o->rb[0]) + o->normal[1] * (b->shift[1] + d[1] - o->rb[1]) +
+             o->normal[2] * (b->shift[2] + d[2] - o->rb[2]);
     }
     if (o->a >= 0) {
         const tb__soft_body *a = &c->soft_bodies[o->a];
-        tb__cross(a->turn, o->ra, d);
-        s -= o->normal[0] * (a->shift[0] + d[0]) + o->normal[1] * (a->shift[1] + d[1]) +
-             o->normal[2] * (a->shift[2] + d[2]);
+        tb__mul(a->delta, o->ra, d);
+        s -= o->normal[0] * (a->shift[0] + d[0] - o->ra[0]) + o->normal[1] * (a->shift[1] + d[1] - o->ra[1]) +
+             o->normal[2] * (a->shift[2] + d[2] - o->ra[2]);
     }
     return s;
 }
@@ -282,20 +296,18 @@ static double slip(const tb__contacts *c, const tb__soft_patch *p, int d)
 /* A point's normal row; its accumulated impulse. With bias, soft: it
    pushes overlaps out; without (the relax), rigid and aiming at no
    approach. A point still apart (s > 0) lets its gap close within the
-   substep, never more. Positions move by the mean of a substep's start and
-   end velocities, so the row aims the end velocity at twice the mean it
-   wants less the start's. */
+   substep, never more: positions move by the velocity the solve leaves. */
 static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const soft *sf, int bias)
 {
     const double max_push = c->settings.max_push;
     const double s = separation_now(c, o), vn = rate(c, o);
     double target, mass_scale = 1, impulse_scale = 0, lambda, total;
     if (s > 0 && bias) {
-        target = 2 * s / hs + o->rate_start;
+        target = s / hs;
     } else if (s > 0) {
         return o->impulse;
     } else if (bias) {
-        target = 2 * fmax(sf->bias_rate * s, -max_push) + o->rate_start;
+        target = fmax(sf->bias_rate * s, -max_push);
         mass_scale = sf->mass_scale;
         impulse_scale = sf->impulse_scale;
     } else {
@@ -307,10 +319,11 @@ static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const so
     o->impulse = total;
     push_row(c, o, lambda);
     if (total > 0 && !o->struck) {
-        /* the speed it struck at: from the start of this substep (u, s)
-           under the kick's acceleration a, u^2 - 2 a s at the surface,
-           within what the substep's velocities span */
-        const double kick = kick_rate(c, o), u = vn - kick, a = kick / hs;
+        /* the speed it struck at: from the start of this substep (u,
+           before its half kick, and s) under the kick's acceleration a,
+           u^2 - 2 a s at the surface, within what the substep's
+           velocities span */
+        const double kick = kick_rate(c, o), u = vn - 0.5 * kick, a = kick / hs;
         double approach = vn;
         if (s > 0) {
             const double fastest = fmin(u, u + kick);
@@ -338,43 +351,68 @@ static void disc_step(const double mass[3], const double acc[2], double r1, doub
     }
 }
 
-/* One pass over the patches: each one's points, then its twist, rolling
-   resistance and friction. */
+/* The passes over an impact's rows (solve_patches) */
+#define TB__IMPACT_PASSES 4
+
+/* Whether a point of patch p still apart closes its gap within the
+   substep: an impact, whose rows a single pass leaves coupled */
+static int closing(const tb__contacts *c, const tb__soft_patch *p, double hs)
+{
+    size_t k;
+    for (k = 0; k < p->count; ++k) {
+        const tb__soft_row *o = &c->soft_rows[p->first + k];
+        const double s = separation_now(c, o);
+        if (s >= 0 && rate(c, o) * hs < -s)
+            return 1;
+    }
+    return 0;
+}
+
+/* Patch p once: its points, then its twist, rolling resistance and
+   friction. */
+static void solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft *sf, int bias)
+{
+    const double *n = c->soft_rows[p->first].normal;
+    double total = 0, twist_limit = 0, t[2];
+    size_t k;
+    for (k = 0; k < p->count; ++k) {
+        tb__soft_row *o = &c->soft_rows[p->first + k];
+        const double f = solve_normal(c, o, hs, sf, bias);
+        total += f;
+        twist_limit += o->lever * f;
+    }
+    if (p->friction > 0) {
+        const double old = p->twist_impulse, most = p->friction * twist_limit;
+        const double next = fmin(fmax(old - p->twist_mass * spin(c, p, n), -most), most);
+        p->twist_impulse = next;
+        turn_patch(c, p, n, next - old);
+    }
+    if (p->rolling > 0) {
+        disc_step(p->rolling_mass, p->rolling_impulse, spin(c, p, p->tangent[0]), spin(c, p, p->tangent[1]),
+                  p->rolling * total, t);
+        turn_patch(c, p, p->tangent[0], t[0] - p->rolling_impulse[0]);
+        turn_patch(c, p, p->tangent[1], t[1] - p->rolling_impulse[1]);
+        p->rolling_impulse[0] = t[0], p->rolling_impulse[1] = t[1];
+    }
+    disc_step(p->tangent_mass, p->friction_impulse, slip(c, p, 0), slip(c, p, 1), p->friction * total, t);
+    push_centre(c, p, t[0] - p->friction_impulse[0], t[1] - p->friction_impulse[1]);
+    p->friction_impulse[0] = t[0], p->friction_impulse[1] = t[1];
+}
+
+/* One pass over the patches. A patch with a point that closes its gap
+   within the substep is an impact, and its rows are solved together, by
+   TB__IMPACT_PASSES passes over them: in one pass the rows met later
+   (another point, the friction at the centre) spin the body and drive the
+   points met first through the surface, at any speed a spinning body
+   brings (soft_step_spinning_plate_stays_on_the_slab). */
 static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias)
 {
-    size_t i, k;
+    size_t i;
     for (i = 0; i < c->soft_patch_count; ++i) {
         tb__soft_patch *p = &c->soft_patches[i];
-        const double *n = c->soft_rows[p->first].normal;
-        double total = 0, twist_limit = 0, t1, t2;
-        for (k = 0; k < p->count; ++k) {
-            tb__soft_row *o = &c->soft_rows[p->first + k];
-            const double f = solve_normal(c, o, hs, sf, bias);
-            total += f;
-            twist_limit += o->lever * f;
-        }
-        if (p->friction > 0) {
-            const double old = p->twist_impulse, most = p->friction * twist_limit;
-            const double next = fmin(fmax(old - p->twist_mass * spin(c, p, n), -most), most);
-            p->twist_impulse = next;
-            turn_patch(c, p, n, next - old);
-        }
-        if (p->rolling > 0) {
-            double t[2];
-            disc_step(p->rolling_mass, p->rolling_impulse, spin(c, p, p->tangent[0]), spin(c, p, p->tangent[1]),
-                      p->rolling * total, t);
-            t1 = t[0], t2 = t[1];
-            turn_patch(c, p, p->tangent[0], t1 - p->rolling_impulse[0]);
-            turn_patch(c, p, p->tangent[1], t2 - p->rolling_impulse[1]);
-            p->rolling_impulse[0] = t1, p->rolling_impulse[1] = t2;
-        }
-        {
-            double t[2];
-            disc_step(p->tangent_mass, p->friction_impulse, slip(c, p, 0), slip(c, p, 1), p->friction * total, t);
-            t1 = t[0], t2 = t[1];
-        }
-        push_centre(c, p, t1 - p->friction_impulse[0], t2 - p->friction_impulse[1]);
-        p->friction_impulse[0] = t1, p->friction_impulse[1] = t2;
+        int pass, passes = bias && closing(c, p, hs) ? TB__IMPACT_PASSES : 1;
+        for (pass = 0; pass < passes; ++pass)
+            solve_patch(c, p, hs, sf, bias);
     }
 }
 
@@ -408,6 +446,8 @@ static void load(tb_world *w, tb__contacts *c, int n)
         memcpy(s->q, b->q0, sizeof s->q);
         memset(s->shift, 0, sizeof s->shift);
         memset(s->turn, 0, sizeof s->turn);
+        memset(s->delta, 0, sizeof s->delta);
+        s->delta[0] = s->delta[4] = s->delta[8] = 1;
         if (b->tier == TB__BODIES) {
             const double *P = w->y + w->off[TB__BODY_MOM] + 3 * b->slot, *L = w->y + w->off[TB__BODY_ANG] + 3 * b->slot;
             for (k = 0; k < 3; ++k) {
@@ -547,6 +587,9 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
             pa->rolling_impulse[d] = scale * tb__dot3(e->rolling_impulse, e->tangent[d]);
         }
         pa->twist_impulse = scale * e->twist_impulse;
+        memset(pa->settled, 0, sizeof pa->settled);
+        memset(pa->settled_rolling, 0, sizeof pa->settled_rolling);
+        pa->settled_twist = 0;
         for (k = 0; k < e->count; ++k) {
             tb__point *p = &e->point[k];
             tb__soft_row *o = &c->soft_rows[c->soft_row_count++];
@@ -564,6 +607,7 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
             o->most = 0;
             o->struck = 0;
             o->impulse = scale * p->normal_impulse;
+            o->settled = 0;
             p->speed = 0;
         }
         set_up_patch(c, pa);
@@ -592,16 +636,10 @@ static void warm_start(tb__contacts *c)
     }
 }
 
-/* The kick of a substep: 1/n of the step's external change */
-static void kick(tb__contacts *c)
+/* Half the kick of a substep: 1/2n of the step's external change */
+static void half_kick(tb__contacts *c)
 {
     size_t i;
-    for (i = 0; i < c->soft_row_count; ++i)
-        c->soft_rows[i].rate_start = rate(c, &c->soft_rows[i]);
-    for (i = 0; i < c->body_count; ++i) {
-        memcpy(c->soft_bodies[i].v_start, c->soft_bodies[i].v, sizeof c->soft_bodies[i].v);
-        memcpy(c->soft_bodies[i].l_start, c->soft_bodies[i].L, sizeof c->soft_bodies[i].L);
-    }
     for (i = 0; i < c->body_count; ++i) {
         tb__soft_body *s = &c->soft_bodies[i];
         const double im = c->bodies[i].inv_mass;
@@ -609,15 +647,15 @@ static void kick(tb__contacts *c)
         int k;
         tb__mul(s->inv_world, s->kick_l, dw);
         for (k = 0; k < 3; ++k) {
-            s->P[k] += s->kick_p[k], s->v[k] += im * s->kick_p[k];
-            s->L[k] += s->kick_l[k], s->w[k] += dw[k];
+            s->P[k] += 0.5 * s->kick_p[k], s->v[k] += 0.5 * im * s->kick_p[k];
+            s->L[k] += 0.5 * s->kick_l[k], s->w[k] += 0.5 * dw[k];
         }
     }
 }
 
 /* Positions over hs: x by the velocity, q by the torque-free turn of L
-   (symplectic Euler over the substep: the kick first, then the drift);
-   then the inverse inertia and w at the new orientation. */
+   (between the substep's half kicks); then the rotation since the start,
+   the inverse inertia and w at the new orientation. */
 static void drift(tb__contacts *c, double hs)
 {
     size_t i;
@@ -625,16 +663,15 @@ static void drift(tb__contacts *c, double hs)
         const tb__solver_body *b = &c->bodies[i];
         tb__soft_body *s = &c->soft_bodies[i];
         int k;
-        double mean_l[3];
         for (k = 0; k < 3; ++k) {
-            s->x[k] += 0.5 * hs * (s->v_start[k] + s->v[k]);
+            s->x[k] += hs * s->v[k];
             s->shift[k] = s->x[k] - b->x0[k];
-            mean_l[k] = 0.5 * (s->l_start[k] + s->L[k]);
         }
         if (b->tier == TB__BODIES) {
-            tb__rotation_split2(s->q, mean_l, b->inv_inertia, hs);
+            tb__rotation_split2(s->q, s->L, b->inv_inertia, hs);
             tb__normalise(s->q);
             first_turn(s->q, b->q0, s->turn);
+            rotation_since(s->q, b->q0, s->delta);
             world_inverse(s->q, b->inv_inertia, s->inv_world);
             tb__mul(s->inv_world, s->L, s->w);
         }
@@ -686,7 +723,7 @@ static void store(tb_world *w, tb__contacts *c, int n)
         const tb__soft_row *o = &c->soft_rows[i];
         tb__point *p = o->point;
         int k;
-        p->normal_impulse = n * o->impulse;
+        p->normal_impulse = n * fmax(o->impulse - o->settled, 0);
         for (k = 0; k < 3; ++k)
             p->friction_impulse[k] = 0;
         p->active = o->most > 0;
@@ -697,10 +734,42 @@ static void store(tb_world *w, tb__contacts *c, int n)
         tb__entry *e = pa->entry;
         int k;
         for (k = 0; k < 3; ++k) {
-            e->friction_impulse[k] = n * (pa->friction_impulse[0] * pa->tangent[0][k] + pa->friction_impulse[1] * pa->tangent[1][k]);
-            e->rolling_impulse[k] = n * (pa->rolling_impulse[0] * pa->tangent[0][k] + pa->rolling_impulse[1] * pa->tangent[1][k]);
+            e->friction_impulse[k] = n * ((pa->friction_impulse[0] - pa->settled[0]) * pa->tangent[0][k] +
+                                          (pa->friction_impulse[1] - pa->settled[1]) * pa->tangent[1][k]);
+            e->rolling_impulse[k] = n * ((pa->rolling_impulse[0] - pa->settled_rolling[0]) * pa->tangent[0][k] +
+                                         (pa->rolling_impulse[1] - pa->settled_rolling[1]) * pa->tangent[1][k]);
         }
-        e->twist_impulse = n * pa->twist_impulse;
+        e->twist_impulse = n * (pa->twist_impulse - pa->settled_twist);
+    }
+}
+
+/* A last rigid pass after the step's final half kick: a body at rest
+   ends the step at rest. The next step's first substep starts without
+   that impulse (its half kick meets a body at rest), so its warm start
+   leaves it out: what each row adds here is kept apart (settled) and
+   taken off what store keeps. */
+static void settle(tb__contacts *c, double hs, const soft *sf)
+{
+    size_t i;
+    for (i = 0; i < c->soft_row_count; ++i)
+        c->soft_rows[i].settled = c->soft_rows[i].impulse;
+    for (i = 0; i < c->soft_patch_count; ++i) {
+        tb__soft_patch *p = &c->soft_patches[i];
+        memcpy(p->settled, p->friction_impulse, sizeof p->settled);
+        p->settled_twist = p->twist_impulse;
+        memcpy(p->settled_rolling, p->rolling_impulse, sizeof p->settled_rolling);
+    }
+    solve_patches(c, hs, sf, 0);
+    for (i = 0; i < c->soft_row_count; ++i)
+        c->soft_rows[i].settled = c->soft_rows[i].impulse - c->soft_rows[i].settled;
+    for (i = 0; i < c->soft_patch_count; ++i) {
+        tb__soft_patch *p = &c->soft_patches[i];
+        int d;
+        for (d = 0; d < 2; ++d) {
+            p->settled[d] = p->friction_impulse[d] - p->settled[d];
+            p->settled_rolling[d] = p->rolling_impulse[d] - p->settled_rolling[d];
+        }
+        p->settled_twist = p->twist_impulse - p->settled_twist;
     }
 }
 
@@ -718,12 +787,14 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
     if ((st = set_up_rows(w, c, h, n)) != TB_OK)
         return st;
     for (i = 0; i < n; ++i) {
-        kick(c);
+        half_kick(c);
         warm_start(c);
         solve_patches(c, hs, &sf, 1);
         drift(c, hs);
         solve_patches(c, hs, &sf, 0);
+        half_kick(c);
     }
+    settle(c, hs, &sf);
     restitution(c);
     store(w, c, n);
     c->kept_h = h;
