@@ -226,6 +226,15 @@ TB_API tb_spring_def tb_default_spring_def(void);
 TB_API tb_status tb_world_add_spring(tb_world *world, const tb_spring_def *def, tb_spring_id *id);
 TB_API tb_status tb_world_remove_spring(tb_world *world, tb_spring_id id);
 TB_API size_t tb_world_spring_count(const tb_world *world);
+/* The spring in slot 0 .. tb_world_spring_count() - 1, to walk them all
+   (a removal moves the last spring into the freed slot); the null id past
+   the end. */
+TB_API tb_spring_id tb_world_spring_at(const tb_world *world, size_t slot);
+/* What a spring is, as the world holds it: its ends (b null and the
+   anchor for an anchored spring), stiffness, damping and rest length (the
+   distance at creation when it was added with a negative one), so that a
+   host can draw it. TB_ERR_STALE_ID for a removed or foreign id. */
+TB_API tb_status tb_spring_definition(const tb_world *world, tb_spring_id id, tb_spring_def *def);
 
 /* --------------------------------------------------------- mass properties -- */
 /* Mass properties (tb_mass) from shapes of uniform density rho (kg/m^3),
