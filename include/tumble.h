@@ -372,6 +372,9 @@ TB_API tb_contact_settings tb_world_contact_settings(const tb_world *world);
 TB_API const tb_contact_event *tb_world_contact_events(const tb_world *world, size_t *count);
 /* Points of contact that are touching now (after the last step). */
 TB_API size_t tb_world_contact_count(const tb_world *world);
+/* The deepest overlap (m, >= 0) among those points, as the last step found
+   it at its start, before solving (0: none overlaps, or no step yet). */
+TB_API double tb_world_deepest_overlap(const tb_world *world);
 
 /* Sleep: an island of bodies joined by touching contacts that rests for
    sleep_time falls asleep: it keeps its pose with zero velocity, costs no
