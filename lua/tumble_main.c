@@ -11,6 +11,7 @@
    with a verb. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime, sigaction, mkstemp, fchmod */
 #include "tumble_lua.h"
+#include "gltf_writer.h"
 
 #include <lauxlib.h>
 #include <lualib.h>
@@ -39,7 +40,7 @@ static const char usage[] =
     "usage: tumble run SCENE.lua [--out FILE.csv] [--integrator NAME] [--dt SECONDS]\n"
     "                            [--tol TOLERANCE] [--guard FACTOR] [--until SECONDS]\n"
     "                            [--every SECONDS] [--trust] [--max-instructions N]\n"
-    "                            [--max-memory BYTES] [--quiet]\n"
+    "                            [--max-memory BYTES] [--gltf FILE.glb] [--quiet]\n"
     "       tumble --help | --version\n"
     "\n"
     "Runs a scene script and writes its trajectory as CSV. Options take their\n"
@@ -76,6 +77,9 @@ static const char usage[] =
     "                     K, M, G multiply by 1e3, 1e6, 1e9\n"
     "  --max-memory BYTES the bytes the scene's Lua and worlds may hold at once;\n"
     "                     default %.0fM, 0: no limit; K, M, G: KiB, MiB, GiB\n"
+    "  --gltf FILE.glb    also write the run as binary glTF 2.0: every shape as a\n"
+    "                     mesh, bodies, particles, tracers and springs as nodes\n"
+    "                     animated at the recorded frames (docs/command.md)\n"
     "  --quiet            print no summary\n"
     "\n"
     "Output: header t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz then one row\n"
@@ -100,7 +104,7 @@ static const char usage[] =
     "signal ends it at once).\n";
 
 typedef struct options {
-    const char *scene, *out, *integrator;
+    const char *scene, *out, *integrator, *gltf;
     double dt, until, every, tol, guard;
     double max_instructions, max_memory; /* budgets; 0: no limit */
     int quiet, trust;
@@ -205,6 +209,10 @@ static int parse_arguments(int argc, char **argv, options *o)
             if (!v || !*v)
                 return die(2, "%s needs a file name", a);
             o->out = v, i += !joined;
+        } else if (!strcmp(a, "--gltf")) {
+            if (!v || !*v)
+                return die(2, "%s needs a file name", a);
+            o->gltf = v, i += !joined;
         } else if (!strcmp(a, "--integrator")) {
             if (!v || !*v)
                 return die(2, "%s needs a name", a);
@@ -587,6 +595,59 @@ static int write_shapes(const char *out_path, tb_world *w)
     return 0;
 }
 
+/* Before the run: can a file be made in path's folder? Returns 0, or 1
+   with a message, so that a long run does not end in a folder it cannot
+   write. */
+static int check_folder(const char *flag, const char *path)
+{
+    char folder[4200];
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(folder, sizeof folder, ".");
+    else
+        snprintf(folder, sizeof folder, "%.*s", slash == path ? 1 : (int)(slash - path), path);
+    if (access(folder, W_OK) != 0) {
+        fprintf(stderr, "tumble: %s %s: cannot write in '%s': %s\n", flag, path, folder, strerror(errno));
+        return 1;
+    }
+    return 0;
+}
+
+/* The run as binary glTF (gltf_writer.c), through a temporary file
+   renamed at the end as the trajectory is; a signal while it is written
+   removes it. Returns 0, or the exit status with a message. */
+static int write_gltf(const char *path, gltf_writer *g, tb_world *w)
+{
+    FILE *f = open_temp(path);
+    int failed, why;
+    if (!f) {
+        fprintf(stderr, "tumble: cannot write a temporary file next to '%s': %s\n", path, strerror(errno));
+        return 1;
+    }
+    if (gltf_write(g, w, f)) {
+        fclose(f);
+        remove_temp();
+        fprintf(stderr, "tumble: --gltf %s: %s\n", path, gltf_message(g));
+        return 1;
+    }
+    failed = ferror(f) | fclose(f);
+    why = errno;
+    if (stop_signal) {
+        remove_temp();
+        fprintf(stderr, "tumble: %s: interrupted by %s; not written\n", path, signal_name(stop_signal));
+        return 128 + stop_signal;
+    }
+    if (failed || rename(temp_path, path)) {
+        if (!failed)
+            why = errno;
+        remove_temp();
+        fprintf(stderr, "tumble: cannot write '%s': %s\n", path, strerror(why));
+        return 1;
+    }
+    temp_made = 0;
+    return 0;
+}
+
 /* Run the scene whose text is in s (read by main). */
 static int run_scene(lua_State *L, const options *o, scene *s)
 {
@@ -602,6 +663,8 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     double shown;
     tb_advice advice;
     FILE *f, *report;
+    gltf_writer *gw = NULL;
+    int gltf_failed = 0;
 
     lua_pushcfunction(L, add_traceback);
     lua_pushcfunction(L, load_scene);
@@ -651,9 +714,14 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         fprintf(stderr, "tumble: warning: %s\n", advice.text);
     to_stdout = !strcmp(out_path, "-");
     report = to_stdout ? stderr : stdout;
+    if (o->gltf && check_folder("--gltf", o->gltf))
+        return 1;
+    if (o->gltf && !(gw = gltf_begin(w)))
+        return die(1, "%s", "out of memory for the glTF writer");
     f = to_stdout ? stdout : open_temp(out_path);
     if (!f) {
         fprintf(stderr, "tumble: cannot write a temporary file next to '%s': %s\n", out_path, strerror(errno));
+        gltf_free(gw);
         return 1;
     }
     fprintf(f, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n");
@@ -661,6 +729,8 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     e0 = tb_world_energy(w);
     t0 = read_clock();
     r = record_rows(f, L, world_idx, w, &tracer_vel, &cap);
+    if (r >= 0 && gw && gltf_record(gw, w))
+        r = -1, gltf_failed = 1;
     shown = t0 + 1; /* a progress line from the first second on */
     for (step = 1; r >= 0 && step <= steps; ++step) {
         rows += r;
@@ -669,8 +739,11 @@ static int run_scene(lua_State *L, const options *o, scene *s)
             r = -1;
             break;
         }
-        if (step % every_steps == 0 || step == steps)
+        if (step % every_steps == 0 || step == steps) {
             r = record_rows(f, L, world_idx, w, &tracer_vel, &cap);
+            if (r >= 0 && gw && gltf_record(gw, w))
+                r = -1, gltf_failed = 1;
+        }
         if (progress && step % 64 == 0 && read_clock() >= shown) {
             const double spent = read_clock() - t0, rate = (double)step / spent;
             fprintf(stderr, "\rtumble: t = %.4g of %.4g s, %.3g steps/s, about %.0f s left\033[K",
@@ -687,8 +760,11 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     write_error = errno;
     if (failed || unwritten) {
         remove_temp();
-        if ((rc = report_stop(L, o, w)) != 0)
-            return rc;
+        if ((rc = report_stop(L, o, w)) == 0 && gltf_failed)
+            fprintf(stderr, "tumble: --gltf %s: at t = %.17g s: %s\n", o->gltf, tb_world_time(w), gltf_message(gw));
+        gltf_free(gw);
+        if (rc != 0 || gltf_failed)
+            return rc ? rc : 1;
         if (r < 0)
             fprintf(stderr, "tumble: %s: at t = %.17g s: %s\n", o->scene, tb_world_time(w), tb_world_message(w));
         else
@@ -701,11 +777,17 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         const int why = errno;
         remove_temp();
         fprintf(stderr, "tumble: cannot rename to '%s': %s\n", out_path, strerror(why));
+        gltf_free(gw);
         return 1;
     }
     temp_made = 0;
-    if (!to_stdout && (rc = write_shapes(out_path, w)) != 0)
+    rc = to_stdout ? 0 : write_shapes(out_path, w);
+    if (!rc && gw)
+        rc = write_gltf(o->gltf, gw, w);
+    if (rc) {
+        gltf_free(gw);
         return rc;
+    }
     e1 = tb_world_energy(w);
     if (!o->quiet) {
         unsigned long long executed;
@@ -744,7 +826,10 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         fprintf(report, "wrote       %s (%ld rows)\n", to_stdout ? "stdout" : out_path, rows);
         if (!to_stdout && tb_world_shape_count(w))
             fprintf(report, "shapes      %zu, beside it in .shapes.csv\n", tb_world_shape_count(w));
+        if (gw)
+            fprintf(report, "gltf        %s (%zu frames)\n", o->gltf, gltf_frames(gw));
     }
+    gltf_free(gw);
     return 0;
 }
 
