@@ -7,7 +7,8 @@
 #   ./dev.sh fuzz    the libFuzzer targets under ASan + UBSan, FUZZ_SECONDS
 #                    (default 60) each, from fuzz/corpus (needs Clang)
 #   ./dev.sh bench   build and run the benchmarks (not part of the tests)
-#   ./dev.sh charts  rerun the work-precision benchmark and redraw docs/charts
+#   ./dev.sh charts  rerun the work-precision and contact-scaling benchmarks
+#                    and redraw docs/charts
 #
 # Warnings are errors when CI is set (CI=true), as in .ci/run.
 set -euo pipefail
@@ -113,6 +114,8 @@ charts)
     mkdir -p bench/out
     ./build/default/bench/bench_workprecision bench/out
     gnuplot bench/workprecision.gp
+    ./build/default/bench/bench_contacts --scaling bench/out
+    gnuplot bench/contact_scaling.gp
     ;;
 *)
     sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'
