@@ -785,7 +785,9 @@ int gltf_write(gltf_writer *g, const tb_world *w, FILE *f)
     bin = write_json(g, w, j, &l);
     if (!bin)
         goto done;
-    fprintf(j, ",\"accessors\":[%s],\"bufferViews\":[%s],\"buffers\":[{\"byteLength\":%zu}]}", accessors, views, bin);
+    if (l.accessor_count) /* glTF refuses empty arrays: an empty world has none */
+        fprintf(j, ",\"accessors\":[%s],\"bufferViews\":[%s]", accessors, views);
+    fprintf(j, ",\"buffers\":[{\"byteLength\":%zu}]}", bin);
     if (fclose(j) != 0 || !json) {
         j = NULL;
         fail(g, "out of memory for the glTF JSON");
@@ -807,7 +809,8 @@ int gltf_write(gltf_writer *g, const tb_world *w, FILE *f)
     fwrite("   ", 1, padded_json - json_size, f);
     put_u32(f, (uint32_t)bin);
     fwrite("BIN", 1, 4, f); /* with its terminating zero: "BIN\0" */
-    fwrite(g->geometry, 1, g->geometry_size, f);
+    if (g->geometry_size) /* NULL without meshes */
+        fwrite(g->geometry, 1, g->geometry_size, f);
     if (g->frame_floats) {
         const size_t points = g->particles + g->tracers;
         fwrite(g->times, sizeof(float), g->frames, f);
