@@ -2,7 +2,8 @@
 # check.sh validate|render TUMBLE WORK: `tumble run --gltf` on
 # tests/gltf/scene.lua, then
 #   validate: the Khronos glTF validator (validate.js) finds no error and
-#             no warning in the file;
+#             no warning in the file, nor in those of an empty world and
+#             of one with static shapes only;
 #   render:   f3d draws its first frame off-screen (under xvfb-run) from a
 #             fixed camera, and render_check.js finds each body where the
 #             CSV puts it and background between them.
@@ -25,6 +26,14 @@ validate)
     [ -d "$here/node_modules/gltf-validator" ] ||
         { echo "check.sh: gltf-validator is missing: npm ci --prefix tests/gltf (./dev.sh test runs it)"; exit 1; }
     node "$here/validate.js" run.glb
+    # the edges: a world with nothing in it, one with static shapes only
+    # (no animation, and no accessors at all in the first)
+    printf 'local w = require("tumble").world{}\nreturn { world = w, duration = 0 }\n' > empty.lua
+    printf 'local w = require("tumble").world{}\nw:shape{ type = "plane" }\nw:shape{ type = "box", pos = {0, 0, 1} }\nreturn { world = w, duration = 0.1 }\n' > static.lua
+    for edge in empty static; do
+        "$tumble" run $edge.lua --out $edge.csv --gltf $edge.glb --quiet
+        node "$here/validate.js" $edge.glb
+    done
     ;;
 render)
     need f3d "apt-get install f3d"
