@@ -21,7 +21,8 @@
    Between frames a viewer interpolates (slerp for rotations; each
    quaternion's sign is chosen nearest the previous one so that it turns
    the short way); at the frames the poses are the trajectory's, as
-   floats (test_gltf.node_translations_match_the_csv).
+   floats (test_gltf.node_translations_match_the_csv, and
+   springs_end_where_their_particles_are for the lines).
 
    Meshes are made here: spheres and capsules as latitude-longitude
    meshes, boxes with flat faces; shapes of the same type and sizes share

@@ -32,7 +32,8 @@ const EYE = [0, -8, 0.5], AT = [0, 0, 0.5];
 const gl = (p) => [p[0], p[2], -p[1]];
 
 if (process.argv[2] === 'f3d-args') {
-  console.log([`--resolution=${W},${H}`, '--bg-color=0,0,0', '--up=+Y', `--camera-view-angle=${VIEW}`,
+  // --dry-run: no configuration file, so a user's settings change nothing
+  console.log(['--dry-run', `--resolution=${W},${H}`, '--bg-color=0,0,0', '--up=+Y', `--camera-view-angle=${VIEW}`,
                `--camera-position=${gl(EYE)}`, `--camera-focal-point=${gl(AT)}`, '--camera-view-up=0,1,0'].join(' '));
   process.exit(0);
 }

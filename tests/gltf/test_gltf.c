@@ -265,6 +265,7 @@ static void node_translations_match_the_csv(void **state)
     char path[1200], *csv, *line, *save = NULL;
     size_t size, nodes, node, frames, checked = 0, input = 0, k;
     const float *times;
+    double worst = 0; /* the largest relative difference of a translation */
     glb g;
     (void)state;
     assert_int_equal(tumble("run '" SCENE "' --out run.csv --gltf run.glb --quiet"), 0);
@@ -308,8 +309,11 @@ static void node_translations_match_the_csv(void **state)
                 continue;
             assert_true(frame < frames);
             assert_rel(times[frame], v[0], 0x1p-24);
-            for (k = 0; k < 3; ++k)
+            for (k = 0; k < 3; ++k) {
                 assert_rel(t[3 * frame + k], v[1 + k], 0x1p-24);
+                if (v[1 + k] != 0 && fabs(t[3 * frame + k] - v[1 + k]) / fabs(v[1 + k]) > worst)
+                    worst = fabs(t[3 * frame + k] - v[1 + k]) / fabs(v[1 + k]);
+            }
             if (body) { /* glTF's (x, y, z, w) against the CSV's (w, x, y, z), up to sign */
                 const double s = q[4 * frame + 3] * v[7] < 0 ? -1 : 1;
                 for (k = 0; k < 4; ++k)
@@ -321,6 +325,84 @@ static void node_translations_match_the_csv(void **state)
         free(copy);
     }
     assert_int_equal(checked, 5 * frames);
+    print_message("%zu frames of 3 bodies and 2 particles: translations within %.3g relative of the CSV (bound "
+                  "2^-24 = %.3g)\n", frames, worst, 0x1p-24);
+    free(csv);
+    free(g.json);
+    free(g.file);
+}
+
+/* The CSV's positions of particle `id`, frame after frame, into x[3 * frames]. */
+static size_t csv_particle(const char *csv, unsigned id, double *x, size_t frames)
+{
+    const char *line = csv;
+    size_t n = 0;
+    while (line && *line) {
+        double t, p[3];
+        unsigned row_id;
+        char kind[16];
+        if (sscanf(line, "%lf,%15[a-z],%u,%lf,%lf,%lf", &t, kind, &row_id, &p[0], &p[1], &p[2]) == 6 &&
+            !strcmp(kind, "particle") && row_id == id && n < frames) {
+            memcpy(x + 3 * n, p, sizeof p);
+            ++n;
+        }
+        line = strchr(line, '\n');
+        line = line ? line + 1 : NULL;
+    }
+    return n;
+}
+
+/* A spring's node carries a line from (0, 0, 0) to (0, 0, 1): at every
+   frame its translation T, rotation R and scale (1, 1, L) put the line's
+   ends at T and T + L R z, which must be the spring's ends. The scene's
+   spring 1 runs from particle 1 to the anchor (2.5, 0.5, 2), spring 2 from
+   particle 1 to particle 2. Bound: the ends are floats, and R z is a
+   float quaternion's turn of z (unit to about 2^-23), times L < 1 m: 1e-6
+   m covers both with room and is far below any real error (a spring drawn
+   from the wrong end is off by its length, 0.3 m and more). */
+static void springs_end_where_their_particles_are(void **state)
+{
+    char path[1200], *csv;
+    size_t size, frames = 21, input = 0, f, s, node;
+    double p1[3 * 21], p2[3 * 21], worst = 0;
+    const double anchor[3] = { 2.5, 0.5, 2.0 };
+    glb g;
+    (void)state;
+    assert_int_equal(tumble("run '" SCENE "' --out springs.csv --gltf springs.glb --quiet"), 0);
+    snprintf(path, sizeof path, "%s/springs.glb", work_dir());
+    g = read_glb(path);
+    snprintf(path, sizeof path, "%s/springs.csv", work_dir());
+    csv = slurp(path, &size);
+    assert_int_equal(csv_particle(csv, 1, p1, frames), frames);
+    assert_int_equal(csv_particle(csv, 2, p2, frames), frames);
+    for (s = 1; s <= 2; ++s) {
+        const float *t, *r, *sc;
+        char name[32];
+        snprintf(name, sizeof name, "\"spring %zu\"", s);
+        for (node = 0; element(member(g.json, "nodes"), node); ++node)
+            if (!strncmp(member(element(member(g.json, "nodes"), node), "name"), name, strlen(name)))
+                break;
+        assert_non_null(element(member(g.json, "nodes"), node));
+        t = channel(&g, node, "translation", frames, 3, &input);
+        r = channel(&g, node, "rotation", frames, 4, &input);
+        sc = channel(&g, node, "scale", frames, 3, &input);
+        for (f = 0; f < frames; ++f) {
+            const float *q = r + 4 * f; /* (x, y, z, w): R z is R's third column */
+            const double z[3] = { 2 * (q[0] * q[2] + q[3] * q[1]), 2 * (q[1] * q[2] - q[3] * q[0]),
+                                  1 - 2 * (q[0] * q[0] + q[1] * q[1]) };
+            const double *end = s == 1 ? anchor : p2 + 3 * f;
+            int k;
+            assert_true(sc[3 * f] == 1 && sc[3 * f + 1] == 1);
+            for (k = 0; k < 3; ++k) {
+                assert_below(fabs(t[3 * f + k] - p1[3 * f + k]), 1e-6);
+                assert_below(fabs(t[3 * f + k] + sc[3 * f + 2] * z[k] - end[k]), 1e-6);
+                if (fabs(t[3 * f + k] + sc[3 * f + 2] * z[k] - end[k]) > worst)
+                    worst = fabs(t[3 * f + k] + sc[3 * f + 2] * z[k] - end[k]);
+            }
+        }
+    }
+    print_message("2 springs over %zu frames: the far end within %.3g m of its particle or anchor (bound 1e-6 m)\n",
+                  frames, worst);
     free(csv);
     free(g.json);
     free(g.file);
@@ -332,10 +414,10 @@ static void node_translations_match_the_csv(void **state)
 static void bad_paths_fail_cleanly(void **state)
 {
     (void)state;
-    assert_int_equal(tumble("run '" SCENE "' --out run.csv --gltf /nonexistent/run.glb"), 1);
-    assert_non_null(strstr(err_text, "tumble: --gltf /nonexistent/run.glb: cannot write in '/nonexistent': No such file"));
-    assert_false(count_files("run."));
-    assert_int_equal(tumble("run '" SCENE "' --out run.csv --gltf ."), 1);
+    assert_int_equal(tumble("run '" SCENE "' --out bad.csv --gltf /nonexistent/bad.glb"), 1);
+    assert_non_null(strstr(err_text, "tumble: --gltf /nonexistent/bad.glb: cannot write in '/nonexistent': No such file"));
+    assert_false(count_files("bad."));
+    assert_int_equal(tumble("run '" SCENE "' --out bad.csv --gltf ."), 1);
     assert_non_null(strstr(err_text, "tumble: cannot write '.': "));
     assert_false(count_files(".part"));
     assert_int_equal(tumble("run '" SCENE "' --gltf"), 2);
@@ -344,6 +426,7 @@ static void bad_paths_fail_cleanly(void **state)
 
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(node_translations_match_the_csv),
+    cmocka_unit_test(springs_end_where_their_particles_are),
     cmocka_unit_test(bad_paths_fail_cleanly),
 };
 
