@@ -414,23 +414,16 @@ static int make_plane(gltf_writer *g, mesh *m, const tb_shape_def *d, double hal
     return add_vertices(g, m, pos, nrm, 4) || add_indices(g, m, idx, 6) ? -1 : 0;
 }
 
-/* The mesh for shape d (an equal one's, when there is one), or -1. */
-static long mesh_for(gltf_writer *g, const tb_shape_def *d, int material, double plane_half)
+/* A new mesh at the end of the list, zeroed but for its key; NULL when
+   out of memory. */
+static mesh *new_mesh(gltf_writer *g, const tb_shape_def *d, int material)
 {
     mesh *m;
-    size_t i;
-    for (i = 0; i < g->mesh_count; ++i) {
-        const tb_shape_def *e = &g->meshes[i].shape;
-        if (g->meshes[i].material == material && e->type == d->type && d->type != TB_SHAPE_PLANE &&
-            e->radius == d->radius && e->half_length == d->half_length && e->half_extents[0] == d->half_extents[0] &&
-            e->half_extents[1] == d->half_extents[1] && e->half_extents[2] == d->half_extents[2])
-            return (long)i;
-    }
     if (g->mesh_count == g->mesh_cap) {
         size_t cap = g->mesh_cap ? 2 * g->mesh_cap : 16;
         mesh *more = realloc(g->meshes, cap * sizeof *more);
         if (!more)
-            return fail(g, "out of memory for the glTF meshes");
+            return fail(g, "out of memory for the glTF meshes"), NULL;
         g->meshes = more;
         g->mesh_cap = cap;
     }
@@ -438,6 +431,24 @@ static long mesh_for(gltf_writer *g, const tb_shape_def *d, int material, double
     memset(m, 0, sizeof *m);
     m->shape = *d;
     m->material = material;
+    return m;
+}
+
+/* The mesh for shape d (an equal one's, when there is one), or -1. */
+static long mesh_for(gltf_writer *g, const tb_shape_def *d, int material, double plane_half)
+{
+    mesh *m;
+    size_t i;
+    for (i = 0; i < g->mesh_count; ++i) {
+        const tb_shape_def *e = &g->meshes[i].shape;
+        if (!g->meshes[i].lines && g->meshes[i].material == material && e->type == d->type &&
+            d->type != TB_SHAPE_PLANE && e->radius == d->radius && e->half_length == d->half_length &&
+            e->half_extents[0] == d->half_extents[0] && e->half_extents[1] == d->half_extents[1] &&
+            e->half_extents[2] == d->half_extents[2])
+            return (long)i;
+    }
+    if (!(m = new_mesh(g, d, material)))
+        return -1;
     if ((d->type == TB_SHAPE_SPHERE && make_round(g, m, d->radius, 0)) ||
         (d->type == TB_SHAPE_CAPSULE && make_round(g, m, d->radius, d->half_length)) ||
         (d->type == TB_SHAPE_BOX && make_box(g, m, d->half_extents)) ||
@@ -446,19 +457,16 @@ static long mesh_for(gltf_writer *g, const tb_shape_def *d, int material, double
     return (long)g->mesh_count++;
 }
 
-/* The spring's line: (0, 0, 0) to (0, 0, 1), no normals, no indices. */
+/* The springs' line: (0, 0, 0) to (0, 0, 1), no normals, no indices. */
 static long line_mesh(gltf_writer *g)
 {
     static const float pos[6] = { 0, 0, 0, 0, 0, 1 };
-    mesh *m;
-    tb_shape_def none;
-    memset(&none, 0, sizeof none);
-    none.type = (tb_shape_type)-1;
-    if (mesh_for(g, &none, MAT_SPRING, 0) < 0) /* a slot; its geometry is below */
+    const tb_shape_def none = tb_default_shape_def(); /* its key: no shape's */
+    mesh *m = new_mesh(g, &none, MAT_SPRING);
+    if (!m)
         return -1;
-    m = &g->meshes[g->mesh_count - 1];
     m->lines = 1;
-    return add_vertices(g, m, pos, NULL, 2) ? -1 : (long)g->mesh_count - 1;
+    return add_vertices(g, m, pos, NULL, 2) ? -1 : (long)g->mesh_count++;
 }
 
 /* -------------------------------------------------------------- writing -- */
