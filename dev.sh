@@ -7,16 +7,21 @@
 #   ./dev.sh fuzz    the libFuzzer targets under ASan + UBSan, FUZZ_SECONDS
 #                    (default 60) each, from fuzz/corpus (needs Clang)
 #   ./dev.sh bench   build and run the benchmarks (not part of the tests)
-#   ./dev.sh charts  rerun the work-precision benchmark and redraw docs/charts
+#   ./dev.sh charts  rerun the work-precision and contact-scaling benchmarks
+#                    and redraw docs/charts
 #
 # Warnings are errors when CI is set (CI=true), as in .ci/run.
 set -euo pipefail
 cd "$(dirname "$0")"
 
 # What building the library and the command and running a scene needs;
-# the tests, benchmarks and charts need the rest.
+# the tests, benchmarks and charts need the rest. The suite also needs what
+# the glTF tests run (tests/gltf/check.sh): f3d to render a frame, xvfb and
+# xauth for its off-screen display (xvfb-run), Mesa's software OpenGL, and
+# node with npm for the Khronos validator (install_node).
 run_packages=(build-essential cmake pkg-config liblua5.4-dev)
 packages=("${run_packages[@]}" lua5.4 libcmocka-dev libode-dev gnuplot-nox)
+test_packages=("${packages[@]}" f3d xvfb xauth libgl1-mesa-dri)
 
 install_missing() { # packages
     local missing=() p sudo=""
@@ -28,6 +33,17 @@ install_missing() { # packages
     echo "dev.sh: installing ${missing[*]}"
     $sudo apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+# node and npm (Debian's, unless a node with npm is there already), then
+# gltf-validator into tests/gltf/node_modules at the version
+# tests/gltf/package-lock.json pins. A failure stops here: the tests need it.
+install_node() {
+    command -v node > /dev/null && command -v npm > /dev/null || install_missing nodejs npm
+    node -e 'process.exit(require("./tests/gltf/node_modules/gltf-validator/package.json").version ===
+             require("./tests/gltf/package.json").dependencies["gltf-validator"] ? 0 : 1)' 2> /dev/null && return 0
+    echo "dev.sh: installing gltf-validator into tests/gltf/node_modules"
+    npm ci --prefix tests/gltf --no-audit --no-fund --loglevel=error
 }
 
 build() { # preset
@@ -44,12 +60,14 @@ run)
     ./build/default/tumble run scenes/projectile.lua --out projectile.csv
     ;;
 test)
-    install_missing "${packages[@]}"
+    install_missing "${test_packages[@]}"
+    install_node
     build default
     ctest --preset default
     ;;
 asan)
-    install_missing "${packages[@]}"
+    install_missing "${test_packages[@]}"
+    install_node
     build asan
     ctest --preset asan
     ;;
@@ -96,6 +114,8 @@ charts)
     mkdir -p bench/out
     ./build/default/bench/bench_workprecision bench/out
     gnuplot bench/workprecision.gp
+    ./build/default/bench/bench_contacts --scaling bench/out
+    gnuplot bench/contact_scaling.gp
     ;;
 *)
     sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'

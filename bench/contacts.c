@@ -57,6 +57,20 @@
      on across the endless plane (no rolling resistance, in either engine),
      and those still rolling at its edge keep its island awake.
 
+   - scaling (`bench_contacts --scaling OUT`, run by `./dev.sh charts`,
+     not by `./dev.sh bench`): the contact cost against the pile's size.
+     ode_pile_scene's pile at 1000, 4000 and 16000 shapes, each on a grid
+     of 10, 20 and 40 a side so that every pile is 10 layers high and
+     falls and lands alike; sleep off, 300 steps at 60 Hz (5 s: it falls
+     for about 1.5 s, then lands and spreads). The figure is ns per contact
+     point: the whole step's wall time summed over the steps over the
+     touching points summed over them (tb_world_contact_count), so it
+     charges the broadphase and the integrator to the contacts too, an
+     upper bound on the contacts' own cost; a solver whose cost grows with
+     the points alone draws a flat line. One run of each; writes
+     OUT/contact_scaling.csv, drawn by bench/contact_scaling.gp into
+     docs/charts/contact_scaling.png.
+
    The machine may be shared: runs alternate tumble and ODE, BENCH_RUNS
    times each, and the figures are medians over those runs, so that a
    burst of load elsewhere does not land on one engine only. The scenes are
@@ -302,7 +316,52 @@ static const char *met(int ok)
     return ok ? "met" : "NOT met";
 }
 
-int main(void)
+/* -------------------------------------------------------------- scaling -- */
+
+static int scaling(const char *folder)
+{
+    static const int counts[3] = { 1000, 4000, 16000 }, grids[3] = { 10, 20, 40 };
+    char path[4096];
+    FILE *f;
+    int k;
+    snprintf(path, sizeof path, "%s/contact_scaling.csv", folder);
+    if (!(f = fopen(path, "w"))) {
+        fprintf(stderr, BENCH_NAME ": cannot write %s\n", path);
+        return EXIT_FAILURE;
+    }
+    printf("tumble contact cost against the pile's size (sleep off, 300 steps at 60 Hz, one run each)\n");
+    bench_print_build();
+    bench_print_asserts();
+    fprintf(f, "shapes,grid,steps,ms_per_step,contacts_per_step,ns_per_contact,below\n");
+    for (k = 0; k < 3; ++k) {
+        ode_pile_def d = ode_default_pile_def();
+        ode_shape *shapes;
+        timing t;
+        int below;
+        d.count = counts[k], d.grid = grids[k], d.steps = 300;
+        shapes = xmalloc((size_t)d.count * sizeof *shapes);
+        if (ode_pile_scene(&d, shapes) != d.count) {
+            fprintf(stderr, BENCH_NAME ": pile scene refused\n");
+            return EXIT_FAILURE;
+        }
+        below = tumble_pile(&d, shapes, 0, &t);
+        printf("scaling   %5d shapes (grid %d): %.2f ms/step, %.0f contact points per step, %.0f ns per contact "
+               "point, centres below the plane %d\n", d.count, d.grid, t.ms_mean, t.contacts_mean,
+               1e6 * t.ms_mean / t.contacts_mean, below);
+        fprintf(f, "%d,%d,%d,%.6g,%.6g,%.6g,%d\n", d.count, d.grid, d.steps, t.ms_mean, t.contacts_mean,
+                1e6 * t.ms_mean / t.contacts_mean, below);
+        fflush(stdout);
+        free(shapes);
+    }
+    if (fclose(f) != 0) {
+        fprintf(stderr, BENCH_NAME ": cannot write %s\n", path);
+        return EXIT_FAILURE;
+    }
+    printf("wrote %s\n", path);
+    return EXIT_SUCCESS;
+}
+
+int main(int argc, char **argv)
 {
     const ode_pyramid_def pd = ode_default_pyramid_def();
     const ode_pile_def ld = ode_default_pile_def();
@@ -322,6 +381,16 @@ int main(void)
     ode_pile_result pile_ode;
     double t_ms, t1_ms, t2_ms, o_ms, ratio;
     int r, below = 0;
+
+    if (argc == 3 && !strcmp(argv[1], "--scaling")) {
+        free(shapes);
+        return scaling(argv[2]);
+    }
+    if (argc != 1) {
+        fprintf(stderr, "usage: " BENCH_NAME " [--scaling FOLDER]\n");
+        free(shapes);
+        return 2;
+    }
 
     printf("tumble contacts beside ODE %s (double): medians over %d alternating runs of each scene\n", TB_BENCH_ODE,
            BENCH_RUNS);

@@ -226,6 +226,15 @@ TB_API tb_spring_def tb_default_spring_def(void);
 TB_API tb_status tb_world_add_spring(tb_world *world, const tb_spring_def *def, tb_spring_id *id);
 TB_API tb_status tb_world_remove_spring(tb_world *world, tb_spring_id id);
 TB_API size_t tb_world_spring_count(const tb_world *world);
+/* The spring in slot 0 .. tb_world_spring_count() - 1, to walk them all
+   (a removal moves the last spring into the freed slot); the null id past
+   the end. */
+TB_API tb_spring_id tb_world_spring_at(const tb_world *world, size_t slot);
+/* What a spring is, as the world holds it: its ends (b null and the
+   anchor for an anchored spring), stiffness, damping and rest length (the
+   distance at creation when it was added with a negative one), so that a
+   host can draw it. TB_ERR_STALE_ID for a removed or foreign id. */
+TB_API tb_status tb_spring_definition(const tb_world *world, tb_spring_id id, tb_spring_def *def);
 
 /* --------------------------------------------------------- mass properties -- */
 /* Mass properties (tb_mass) from shapes of uniform density rho (kg/m^3),
@@ -363,6 +372,9 @@ TB_API tb_contact_settings tb_world_contact_settings(const tb_world *world);
 TB_API const tb_contact_event *tb_world_contact_events(const tb_world *world, size_t *count);
 /* Points of contact that are touching now (after the last step). */
 TB_API size_t tb_world_contact_count(const tb_world *world);
+/* The deepest overlap (m, >= 0) among those points, as the last step found
+   it at its start, before solving (0: none overlaps, or no step yet). */
+TB_API double tb_world_deepest_overlap(const tb_world *world);
 
 /* Sleep: an island of bodies joined by touching contacts that rests for
    sleep_time falls asleep: it keeps its pose with zero velocity, costs no

@@ -1,5 +1,6 @@
 /* tumble_main.c: the `tumble` command. Runs a Lua scene script and writes
-   its trajectory as CSV. Errors are one line on stderr and a non-zero exit;
+   its trajectory as CSV (and, when asked, a glTF file, gltf_writer.c, and
+   a plot, run_plot.c). Errors are one line on stderr and a non-zero exit;
    the output file appears only when the whole run succeeded: rows go to a
    temporary file of its own next to it, renamed over it at the end, and
    removed on failure and on SIGINT, SIGTERM and SIGHUP.
@@ -11,6 +12,8 @@
    with a verb. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime, sigaction, mkstemp, fchmod */
 #include "tumble_lua.h"
+#include "gltf_writer.h"
+#include "run_plot.h"
 
 #include <lauxlib.h>
 #include <lualib.h>
@@ -39,7 +42,8 @@ static const char usage[] =
     "usage: tumble run SCENE.lua [--out FILE.csv] [--integrator NAME] [--dt SECONDS]\n"
     "                            [--tol TOLERANCE] [--guard FACTOR] [--until SECONDS]\n"
     "                            [--every SECONDS] [--trust] [--max-instructions N]\n"
-    "                            [--max-memory BYTES] [--quiet]\n"
+    "                            [--max-memory BYTES] [--gltf FILE.glb] [--plot FILE.png]\n"
+    "                            [--quiet]\n"
     "       tumble --help | --version\n"
     "\n"
     "Runs a scene script and writes its trajectory as CSV. Options take their\n"
@@ -76,10 +80,19 @@ static const char usage[] =
     "                     K, M, G multiply by 1e3, 1e6, 1e9\n"
     "  --max-memory BYTES the bytes the scene's Lua and worlds may hold at once;\n"
     "                     default %.0fM, 0: no limit; K, M, G: KiB, MiB, GiB\n"
-    "  --quiet            print no summary\n"
+    "  --gltf FILE.glb    also write the run as binary glTF 2.0: every shape as a\n"
+    "                     mesh, bodies, particles, tracers and springs as nodes\n"
+    "                     animated at the recorded frames (docs/command.md)\n"
+    "  --plot FILE.png    also draw the energy terms, momentum and (with shapes)\n"
+    "                     contacts at the recorded frames, with gnuplot\n"
+    "  --quiet            print no summary\n";
+
+/* The rest of the help: the output (a second string, as C99 promises
+   string literals of 4095 characters only). */
+static const char usage_output[] =
     "\n"
     "Output: header t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz then one row\n"
-    "per object per recorded step, numbers as %%.17g. kind is particle, tracer\n"
+    "per object per recorded step, numbers as %.17g. kind is particle, tracer\n"
     "or body; id is the object's id index (as in handle:id()); a tracer's\n"
     "velocity is the field velocity at its position. For bodies x is the\n"
     "centre of mass, q the orientation (world from principal axes) and w the\n"
@@ -100,7 +113,7 @@ static const char usage[] =
     "signal ends it at once).\n";
 
 typedef struct options {
-    const char *scene, *out, *integrator;
+    const char *scene, *out, *integrator, *gltf, *plot;
     double dt, until, every, tol, guard;
     double max_instructions, max_memory; /* budgets; 0: no limit */
     int quiet, trust;
@@ -132,6 +145,7 @@ static void print_usage(FILE *f)
         strncat(names, tb_integrator_name(i), sizeof names - strlen(names) - 1);
     }
     fprintf(f, usage, names, DEFAULT_MAX_INSTRUCTIONS / 1e9, DEFAULT_MAX_MEMORY / (1024 * 1024));
+    fputs(usage_output, f);
 }
 
 static int parse_number(const char *flag, const char *text, double *out, int allow_zero)
@@ -205,6 +219,14 @@ static int parse_arguments(int argc, char **argv, options *o)
             if (!v || !*v)
                 return die(2, "%s needs a file name", a);
             o->out = v, i += !joined;
+        } else if (!strcmp(a, "--gltf")) {
+            if (!v || !*v)
+                return die(2, "%s needs a file name", a);
+            o->gltf = v, i += !joined;
+        } else if (!strcmp(a, "--plot")) {
+            if (!v || !*v)
+                return die(2, "%s needs a file name", a);
+            o->plot = v, i += !joined;
         } else if (!strcmp(a, "--integrator")) {
             if (!v || !*v)
                 return die(2, "%s needs a name", a);
@@ -587,6 +609,94 @@ static int write_shapes(const char *out_path, tb_world *w)
     return 0;
 }
 
+/* Before the run: can a file be made in path's folder? Returns 0, or 1
+   with a message, so that a long run does not end in a folder it cannot
+   write. */
+static int check_folder(const char *flag, const char *path)
+{
+    char folder[4200];
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(folder, sizeof folder, ".");
+    else
+        snprintf(folder, sizeof folder, "%.*s", slash == path ? 1 : (int)(slash - path), path);
+    if (access(folder, W_OK) != 0) {
+        fprintf(stderr, "tumble: %s %s: cannot write in '%s': %s\n", flag, path, folder, strerror(errno));
+        return 1;
+    }
+    return 0;
+}
+
+/* The run as binary glTF (gltf_writer.c), through a temporary file
+   renamed at the end as the trajectory is; a signal while it is written
+   removes it. Returns 0, or the exit status with a message. */
+static int write_gltf(const char *path, gltf_writer *g, tb_world *w)
+{
+    FILE *f = open_temp(path);
+    int failed, why;
+    if (!f) {
+        fprintf(stderr, "tumble: cannot write a temporary file next to '%s': %s\n", path, strerror(errno));
+        return 1;
+    }
+    if (gltf_write(g, w, f)) {
+        fclose(f);
+        remove_temp();
+        fprintf(stderr, "tumble: --gltf %s: %s\n", path, gltf_message(g));
+        return 1;
+    }
+    failed = ferror(f) | fclose(f);
+    why = errno;
+    if (stop_signal) {
+        remove_temp();
+        fprintf(stderr, "tumble: %s: interrupted by %s; not written\n", path, signal_name(stop_signal));
+        return 128 + stop_signal;
+    }
+    if (failed || rename(temp_path, path)) {
+        if (!failed)
+            why = errno;
+        remove_temp();
+        fprintf(stderr, "tumble: cannot write '%s': %s\n", path, strerror(why));
+        return 1;
+    }
+    temp_made = 0;
+    return 0;
+}
+
+/* The plot (run_plot.c): gnuplot draws into a temporary file of ours,
+   renamed at the end; a signal while it draws removes it. Returns 0, or
+   the exit status with a message. */
+static int write_plot(const char *path, run_plot *p, const char *title, int contacts)
+{
+    char why[256];
+    FILE *f = open_temp(path);
+    if (!f) {
+        fprintf(stderr, "tumble: cannot write a temporary file next to '%s': %s\n", path, strerror(errno));
+        return 1;
+    }
+    fclose(f);
+    if (plot_draw(p, temp_path, title, contacts, why, sizeof why)) {
+        remove_temp();
+        if (stop_signal)
+            return fprintf(stderr, "tumble: %s: interrupted by %s; not written\n", path, signal_name(stop_signal)),
+                   128 + stop_signal;
+        fprintf(stderr, "tumble: --plot %s: %s\n", path, why);
+        return 1;
+    }
+    if (stop_signal) {
+        remove_temp();
+        fprintf(stderr, "tumble: %s: interrupted by %s; not written\n", path, signal_name(stop_signal));
+        return 128 + stop_signal;
+    }
+    if (rename(temp_path, path)) {
+        const int why_errno = errno;
+        remove_temp();
+        fprintf(stderr, "tumble: cannot write '%s': %s\n", path, strerror(why_errno));
+        return 1;
+    }
+    temp_made = 0;
+    return 0;
+}
+
 /* Run the scene whose text is in s (read by main). */
 static int run_scene(lua_State *L, const options *o, scene *s)
 {
@@ -602,6 +712,9 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     double shown;
     tb_advice advice;
     FILE *f, *report;
+    gltf_writer *gw = NULL;
+    run_plot *pr = NULL;
+    int gltf_failed = 0, plot_failed = 0;
 
     lua_pushcfunction(L, add_traceback);
     lua_pushcfunction(L, load_scene);
@@ -651,9 +764,16 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         fprintf(stderr, "tumble: warning: %s\n", advice.text);
     to_stdout = !strcmp(out_path, "-");
     report = to_stdout ? stderr : stdout;
+    if (o->gltf && !(gw = gltf_begin(w)))
+        return die(1, "%s", "out of memory for the glTF writer");
+    if (o->plot && !(pr = plot_begin())) {
+        gltf_free(gw);
+        return die(1, "%s", "out of memory for the plot");
+    }
     f = to_stdout ? stdout : open_temp(out_path);
     if (!f) {
         fprintf(stderr, "tumble: cannot write a temporary file next to '%s': %s\n", out_path, strerror(errno));
+        gltf_free(gw);
         return 1;
     }
     fprintf(f, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n");
@@ -661,6 +781,10 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     e0 = tb_world_energy(w);
     t0 = read_clock();
     r = record_rows(f, L, world_idx, w, &tracer_vel, &cap);
+    if (r >= 0 && gw && gltf_record(gw, w))
+        r = -1, gltf_failed = 1;
+    if (r >= 0 && pr && plot_record(pr, w))
+        r = -1, plot_failed = 1;
     shown = t0 + 1; /* a progress line from the first second on */
     for (step = 1; r >= 0 && step <= steps; ++step) {
         rows += r;
@@ -669,8 +793,13 @@ static int run_scene(lua_State *L, const options *o, scene *s)
             r = -1;
             break;
         }
-        if (step % every_steps == 0 || step == steps)
+        if (step % every_steps == 0 || step == steps) {
             r = record_rows(f, L, world_idx, w, &tracer_vel, &cap);
+            if (r >= 0 && gw && gltf_record(gw, w))
+                r = -1, gltf_failed = 1;
+            if (r >= 0 && pr && plot_record(pr, w))
+                r = -1, plot_failed = 1;
+        }
         if (progress && step % 64 == 0 && read_clock() >= shown) {
             const double spent = read_clock() - t0, rate = (double)step / spent;
             fprintf(stderr, "\rtumble: t = %.4g of %.4g s, %.3g steps/s, about %.0f s left\033[K",
@@ -687,8 +816,14 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     write_error = errno;
     if (failed || unwritten) {
         remove_temp();
-        if ((rc = report_stop(L, o, w)) != 0)
-            return rc;
+        if ((rc = report_stop(L, o, w)) == 0 && gltf_failed)
+            fprintf(stderr, "tumble: --gltf %s: at t = %.17g s: %s\n", o->gltf, tb_world_time(w), gltf_message(gw));
+        else if (rc == 0 && plot_failed)
+            fprintf(stderr, "tumble: --plot %s: out of memory for the plot's frames\n", o->plot);
+        gltf_free(gw);
+        plot_free(pr);
+        if (rc != 0 || gltf_failed || plot_failed)
+            return rc ? rc : 1;
         if (r < 0)
             fprintf(stderr, "tumble: %s: at t = %.17g s: %s\n", o->scene, tb_world_time(w), tb_world_message(w));
         else
@@ -701,11 +836,21 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         const int why = errno;
         remove_temp();
         fprintf(stderr, "tumble: cannot rename to '%s': %s\n", out_path, strerror(why));
+        gltf_free(gw);
+        plot_free(pr);
         return 1;
     }
     temp_made = 0;
-    if (!to_stdout && (rc = write_shapes(out_path, w)) != 0)
+    rc = to_stdout ? 0 : write_shapes(out_path, w);
+    if (!rc && gw)
+        rc = write_gltf(o->gltf, gw, w);
+    if (!rc && pr)
+        rc = write_plot(o->plot, pr, o->scene, tb_world_shape_count(w) > 0);
+    if (rc) {
+        gltf_free(gw);
+        plot_free(pr);
         return rc;
+    }
     e1 = tb_world_energy(w);
     if (!o->quiet) {
         unsigned long long executed;
@@ -744,7 +889,13 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         fprintf(report, "wrote       %s (%ld rows)\n", to_stdout ? "stdout" : out_path, rows);
         if (!to_stdout && tb_world_shape_count(w))
             fprintf(report, "shapes      %zu, beside it in .shapes.csv\n", tb_world_shape_count(w));
+        if (gw)
+            fprintf(report, "gltf        %s (%zu frames)\n", o->gltf, gltf_frames(gw));
+        if (pr)
+            fprintf(report, "plot        %s\n", o->plot);
     }
+    gltf_free(gw);
+    plot_free(pr);
     return 0;
 }
 
@@ -757,6 +908,11 @@ int main(int argc, char **argv)
     int rc = parse_arguments(argc, argv, &o);
     if (rc)
         return rc < 0 ? 0 : rc;
+    /* what the outputs need, before a run that may be long */
+    if ((o.gltf && check_folder("--gltf", o.gltf)) || (o.plot && check_folder("--plot", o.plot)))
+        return 1;
+    if (o.plot && !plot_gnuplot_found())
+        return die(1, "%s", "--plot draws with gnuplot, which is not on PATH (on Debian: apt-get install gnuplot-nox)");
     memset(&s, 0, sizeof s);
     s.o = &o;
     s.text = read_file(o.scene, &s.size);

@@ -381,3 +381,19 @@ size_t tb_world_contact_count(const tb_world *w)
 {
     return w && w->contacts ? w->contacts->touching_points : 0;
 }
+
+double tb_world_deepest_overlap(const tb_world *w)
+{
+    double deepest = 0;
+    size_t i;
+    int k;
+    if (!w || !w->contacts)
+        return 0;
+    for (i = 0; i < w->contacts->entry_count; ++i) {
+        const tb__entry *e = &w->contacts->entries[i];
+        for (k = 0; k < e->count; ++k)
+            if (e->point[k].active && -e->point[k].separation > deepest)
+                deepest = -e->point[k].separation;
+    }
+    return deepest;
+}

@@ -132,6 +132,35 @@ size_t tb_world_spring_count(const tb_world *w)
     return w->spring_count;
 }
 
+tb_spring_id tb_world_spring_at(const tb_world *w, size_t slot)
+{
+    tb_spring_id id = { 0, 0 };
+    if (w && slot < w->spring_count)
+        tb__ids_at(&w->spring_ids, (uint32_t)slot, &id.index1, &id.generation);
+    return id;
+}
+
+tb_status tb_spring_definition(const tb_world *w, tb_spring_id id, tb_spring_def *def)
+{
+    uint32_t s;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if (!def)
+        return tb__null((tb_world *)w, "tb_spring_definition", "the output");
+    if (!tb__ids_lookup(&w->spring_ids, id.index1, id.generation, &s))
+        return tb__fail((tb_world *)w, TB_ERR_STALE_ID, "spring id %u.%u is null, removed or from another world",
+                        id.index1, id.generation);
+    memset(def, 0, sizeof *def);
+    tb__ids_at(&w->particle_ids, w->spring_a[s], &def->a.index1, &def->a.generation);
+    if (w->spring_b[s] != TB__ANCHOR)
+        tb__ids_at(&w->particle_ids, w->spring_b[s], &def->b.index1, &def->b.generation);
+    else
+        memcpy(def->anchor, w->spring_anchor + 3 * s, sizeof def->anchor);
+    def->stiffness = w->spring_k[s];
+    def->damping = w->spring_c[s];
+    def->rest_length = w->spring_rest[s];
+    return TB_OK;
+}
+
 /* A particle was removed from slot `slot`, the last one moved into it:
    its springs go with it, and springs of the moved one follow it. */
 static void particle_removed(tb_world *w, uint32_t slot, uint32_t last)

@@ -218,7 +218,34 @@ static void structural_churn_keeps_ids_honest(void **state)
     }
 }
 
+/* The deepest overlap is what the step found at its start: a unit box
+   sunk 5 cm into the plane reads 0.05 m at its first step (the box's four
+   bottom corners, exact to rounding), none before a step, and once the
+   position pass has lifted it and it rests, at most the slop the solver
+   leaves alone (5 mm) plus rounding (tb_world_deepest_overlap, which
+   `tumble run --plot` draws). */
+static void deepest_overlap_is_read(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double at[3] = { 0, 0, 0.45 };
+    const tb_contact_settings cs = tb_default_contact_settings();
+    int i;
+    (void)state;
+    add_box(w, at, 1, 0.6);
+    assert_true(tb_world_deepest_overlap(w) == 0);
+    assert_true(tb_world_deepest_overlap(NULL) == 0);
+    assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    assert_int_equal(tb_world_contact_count(w), 4);
+    assert_float_equal(tb_world_deepest_overlap(w), 0.05, 1e-12);
+    for (i = 0; i < 120; ++i)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    assert_true(tb_world_deepest_overlap(w) > 0);
+    assert_true(tb_world_deepest_overlap(w) <= cs.slop + 1e-9);
+    tb_world_destroy(w);
+}
+
 static const struct CMUnitTest tests[] = {
+    cmocka_unit_test(deepest_overlap_is_read),
     cmocka_unit_test(structural_churn_keeps_ids_honest),
     cmocka_unit_test(bad_shapes_are_refused),
     cmocka_unit_test(shapes_read_back_as_defined),

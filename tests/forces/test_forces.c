@@ -377,6 +377,47 @@ static void fields_add_up(void **state)
     tb_world_destroy(w);
 }
 
+/* Springs read back as they were made: ends, anchor, coefficients and the
+   rest length the world took (the distance at creation for a negative
+   one); after a particle's removal its springs are gone and the rest keep
+   their ends (tb_spring_definition, as the command's glTF output reads
+   them). */
+static void springs_read_back(void **state)
+{
+    tb_world *w = world_with("verlet", 0, 0, 0);
+    const double xa[3] = { 0, 0, 0 }, xb[3] = { 3, 4, 0 }, xc[3] = { 0, 0, 2 }, zero[3] = { 0, 0, 0 };
+    tb_particle_id a = particle(w, xa, zero, 1, 0), b = particle(w, xb, zero, 1, 0), c = particle(w, xc, zero, 1, 0);
+    tb_spring_def d = tb_default_spring_def(), got;
+    tb_spring_id s1, s2;
+    (void)state;
+    d.a = a, d.b = b, d.stiffness = 7, d.damping = 0.5;
+    assert_int_equal(tb_world_add_spring(w, &d, &s1), TB_OK);
+    d = tb_default_spring_def();
+    d.a = c, d.anchor[0] = 1, d.anchor[1] = 2, d.anchor[2] = 3, d.stiffness = 2, d.rest_length = 0.25;
+    assert_int_equal(tb_world_add_spring(w, &d, &s2), TB_OK);
+    assert_int_equal(tb_world_spring_at(w, 0).index1, s1.index1);
+    assert_int_equal(tb_world_spring_at(w, 1).index1, s2.index1);
+    assert_int_equal(tb_world_spring_at(w, 2).index1, 0); /* past the end */
+    assert_int_equal(tb_spring_definition(w, s1, &got), TB_OK);
+    assert_int_equal(got.a.index1, a.index1);
+    assert_int_equal(got.b.index1, b.index1);
+    assert_true(got.stiffness == 7 && got.damping == 0.5);
+    assert_true(got.rest_length == 5); /* |(3, 4, 0)|, exact */
+    assert_int_equal(tb_spring_definition(w, s2, &got), TB_OK);
+    assert_int_equal(got.a.index1, c.index1);
+    assert_int_equal(got.b.index1, 0);
+    assert_true(got.anchor[0] == 1 && got.anchor[1] == 2 && got.anchor[2] == 3 && got.rest_length == 0.25);
+    assert_int_equal(tb_spring_definition(w, s1, NULL), TB_ERR_ARGUMENT);
+    /* removing a takes s1 with it; c moves into a's slot and s2 follows */
+    assert_int_equal(tb_world_remove_particle(w, a), TB_OK);
+    assert_int_equal(tb_spring_definition(w, s1, &got), TB_ERR_STALE_ID);
+    assert_int_equal(tb_world_spring_count(w), 1);
+    assert_int_equal(tb_spring_definition(w, tb_world_spring_at(w, 0), &got), TB_OK);
+    assert_int_equal(got.a.index1, c.index1);
+    assert_int_equal(got.a.generation, c.generation);
+    tb_world_destroy(w);
+}
+
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(projectile_velocity_follows_stability_function),
     cmocka_unit_test(projectile_rk4_matches_closed_form),
@@ -389,5 +430,6 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(pinned_particles_do_not_move),
     cmocka_unit_test(c_force_callback_pushes),
     cmocka_unit_test(fields_add_up),
+    cmocka_unit_test(springs_read_back),
 };
 TB_TEST_MAIN(tests)

@@ -280,6 +280,61 @@ static void shapes_are_written_beside_the_trajectory(void **state)
     assert_true(rows == 6 && planes == 1 && spheres == 5);
 }
 
+/* The PNG's width and height from its header: the 8-byte signature, then
+   the IHDR chunk (length 13, "IHDR", width, height big-endian). 0 and 0
+   when it is no PNG. */
+static void png_size(const char *path, unsigned long *width, unsigned long *height)
+{
+    static const unsigned char signature[8] = { 0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n' };
+    unsigned char b[24];
+    FILE *f = fopen(path, "rb");
+    *width = *height = 0;
+    if (!f)
+        return;
+    if (fread(b, 1, sizeof b, f) == sizeof b && !memcmp(b, signature, 8) && !memcmp(b + 12, "IHDR", 4)) {
+        *width = (unsigned long)b[16] << 24 | (unsigned long)b[17] << 16 | (unsigned long)b[18] << 8 | b[19];
+        *height = (unsigned long)b[20] << 24 | (unsigned long)b[21] << 16 | (unsigned long)b[22] << 8 | b[23];
+    }
+    fclose(f);
+}
+
+/* --plot: gnuplot draws a 1000 x 900 PNG (run_plot.c sets that size for
+   two panels and for three), for a scene with contacts and one without,
+   through a temporary file that does not stay; without gnuplot on PATH
+   the command says so before running, with status 1 and no file. */
+static void plot_is_drawn_with_gnuplot(void **state)
+{
+    char args[2048], path[1100];
+    unsigned long width, height;
+    const char *scenes[] = { "bounce.lua' --until 1", "projectile.lua'" };
+    int k;
+    (void)state;
+    for (k = 0; k < 2; ++k) {
+        snprintf(args, sizeof args, "run '%s/%s --out run.csv --plot run.png", SCENES_DIR, scenes[k]);
+        assert_int_equal(tumble(args), 0);
+        assert_non_null(strstr(out_text, "plot        run.png"));
+        work_path(path, sizeof path, "run.png");
+        png_size(path, &width, &height);
+        assert_int_equal(width, 1000);
+        assert_int_equal(height, 900);
+        remove(path);
+        snprintf(args, sizeof args, "ls -a '%s' | grep -q -F .part", work_dir());
+        assert_int_equal(system(args), 256); /* grep found none: status 1 */
+    }
+    snprintf(args, sizeof args, "cd '%s' && PATH=/nonexistent '%s' run '%s/bounce.lua' --out nogp.csv --plot nogp.png "
+                                "2> err.txt", work_dir(), TUMBLE_EXE, SCENES_DIR);
+    k = system(args);
+    assert_true(WIFEXITED(k) && WEXITSTATUS(k) == 1);
+    work_path(path, sizeof path, "err.txt");
+    slurp(path, err_text, sizeof err_text);
+    assert_string_equal(err_text, "tumble: --plot draws with gnuplot, which is not on PATH (on Debian: apt-get "
+                                  "install gnuplot-nox)\n");
+    work_path(path, sizeof path, "nogp.png");
+    assert_false(exists(path));
+    work_path(path, sizeof path, "nogp.csv");
+    assert_false(exists(path));
+}
+
 /* The reference scenes of the work-precision benchmark run as scenes too. */
 static void reference_scenes_run(void **state)
 {
@@ -481,6 +536,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(contact_scenes),
     cmocka_unit_test(pipes_and_joined_values),
     cmocka_unit_test(shapes_are_written_beside_the_trajectory),
+    cmocka_unit_test(plot_is_drawn_with_gnuplot),
     cmocka_unit_test(blow_up_is_stopped_and_auto_plans),
     cmocka_unit_test(projectile_scene),
     cmocka_unit_test(vortex_scene),
