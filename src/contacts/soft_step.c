@@ -32,8 +32,10 @@
    each point's impulse times its lever from the centre) and rolling
    resistance (about the tangents, within rho times the normal impulse).
    Every row keeps the arms of the start of the step (the Jacobian is that
-   of the start pose); the separation is recomputed every substep from the
-   bodies' displacements and their turns since the start, exactly. */
+   of the start pose) and moves the bodies through their inertia at the
+   start, the pose its mass was found at; the separation is recomputed
+   every substep from the bodies' displacements and their turns since the
+   start, exactly. */
 #include "contacts/contacts.h"
 
 #include <math.h>
@@ -61,6 +63,8 @@ typedef struct tb__soft_patch {
     double tangent[2][3];
     double ca[3], cb[3];        /* m: the centre of the points from each side's centre */
     double arm_a[2][3], arm_b[2][3]; /* centre x tangent */
+    double spin_a[2][3], spin_b[2][3]; /* the start's inverse inertia times those */
+    double turn_a[3][3], turn_b[3][3]; /* ... times the normal and the tangents */
     double tangent_mass[3];     /* the 2 x 2 inverse of J M^-1 J^T: xx, xy, yy */
     double twist_mass;
     double rolling_mass[3];     /* 2 x 2 inverse, about the tangents */
@@ -74,6 +78,7 @@ typedef struct tb__soft_row {
     int32_t a, b;               /* solver bodies, -1: the static world */
     double normal[3];           /* a to b */
     double arm_a[3], arm_b[3];  /* r x normal at each side */
+    double spin_a[3], spin_b[3];/* the start's inverse inertia times those */
     double ra[3], rb[3];        /* m: the point from each centre at the start */
     double mass;                /* 1 / (J M^-1 J^T), at the start pose */
     double impulse;             /* N s: accumulated in the current substep */
@@ -119,38 +124,36 @@ static void rotation_since(const double q[4], const double q0[4], double out[9])
     tb__matrix_of(dq, out);
 }
 
-/* Solver body i (>= 0) receives impulse j (N s, world) at arm r. */
-static void push(tb__contacts *c, int32_t i, const double j[3], const double r[3])
+/* Solver body i (>= 0) receives an impulse lambda along unit d whose
+   angular part is arm (r x d): its spin changes by lambda times spin, the
+   start's inverse inertia times arm. Every row responds through the
+   inertia of the start pose, as its mass was found; the drift then takes
+   w from L at the new orientation. */
+static void apply(tb__contacts *c, int32_t i, double lambda, const double d[3], const double arm[3],
+                  const double spin[3])
 {
     tb__soft_body *s = &c->soft_bodies[i];
-    const double im = c->bodies[i].inv_mass;
-    double rj[3], dw[3];
+    const double im = c->bodies[i].inv_mass * lambda;
     int k;
     for (k = 0; k < 3; ++k) {
-        s->P[k] += j[k];
-        s->v[k] += im * j[k];
+        s->P[k] += lambda * d[k];
+        s->v[k] += im * d[k];
     }
     if (c->bodies[i].tier != TB__BODIES)
         return;
-    tb__cross(r, j, rj);
-    tb__mul(s->inv_world, rj, dw);
     for (k = 0; k < 3; ++k) {
-        s->L[k] += rj[k];
-        s->w[k] += dw[k];
+        s->L[k] += lambda * arm[k];
+        s->w[k] += lambda * spin[k];
     }
 }
 
-/* A scalar impulse along row d of row o, equal and opposite on its sides. */
+/* A scalar impulse along row o's normal, equal and opposite on its sides. */
 static void push_row(tb__contacts *c, const tb__soft_row *o, double lambda)
 {
-    double j[3];
-    j[0] = lambda * o->normal[0], j[1] = lambda * o->normal[1], j[2] = lambda * o->normal[2];
     if (o->b >= 0)
-        push(c, o->b, j, o->rb);
-    if (o->a >= 0) {
-        j[0] = -j[0], j[1] = -j[1], j[2] = -j[2];
-        push(c, o->a, j, o->ra);
-    }
+        apply(c, o->b, lambda, o->normal, o->arm_b, o->spin_b);
+    if (o->a >= 0)
+        apply(c, o->a, -lambda, o->normal, o->arm_a, o->spin_a);
 }
 
 /* The relative velocity of b against a along row d */
@@ -227,29 +230,23 @@ static soft softness(double hertz, double zeta, double hs)
     return s;
 }
 
-/* Angular impulse t (N m s, world) on solver body i (>= 0) */
-static void turn_body(tb__contacts *c, int32_t i, const double t[3], double sign)
+/* An angular impulse lambda about axis d (N m s), equal and opposite on
+   a patch's sides; spin_a and spin_b: the start's inverse inertia times
+   d on each side. */
+static void turn_patch(tb__contacts *c, const tb__soft_patch *p, const double d[3], const double spin_a[3],
+                       const double spin_b[3], double lambda)
 {
-    tb__soft_body *s = &c->soft_bodies[i];
-    double dw[3];
     int k;
-    if (c->bodies[i].tier != TB__BODIES)
-        return;
-    tb__mul(s->inv_world, t, dw);
-    for (k = 0; k < 3; ++k) {
-        s->L[k] += sign * t[k];
-        s->w[k] += sign * dw[k];
+    if (p->b >= 0 && c->bodies[p->b].tier == TB__BODIES) {
+        tb__soft_body *s = &c->soft_bodies[p->b];
+        for (k = 0; k < 3; ++k)
+            s->L[k] += lambda * d[k], s->w[k] += lambda * spin_b[k];
     }
-}
-
-/* An angular impulse lambda about axis d, equal and opposite on a patch's sides */
-static void turn_patch(tb__contacts *c, const tb__soft_patch *p, const double d[3], double lambda)
-{
-    const double t[3] = { lambda * d[0], lambda * d[1], lambda * d[2] };
-    if (p->b >= 0)
-        turn_body(c, p->b, t, 1);
-    if (p->a >= 0)
-        turn_body(c, p->a, t, -1);
+    if (p->a >= 0 && c->bodies[p->a].tier == TB__BODIES) {
+        tb__soft_body *s = &c->soft_bodies[p->a];
+        for (k = 0; k < 3; ++k)
+            s->L[k] -= lambda * d[k], s->w[k] -= lambda * spin_a[k];
+    }
 }
 
 /* The relative spin of b against a about axis d */
@@ -266,15 +263,15 @@ static double spin(const tb__contacts *c, const tb__soft_patch *p, const double 
 /* A friction impulse (along the tangents) at the patch's centre */
 static void push_centre(tb__contacts *c, const tb__soft_patch *p, double l1, double l2)
 {
-    double j[3];
-    int k;
-    for (k = 0; k < 3; ++k)
-        j[k] = l1 * p->tangent[0][k] + l2 * p->tangent[1][k];
-    if (p->b >= 0)
-        push(c, p->b, j, p->cb);
-    if (p->a >= 0) {
-        j[0] = -j[0], j[1] = -j[1], j[2] = -j[2];
-        push(c, p->a, j, p->ca);
+    int d;
+    const double l[2] = { l1, l2 };
+    for (d = 0; d < 2; ++d) {
+        if (l[d] == 0)
+            continue;
+        if (p->b >= 0)
+            apply(c, p->b, l[d], p->tangent[d], p->arm_b[d], p->spin_b[d]);
+        if (p->a >= 0)
+            apply(c, p->a, -l[d], p->tangent[d], p->arm_a[d], p->spin_a[d]);
     }
 }
 
@@ -297,11 +294,12 @@ static double slip(const tb__contacts *c, const tb__soft_patch *p, int d)
    pushes overlaps out; without (the relax), rigid and aiming at no
    approach. A point still apart (s > 0) lets its gap close within the
    substep, never more: positions move by the velocity the solve leaves. */
-static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const soft *sf, int bias)
+static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const soft *sf, int bias, int *closing)
 {
     const double max_push = c->settings.max_push;
     const double s = separation_now(c, o), vn = rate(c, o);
     double target, mass_scale = 1, impulse_scale = 0, lambda, total;
+    *closing |= bias && s >= 0 && vn * hs < -s;
     if (s > 0 && bias) {
         target = s / hs;
     } else if (s > 0) {
@@ -354,30 +352,19 @@ static void disc_step(const double mass[3], const double acc[2], double r1, doub
 /* The passes over an impact's rows (solve_patches) */
 #define TB__IMPACT_PASSES 4
 
-/* Whether a point of patch p still apart closes its gap within the
-   substep: an impact, whose rows a single pass leaves coupled */
-static int closing(const tb__contacts *c, const tb__soft_patch *p, double hs)
-{
-    size_t k;
-    for (k = 0; k < p->count; ++k) {
-        const tb__soft_row *o = &c->soft_rows[p->first + k];
-        const double s = separation_now(c, o);
-        if (s >= 0 && rate(c, o) * hs < -s)
-            return 1;
-    }
-    return 0;
-}
-
 /* Patch p once: its points, then its twist, rolling resistance and
-   friction. */
-static void solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft *sf, int bias)
+   friction. Whether a point still apart (or just touching) closes its gap
+   within the substep: an impact, whose rows a single pass leaves
+   coupled. */
+static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft *sf, int bias)
 {
+    int closing = 0;
     const double *n = c->soft_rows[p->first].normal;
     double total = 0, twist_limit = 0, t[2];
     size_t k;
     for (k = 0; k < p->count; ++k) {
         tb__soft_row *o = &c->soft_rows[p->first + k];
-        const double f = solve_normal(c, o, hs, sf, bias);
+        const double f = solve_normal(c, o, hs, sf, bias, &closing);
         total += f;
         twist_limit += o->lever * f;
     }
@@ -385,18 +372,19 @@ static void solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const sof
         const double old = p->twist_impulse, most = p->friction * twist_limit;
         const double next = fmin(fmax(old - p->twist_mass * spin(c, p, n), -most), most);
         p->twist_impulse = next;
-        turn_patch(c, p, n, next - old);
+        turn_patch(c, p, n, p->turn_a[0], p->turn_b[0], next - old);
     }
     if (p->rolling > 0) {
         disc_step(p->rolling_mass, p->rolling_impulse, spin(c, p, p->tangent[0]), spin(c, p, p->tangent[1]),
                   p->rolling * total, t);
-        turn_patch(c, p, p->tangent[0], t[0] - p->rolling_impulse[0]);
-        turn_patch(c, p, p->tangent[1], t[1] - p->rolling_impulse[1]);
+        turn_patch(c, p, p->tangent[0], p->turn_a[1], p->turn_b[1], t[0] - p->rolling_impulse[0]);
+        turn_patch(c, p, p->tangent[1], p->turn_a[2], p->turn_b[2], t[1] - p->rolling_impulse[1]);
         p->rolling_impulse[0] = t[0], p->rolling_impulse[1] = t[1];
     }
     disc_step(p->tangent_mass, p->friction_impulse, slip(c, p, 0), slip(c, p, 1), p->friction * total, t);
     push_centre(c, p, t[0] - p->friction_impulse[0], t[1] - p->friction_impulse[1]);
     p->friction_impulse[0] = t[0], p->friction_impulse[1] = t[1];
+    return closing;
 }
 
 /* One pass over the patches. A patch with a point that closes its gap
@@ -410,9 +398,10 @@ static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias)
     size_t i;
     for (i = 0; i < c->soft_patch_count; ++i) {
         tb__soft_patch *p = &c->soft_patches[i];
-        int pass, passes = bias && closing(c, p, hs) ? TB__IMPACT_PASSES : 1;
-        for (pass = 0; pass < passes; ++pass)
-            solve_patch(c, p, hs, sf, bias);
+        int pass;
+        if (solve_patch(c, p, hs, sf, bias))
+            for (pass = 1; pass < TB__IMPACT_PASSES; ++pass)
+                solve_patch(c, p, hs, sf, bias);
     }
 }
 
@@ -473,6 +462,17 @@ static void load(tb_world *w, tb__contacts *c, int n)
 /* The rows of every point of the awake entries, in key order; warm
    started from the impulses kept last step (a step's total, cut into n
    substeps and scaled by h / h_last). */
+/* The start's inverse world inertia of solver body i times v (0 for the
+   static world and particles) */
+static void start_spin(const tb__contacts *c, int32_t i, const double v[3], double out[3])
+{
+    if (i >= 0 && c->bodies[i].tier == TB__BODIES) {
+        tb__mul(c->soft_bodies[i].inv_world, v, out);
+    } else {
+        out[0] = out[1] = out[2] = 0;
+    }
+}
+
 /* 2 x 2 symmetric inverse of (xx, xy, yy) */
 static void invert2(const double k[3], double out[3])
 {
@@ -522,6 +522,13 @@ static void set_up_patch(tb__contacts *c, tb__soft_patch *p)
     for (d = 0; d < 2; ++d) {
         tb__cross(p->ca, p->tangent[d], p->arm_a[d]);
         tb__cross(p->cb, p->tangent[d], p->arm_b[d]);
+        start_spin(c, p->a, p->arm_a[d], p->spin_a[d]);
+        start_spin(c, p->b, p->arm_b[d], p->spin_b[d]);
+    }
+    for (d = 0; d < 3; ++d) {
+        const double *axis = d == 0 ? c->soft_rows[p->first].normal : p->tangent[d - 1];
+        start_spin(c, p->a, axis, p->turn_a[d]);
+        start_spin(c, p->b, axis, p->turn_b[d]);
     }
     if (p->a >= 0)
         im += c->bodies[p->a].inv_mass;
@@ -600,6 +607,8 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
             memcpy(o->rb, p->rb, sizeof o->rb);
             tb__cross(o->ra, o->normal, o->arm_a);
             tb__cross(o->rb, o->normal, o->arm_b);
+            start_spin(c, o->a, o->arm_a, o->spin_a);
+            start_spin(c, o->b, o->arm_b, o->spin_b);
             o->mass = row_mass(c, o);
             o->separation = p->separation;
             o->restitution = e->restitution;
@@ -628,10 +637,10 @@ static void warm_start(tb__contacts *c)
         const tb__soft_patch *p = &c->soft_patches[i];
         push_centre(c, p, p->friction_impulse[0], p->friction_impulse[1]);
         if (p->twist_impulse != 0)
-            turn_patch(c, p, c->soft_rows[p->first].normal, p->twist_impulse);
+            turn_patch(c, p, c->soft_rows[p->first].normal, p->turn_a[0], p->turn_b[0], p->twist_impulse);
         if (p->rolling_impulse[0] != 0 || p->rolling_impulse[1] != 0) {
-            turn_patch(c, p, p->tangent[0], p->rolling_impulse[0]);
-            turn_patch(c, p, p->tangent[1], p->rolling_impulse[1]);
+            turn_patch(c, p, p->tangent[0], p->turn_a[1], p->turn_b[1], p->rolling_impulse[0]);
+            turn_patch(c, p, p->tangent[1], p->turn_a[2], p->turn_b[2], p->rolling_impulse[1]);
         }
     }
 }
