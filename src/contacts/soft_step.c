@@ -49,6 +49,8 @@ typedef struct tb__soft_body {
     double inv_world[9];        /* R diag(invI) R^T at q (0 for particles) */
     double shift[3], turn[3];   /* m, rad: x - x0 and the first-order turn from q0 */
     double delta[9];            /* the rotation from q0 to q */
+    double v_struck[3], l_struck[3]; /* m/s, N m s: v and L before this substep's impacts */
+    double struck_at;           /* s into the substep of its impact; < 0: none */
 } tb__soft_body;
 
 /* A manifold: its points' normal rows, then friction (two rows at the
@@ -89,6 +91,8 @@ typedef struct tb__soft_row {
     double most;                /* N s: the largest normal impulse of any substep */
     int struck;                 /* the normal row has pushed in some substep */
     double settled;             /* N s: what settle added */
+    double bounce;              /* N s: this substep's impact impulse (impacts) */
+    int bounced;                /* bounced by impacts in some substep */
 } tb__soft_row;
 
 
@@ -364,7 +368,7 @@ static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft
     size_t k;
     for (k = 0; k < p->count; ++k) {
         tb__soft_row *o = &c->soft_rows[p->first + k];
-        const double f = solve_normal(c, o, hs, sf, bias, &closing);
+        const double f = solve_normal(c, o, hs, sf, bias, &closing) + o->bounce;
         total += f;
         twist_limit += o->lever * f;
     }
@@ -617,6 +621,8 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
             o->struck = 0;
             o->impulse = scale * p->normal_impulse;
             o->settled = 0;
+            o->bounce = 0;
+            o->bounced = 0;
             p->speed = 0;
         }
         set_up_patch(c, pa);
@@ -687,6 +693,132 @@ static void drift(tb__contacts *c, double hs)
     }
 }
 
+/* ---- impacts ---------------------------------------------------------- */
+
+/* The impacts of a substep, before its solve: every point with restitution
+   whose gap closes within the substep faster than the threshold, and every
+   touching point the blow then reaches, bounced one after the other, each
+   toward e times the speed it meets the other side at, in passes until
+   none approaches faster than the threshold (TB__IMPACT_ROUNDS at most).
+   A blow so passes along bodies already touching as a row of separate
+   collisions (newtons_cradle). The impulse of each point is kept apart
+   from the rows' (bounce): the soft rows never take it back, and friction
+   meets the point with it. A struck point's bounce happens tau into the
+   substep: the speed it strikes at is taken from the energy over its gap,
+   and its target carries what the kicks around the drift add after it, so
+   that with the positions moved back by the change of velocity times tau
+   (impacts_moved) the substep ends exactly where and as fast as a bounce
+   at tau would under a constant force (ball_bounces_near_e_squared). */
+#define TB__IMPACT_ROUNDS 32
+
+/* The first t >= 0 with s + u t + a t^2 / 2 = 0 (s > 0), in the form that
+   does not subtract nearly equal numbers, and the speed it closes at then;
+   a negative t: never. */
+static double impact_time(double s, double u, double a, double *speed)
+{
+    const double disc = u * u - 2 * a * s, root = sqrt(fmax(disc, 0));
+    *speed = root;
+    return disc >= 0 && root - u > 0 ? 2 * s / (root - u) : -1;
+}
+
+static int impacts(tb__contacts *c, double hs)
+{
+    const double threshold = fmax(c->settings.restitution_threshold, 1e-9);
+    size_t i;
+    int round, any = 0, changed = 1;
+    for (i = 0; i < c->body_count; ++i)
+        c->soft_bodies[i].struck_at = -1;
+    for (i = 0; i < c->soft_row_count; ++i) {
+        tb__soft_row *o = &c->soft_rows[i];
+        o->bounce = 0;
+    }
+    for (round = 0; round < TB__IMPACT_ROUNDS && changed; ++round) {
+        changed = 0;
+        for (i = 0; i < c->soft_row_count; ++i) {
+            tb__soft_row *o = &c->soft_rows[i];
+            double s, vn, target, tau = -1, lambda;
+            int k;
+            if (o->restitution == 0 || (vn = rate(c, o)) > -threshold)
+                continue;
+            s = separation_now(c, o);
+            if (s > 0) {
+                /* a gap closing in the substep: when, and how fast */
+                const double kick = kick_rate(c, o), u = vn - 0.5 * kick, a = kick / hs;
+                double speed;
+                tau = impact_time(s, u, a, &speed);
+                if (tau < 0 || tau > hs || speed < threshold)
+                    continue;
+                target = o->restitution * speed + a * (0.5 * hs - tau);
+            } else {
+                /* touching: met by a blow this substep (a body of it struck) */
+                const double ta = o->a >= 0 ? c->soft_bodies[o->a].struck_at : -1;
+                const double tb = o->b >= 0 ? c->soft_bodies[o->b].struck_at : -1;
+                if (ta < 0 && tb < 0)
+                    continue;
+                tau = fmax(ta, tb);
+                target = -o->restitution * vn;
+            }
+            lambda = o->mass * (target - vn);
+            if (!(lambda > 0))
+                continue;
+            for (k = 0; k < 2; ++k) {
+                const int32_t b = k ? o->b : o->a;
+                tb__soft_body *sb;
+                if (b < 0)
+                    continue;
+                sb = &c->soft_bodies[b];
+                if (sb->struck_at < 0) {
+                    memcpy(sb->v_struck, sb->v, sizeof sb->v_struck);
+                    memcpy(sb->l_struck, sb->L, sizeof sb->l_struck);
+                    sb->struck_at = tau;
+                }
+            }
+            push_row(c, o, lambda);
+            o->bounce += lambda;
+            o->bounced = 1;
+            changed = any = 1;
+        }
+    }
+    return any;
+}
+
+/* After the drift: each body an impact changed moved back by its change
+   of velocity (and turned back by its change of spin) times the time into
+   the substep the impact came at. */
+static void impacts_moved(tb__contacts *c)
+{
+    size_t i;
+    for (i = 0; i < c->body_count; ++i) {
+        const tb__solver_body *b = &c->bodies[i];
+        tb__soft_body *s = &c->soft_bodies[i];
+        double dl[3], dw[3], dq[4];
+        int k;
+        if (s->struck_at <= 0)
+            continue;
+        for (k = 0; k < 3; ++k) {
+            s->x[k] -= (s->v[k] - s->v_struck[k]) * s->struck_at;
+            s->shift[k] = s->x[k] - b->x0[k];
+            dl[k] = s->L[k] - s->l_struck[k];
+        }
+        if (b->tier != TB__BODIES)
+            continue;
+        tb__mul(s->inv_world, dl, dw);
+        for (k = 0; k < 3; ++k)
+            dw[k] *= -s->struck_at;
+        dq[0] = -0.5 * (dw[0] * s->q[1] + dw[1] * s->q[2] + dw[2] * s->q[3]);
+        dq[1] = 0.5 * (dw[0] * s->q[0] + dw[1] * s->q[3] - dw[2] * s->q[2]);
+        dq[2] = 0.5 * (-dw[0] * s->q[3] + dw[1] * s->q[0] + dw[2] * s->q[1]);
+        dq[3] = 0.5 * (dw[0] * s->q[2] - dw[1] * s->q[1] + dw[2] * s->q[0]);
+        for (k = 0; k < 4; ++k)
+            s->q[k] += dq[k];
+        tb__normalise(s->q);
+        first_turn(s->q, b->q0, s->turn);
+        rotation_since(s->q, b->q0, s->delta);
+        world_inverse(s->q, b->inv_inertia, s->inv_world);
+        tb__mul(s->inv_world, s->L, s->w);
+    }
+}
+
 /* After the substeps: each point that struck faster than the threshold,
    toward e times the speed it struck at, by its normal row alone. */
 static void restitution(tb__contacts *c)
@@ -696,7 +828,7 @@ static void restitution(tb__contacts *c)
     for (i = 0; i < c->soft_row_count; ++i) {
         tb__soft_row *o = &c->soft_rows[i];
         double lambda, total;
-        if (o->restitution == 0 || !o->struck || o->approach > -threshold || o->most == 0)
+        if (o->restitution == 0 || o->bounced || !o->struck || o->approach > -threshold || o->most == 0)
             continue;
         lambda = -o->mass * (rate(c, o) + o->restitution * o->approach);
         total = fmax(o->impulse + lambda, 0);
@@ -788,7 +920,7 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
     const double hs = h / n;
     const soft sf = softness(c->settings.hertz, c->settings.damping_ratio, hs);
     tb_status st;
-    int i;
+    int i, struck;
     if ((st = tb__reserve(w, (void **)&c->soft_bodies, &c->soft_body_cap, c->body_count + 1,
                           sizeof *c->soft_bodies)) != TB_OK)
         return st;
@@ -798,8 +930,11 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
     for (i = 0; i < n; ++i) {
         half_kick(c);
         warm_start(c);
+        struck = impacts(c, hs);
         solve_patches(c, hs, &sf, 1);
         drift(c, hs);
+        if (struck)
+            impacts_moved(c);
         solve_patches(c, hs, &sf, 0);
         half_kick(c);
     }
