@@ -71,6 +71,7 @@ typedef struct tb__soft_patch {
     double twist_mass;
     double rolling_mass[3];     /* 2 x 2 inverse, about the tangents */
     double friction, rolling;
+    double round;               /* m: the entry's radius of curvature at one point */
     double friction_impulse[2], twist_impulse, rolling_impulse[2]; /* N s, N m s: this substep's */
     double settled[2], settled_twist, settled_rolling[2]; /* what settle added */
 } tb__soft_patch;
@@ -372,6 +373,12 @@ static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft
         total += f;
         twist_limit += o->lever * f;
     }
+    if (p->count == 1 && p->round > 0) {
+        /* one round point: the soft overlap's disc, of radius
+           sqrt(2 r overlap), pressed evenly, its friction at 2/3 of it */
+        const double overlap = fmax(-separation_now(c, &c->soft_rows[p->first]), 0);
+        twist_limit = total * (2.0 / 3) * sqrt(2 * p->round * overlap);
+    }
     if (p->friction > 0) {
         const double old = p->twist_impulse, most = p->friction * twist_limit;
         const double next = fmin(fmax(old - p->twist_mass * spin(c, p, n), -most), most);
@@ -593,6 +600,7 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
         memcpy(pa->tangent, e->tangent, sizeof pa->tangent);
         pa->friction = e->friction;
         pa->rolling = e->rolling;
+        pa->round = e->round;
         for (d = 0; d < 2; ++d) {
             pa->friction_impulse[d] = scale * tb__dot3(e->friction_impulse, e->tangent[d]);
             pa->rolling_impulse[d] = scale * tb__dot3(e->rolling_impulse, e->tangent[d]);
