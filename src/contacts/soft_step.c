@@ -8,29 +8,34 @@
       bodies, the velocity for particles);
    2. warm starts: every row's impulse of the last substep (of last step,
       for the first) is applied again;
-   3. solves every patch once (below), the normal rows soft (a
+   3. meets the substep's impacts (impacts, below): points with
+      restitution whose gap closes in the substep, and the touching points
+      their blows reach, bounced one after the other;
+   4. solves every patch once (below), the normal rows soft (a
       spring-damper of `hertz` and `damping_ratio` on the overlap, pushing
       at most `max_push`), speculative where the points are still apart;
-      a patch whose point closes its gap within the substep (an impact) is
-      solved TB__IMPACT_PASSES times;
-   4. moves positions by the velocities the solve left (x by v, q by the
-      torque-free turn of L: tb__rotation_split2);
-   5. relaxes: every patch once more, its touching points rigid and
+      a patch whose point closes its gap within the substep is solved
+      TB__IMPACT_PASSES times;
+   5. moves positions by the velocities the solve left (x by v, q by the
+      torque-free turn of L: tb__rotation_split2), and a body an impact
+      changed back to where the impact's time within the substep puts it;
+   6. relaxes: every patch once more, its touching points rigid and
       without the push, so that the push moves positions and leaves no
       speed; points still apart are left to the next substep's solve;
-   6. adds the other half of the substep's external change.
+   7. adds the other half of the substep's external change.
    The kicks around the drift make it the leapfrog (kick, drift, kick),
    exact for a constant force: free flight, a slide under Coulomb friction
    (soft_step_slides_to_v2_over_2_mu_g), and the rows meet the velocity
    the positions move by. After the substeps one more rigid pass (settle)
    leaves a body at rest at rest, and points that struck faster than
-   `restitution_threshold` are bounced by their normal rows, toward e
-   times the approach speed they struck at (ball_bounces_near_e_squared).
+   `restitution_threshold` without being met as impacts are bounced by
+   their normal rows, toward e times the approach speed they struck at.
    A patch is one manifold: a normal row per point (impulse >= 0), then,
    at the centre of its points, friction (two rows within the circle mu
    times the points' normal impulses), twist (within mu times the sum of
-   each point's impulse times its lever from the centre) and rolling
-   resistance (about the tangents, within rho times the normal impulse).
+   each point's impulse times its lever from the centre; a round point's
+   over its overlap's disc) and rolling resistance (about the tangents,
+   within rho times the normal impulse).
    Every row keeps the arms of the start of the step (the Jacobian is that
    of the start pose) and moves the bodies through their inertia at the
    start, the pose its mass was found at; the separation is recomputed
