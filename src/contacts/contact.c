@@ -247,6 +247,8 @@ typedef struct side {
     double friction, restitution, rolling;
     double curvature_radius;   /* m: a round shape's radius; 0: sharp (corners, edges, points);
                                   INFINITY: flat */
+    double core;               /* m: from its surface to its core (a sphere's centre, a
+                                  capsule's segment): the radius; 0 for boxes and planes */
 } side;
 
 static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
@@ -259,7 +261,7 @@ static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
         s->friction = c->settings.particle_friction;
         s->restitution = c->settings.particle_restitution;
         s->rolling = 0;
-        s->curvature_radius = fmax(c->settings.particle_radius, 0);
+        s->curvature_radius = s->core = fmax(c->settings.particle_radius, 0);
         return solver_body(w, c, TB__PARTICLES, slot, &s->body);
     } else {
         const tb__shape *sh = &c->shapes[proxy];
@@ -270,6 +272,7 @@ static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
         s->rolling = sh->rolling_resistance;
         s->curvature_radius = sh->kind == TB__SHAPE_PLANE ? INFINITY
                               : sh->kind == TB__SHAPE_BOX ? 0 : sh->radius;
+        s->core = sh->kind == TB__SHAPE_SPHERE || sh->kind == TB__SHAPE_CAPSULE ? sh->radius : 0;
         s->body = -1;
         if (sh->body && tb__ids_lookup(&w->body_ids, sh->body, sh->body_generation, &slot) &&
             !w->body_island[slot]) /* (a sleeping body is ground to a slow particle) */
@@ -318,6 +321,7 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
     /* two round surfaces touch like spheres of 1 / (1/ra + 1/rb) on a plane */
     e->round = a.curvature_radius == 0 || b.curvature_radius == 0 ? 0
                : 1 / (1 / a.curvature_radius + 1 / b.curvature_radius);
+    e->core[0] = a.core, e->core[1] = b.core;
     e->count = m->count;
     e->touching = e->asleep = e->colour = e->cached = e->reused = 0;
     if (!found)

@@ -225,6 +225,8 @@ typedef struct tb__entry {
     double rolling;            /* m: the pair's rolling resistance */
     double round;              /* m: the radius of the sphere on a plane the pair touches
                                   like at one point (0: a corner, an edge or a point) */
+    double core[2];            /* m: each side's depth from its surface to its core (a
+                                  sphere's centre, a capsule's segment; 0: box, plane) */
     double friction_impulse[3];/* N s, world: the patch's, kept from step to step */
     double twist_impulse;      /* N m s, about the normal */
     double tilt_impulse[3];    /* N m s, world, in the contact plane: the tilts', kept from

@@ -88,6 +88,8 @@ typedef struct tb__soft_row {
     double arm_a[3], arm_b[3];  /* r x normal at each side */
     double spin_a[3], spin_b[3];/* the start's inverse inertia times those */
     double ra[3], rb[3];        /* m: the point from each centre at the start */
+    double core_a[3], core_b[3];/* m: each side's core point under it from each centre (a
+                                   round shape turns about its core, its surface stays) */
     double mass;                /* 1 / (J M^-1 J^T), at the start pose */
     double impulse;             /* N s: accumulated in the current substep */
     double separation;          /* m: at the start of the step */
@@ -205,15 +207,15 @@ static double separation_now(const tb__contacts *c, const tb__soft_row *o)
     double s = o->separation, d[3];
     if (o->b >= 0) {
         const tb__soft_body *b = &c->soft_bodies[o->b];
-        tb__mul(b->delta, o->rb, d);
-        s += o->normal[0] * (b->shift[0] + d[0] - o->rb[0]) + o->normal[1] * (b->shift[1] + d[1] - o->rb[1]) +
-             o->normal[2] * (b->shift[2] + d[2] - o->rb[2]);
+        tb__mul(b->delta, o->core_b, d);
+        s += o->normal[0] * (b->shift[0] + d[0] - o->core_b[0]) + o->normal[1] * (b->shift[1] + d[1] - o->core_b[1]) +
+             o->normal[2] * (b->shift[2] + d[2] - o->core_b[2]);
     }
     if (o->a >= 0) {
         const tb__soft_body *a = &c->soft_bodies[o->a];
-        tb__mul(a->delta, o->ra, d);
-        s -= o->normal[0] * (a->shift[0] + d[0] - o->ra[0]) + o->normal[1] * (a->shift[1] + d[1] - o->ra[1]) +
-             o->normal[2] * (a->shift[2] + d[2] - o->ra[2]);
+        tb__mul(a->delta, o->core_a, d);
+        s -= o->normal[0] * (a->shift[0] + d[0] - o->core_a[0]) + o->normal[1] * (a->shift[1] + d[1] - o->core_a[1]) +
+             o->normal[2] * (a->shift[2] + d[2] - o->core_a[2]);
     }
     return s;
 }
@@ -489,6 +491,16 @@ static void start_spin(const tb__contacts *c, int32_t i, const double v[3], doub
     }
 }
 
+static void patch_response(tb__contacts *c, tb__soft_patch *p);
+
+/* A row's spins and mass, through the inertia of the start */
+static void row_response(tb__contacts *c, tb__soft_row *o)
+{
+    start_spin(c, o->a, o->arm_a, o->spin_a);
+    start_spin(c, o->b, o->arm_b, o->spin_b);
+    o->mass = row_mass(c, o);
+}
+
 /* 2 x 2 symmetric inverse of (xx, xy, yy) */
 static void invert2(const double k[3], double out[3])
 {
@@ -518,9 +530,8 @@ static double angular_inverse(const tb__contacts *c, const tb__soft_patch *p, co
 /* A patch's centre, arms and masses, at the start pose */
 static void set_up_patch(tb__contacts *c, tb__soft_patch *p)
 {
-    double k[3], im = 0, t[3];
     size_t r;
-    int d, e, q;
+    int d, q;
     memset(p->ca, 0, sizeof p->ca);
     memset(p->cb, 0, sizeof p->cb);
     for (r = 0; r < p->count; ++r)
@@ -538,6 +549,16 @@ static void set_up_patch(tb__contacts *c, tb__soft_patch *p)
     for (d = 0; d < 2; ++d) {
         tb__cross(p->ca, p->tangent[d], p->arm_a[d]);
         tb__cross(p->cb, p->tangent[d], p->arm_b[d]);
+    }
+    patch_response(c, p);
+}
+
+/* A patch's spins and masses, through the inertia of the start */
+static void patch_response(tb__contacts *c, tb__soft_patch *p)
+{
+    double k[3], im = 0, t[3];
+    int d, e;
+    for (d = 0; d < 2; ++d) {
         start_spin(c, p->a, p->arm_a[d], p->spin_a[d]);
         start_spin(c, p->b, p->arm_b[d], p->spin_b[d]);
     }
@@ -622,10 +643,14 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
             memcpy(o->normal, e->normal, sizeof o->normal);
             memcpy(o->ra, p->ra, sizeof o->ra);
             memcpy(o->rb, p->rb, sizeof o->rb);
+            for (d = 0; d < 3; ++d) {
+                /* the point is midway between the surfaces */
+                o->core_a[d] = o->ra[d] - (0.5 * p->separation + e->core[0]) * o->normal[d];
+                o->core_b[d] = o->rb[d] + (0.5 * p->separation + e->core[1]) * o->normal[d];
+            }
             tb__cross(o->ra, o->normal, o->arm_a);
             tb__cross(o->rb, o->normal, o->arm_b);
-            start_spin(c, o->a, o->arm_a, o->spin_a);
-            start_spin(c, o->b, o->arm_b, o->spin_b);
+            row_response(c, o);
             o->mass = row_mass(c, o);
             o->separation = p->separation;
             o->restitution = e->restitution;
