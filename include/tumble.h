@@ -70,18 +70,24 @@ TB_API tb_status tb_world_set_drag(tb_world *world, double linear, double quadra
 /* ----------------------------------------------------------- stepping -- */
 
 /* Integrators, by name (what each does to bodies' rotations, and the
-   derivations: docs/integrators.md):
-     name                order  force evaluations    stable on oscillations
-     "euler"               1    1                    never
-     "symplectic_euler"    1    1                    h w < 2 (ODE's dWorldStep)
-     "verlet"              2    2                    h w < 2
-     "rk4"                 4    4                    h w < 2 sqrt 2, damps slightly
-     "verlet_exact"        2    2                    h w < 2; bodies turn to 4th
-                                                     order, ~2x "verlet" per
+   derivations: docs/integrators.md). Stability on x'' = -w^2 x - 2 z w x',
+   damping ratio z:
+     name                order  force evaluations    stable for h w below
+     "euler"               1    1                    2 z (z <= 1): never undamped
+     "symplectic_euler"    1    1                    2 (sqrt(1 + z^2) - z)
+                                                     (ODE's dWorldStep)
+     "verlet"              2    2                    2 / (z + sqrt(1 - 3 z^2))
+                                                     for z <= 1/2, 1 / z above:
+                                                     2, 1.73 at 0.3, 1 at 1
+     "rk4"                 4    4                    2 sqrt 2 undamped, 2.79 at
+                                                     z = 1; damps slightly
+     "verlet_exact"        2    2                    as "verlet"; bodies turn to
+                                                     4th order, ~2x "verlet" per
                                                      anisotropic body
      "implicit_euler"      1    1 + a CG solve       any step on springs and drag
-                                                     (it damps them)
-     "dopri5"              5    6 per substep        substeps meet the tolerance
+                                                     (it damps them, and slows a
+                                                     mode to atan(h w) / h)
+     "dopri5"              5    6 or 7 per substep   substeps meet the tolerance
      "auto"                -    the chosen method's  the cheapest of verlet,
                                                      verlet_exact, rk4, dopri5 and
                                                      substeps that meet the
@@ -380,9 +386,12 @@ TB_API size_t tb_world_sleeping_count(const tb_world *world);
 /* --------------------------------------------------------------- advisor -- */
 
 /* Before a run: the stability limit of the world's integrator for a step h
-   (as tb_world_step takes it), from the stiffest spring mode (power
-   iteration on M^-1 K, pinned particles excluded) and the fastest drag
-   decay. Changes nothing. */
+   (as tb_world_step takes it), damping counted: the method's damped limit
+   on the stiffest spring mode (power iteration on M^-1 K, pinned particles
+   excluded) with the damping ratio it sees, on the most damped mode, and
+   its decay limit on the fastest drag or body damping (docs/integrators.md;
+   within 10% of the measured blow-up on damped chains and cloth,
+   test_stability.advisor_predicts_damped_chains). Changes nothing. */
 TB_API tb_status tb_world_advise(tb_world *world, double h, tb_advice *advice);
 
 /* ---------------------------------------------------------- diagnostics -- */

@@ -1424,6 +1424,39 @@ static int world_auto_choice(lua_State *L)
     return 2;
 }
 
+/* world:advise([dt]): the advisor's verdict for a step dt (the world's
+   dt when omitted) as a table {limit, exceeded, stiffest, damping_ratio,
+   decay, fastest_spin, spring (index, nil when none), text}; changes
+   nothing (tb_world_advise). */
+static int world_advise(lua_State *L)
+{
+    tl_world *lw = check_world(L, 1);
+    const double dt = lua_isnoneornil(L, 2) ? lw->dt : luaL_checknumber(L, 2);
+    tb_advice a;
+    if (tb_world_advise(lw->world, dt, &a) != TB_OK)
+        return raise_world_error(L, lw, "world:advise");
+    lua_createtable(L, 0, 8);
+    lua_pushnumber(L, a.limit);
+    lua_setfield(L, -2, "limit");
+    lua_pushboolean(L, a.exceeded);
+    lua_setfield(L, -2, "exceeded");
+    lua_pushnumber(L, a.stiffest);
+    lua_setfield(L, -2, "stiffest");
+    lua_pushnumber(L, a.damping_ratio);
+    lua_setfield(L, -2, "damping_ratio");
+    lua_pushnumber(L, a.decay);
+    lua_setfield(L, -2, "decay");
+    lua_pushnumber(L, a.fastest_spin);
+    lua_setfield(L, -2, "fastest_spin");
+    if (!TB_ID_IS_NULL(a.spring)) {
+        lua_pushinteger(L, (lua_Integer)a.spring.index1);
+        lua_setfield(L, -2, "spring");
+    }
+    lua_pushstring(L, a.text);
+    lua_setfield(L, -2, "text");
+    return 1;
+}
+
 static int world_gravity(lua_State *L)
 {
     double g[3];
@@ -1581,7 +1614,7 @@ static const luaL_Reg world_methods[] = {
     { "step", world_step }, { "time", world_time }, { "dt", world_dt }, { "set_dt", world_set_dt },
     { "integrator", world_integrator }, { "set_integrator", world_set_integrator },
     { "set_tolerance", world_set_tolerance }, { "set_guard", world_set_guard },
-    { "auto_choice", world_auto_choice },
+    { "auto_choice", world_auto_choice }, { "advise", world_advise },
     { "gravity", world_gravity }, { "set_gravity", world_set_gravity },
     { "energy", world_energy }, { "momentum", world_momentum }, { "counts", world_counts },
     { "snapshot", world_snapshot }, { "restore", world_restore }, { "hash", world_hash },

@@ -211,10 +211,14 @@ typedef struct tb_contact_event {
    oscillation), and c_decay = 2 (2.785 for RK4). */
 typedef struct tb_advice {
     double stiffest;          /* rad/s, the fastest spring oscillation (0: none) */
-    double decay;             /* 1/s, the fastest drag decay rate (0: none) */
+    double damping_ratio;     /* its damping ratio z (springs' damping and drag) */
+    double decay;             /* 1/s, the fastest decay: drag, body damping, and the
+                                 most damped mode of the springs (0: none) */
     double fastest_spin;      /* rad/s, the fastest body spin (information) */
-    double limit;             /* s, the largest stable step of the integrator;
-                                 INFINITY when nothing limits it, 0 when no step is stable */
+    double limit;             /* s, the largest stable step of the integrator with
+                                 damping counted; INFINITY when nothing limits it
+                                 (and for the adaptive methods), 0 when no step is
+                                 stable */
     int exceeded;             /* the step asked about is above the limit */
     tb_spring_id spring;      /* the stiffest mode's stiffest spring (null: none) */
     char text[TB_MESSAGE_SIZE]; /* one line: the verdict, and a step or method to use */

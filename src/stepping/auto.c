@@ -59,6 +59,8 @@ typedef struct rates {
                               the split methods turn exactly (only RK-type
                               methods err) */
     int unknown;           /* callbacks: rates the plan cannot see */
+    tb__modes modes;       /* what limits each method's step (advisor.c) */
+    double vortex;         /* rad/s, the fastest vortex field: an undamped turn */
 } rates;
 
 static tb_status scene_rates(tb_world *w, rates *r)
@@ -66,12 +68,10 @@ static tb_status scene_rates(tb_world *w, rates *r)
     size_t i;
     tb_status st;
     memset(r, 0, sizeof *r);
-    if (w->spring_count) {
-        tb_spring_id culprit;
-        if ((st = tb__stiffest_mode(w, &r->oscillation, &culprit)) != TB_OK)
-            return st;
-    }
-    r->decay = tb__fastest_decay(w);
+    if ((st = tb__modes_of(w, &r->modes)) != TB_OK)
+        return st;
+    r->oscillation = r->modes.omega;
+    r->decay = r->modes.decay;
     /* quadratic drag at rest has no rate yet; it reaches its largest near
        terminal speed, sqrt(m g / c2), where d(c2 |v| v)/dv / m = 2 sqrt(g c2 / m) */
     if (w->quadratic_drag > 0)
@@ -96,8 +96,9 @@ static tb_status scene_rates(tb_world *w, rates *r)
         if (f->kind == TB__FIELD_CALLBACK)
             r->unknown = 1;
         else if (f->kind == TB__FIELD_VORTEX)
-            r->oscillation = fmax(r->oscillation, tb__norm3(f->a));
+            r->vortex = fmax(r->vortex, tb__norm3(f->a));
     }
+    r->oscillation = fmax(r->oscillation, r->vortex);
     return TB_OK;
 }
 
@@ -131,10 +132,13 @@ tb_status tb__auto_plan(tb_world *w, double h)
             n = fmax(n, substeps_for(r.decay, h, c->c_decay, c->order, w->tolerance));
             n = fmax(n, substeps_for(r.spin, h, c->c_spin, c->spin_order, w->tolerance));
             n = fmax(n, substeps_for(r.iso_spin, h, c->c_spin, c->iso_spin_order, w->tolerance));
-            if (r.oscillation > 0)
-                n = fmax(n, h * r.oscillation / (0.9 * m->oscillation_limit));
+            /* each substep within 0.9 of the method's damped limit */
+            double limit = tb__limit_of(m, &r.modes, NULL);
+            if (r.vortex > 0)
+                limit = fmin(limit, m->damped_limit(0) / r.vortex);
             if (r.decay > 0)
-                n = fmax(n, h * r.decay / (0.9 * m->decay_limit));
+                limit = fmin(limit, m->decay_limit / r.decay);
+            n = fmax(n, h / (0.9 * limit));
         } else {
             /* dopri5 keeps each of its own substeps within the tolerance;
                estimate how many it takes, for the comparison */

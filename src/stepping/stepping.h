@@ -49,9 +49,24 @@ tb_status tb__implicit_particles(tb_world *w, double h);
 tb_status tb__implicit_step(tb_world *w, double h);
 
 /* ---- advisor.c, auto.c, guard.c, diagnostics.c ---------------------------- */
-/* The stiffest spring mode w (rad/s) by power iteration, and the stiffest
-   spring where that mode is largest. Uses two scratch state vectors. */
-tb_status tb__stiffest_mode(tb_world *w, double *omega, tb_spring_id *culprit);
+/* What limits a world's step (advisor.c): its stiffest spring mode and how
+   damped it is, its most damped mode and how stiff it is, and the fastest
+   decay of drag and body damping. */
+typedef struct tb__modes {
+    double omega;          /* rad/s, the stiffest mode of M^-1 K (0: none) */
+    double zeta;           /* its damping ratio: (u.M^-1/2 (C + D) M^-1/2 u) / (2 omega) */
+    double damped_rate;    /* 1/s, the largest eigenvalue of M^-1 (C + D) (0: none) */
+    double damped_omega;   /* rad/s, the stiffness that most damped mode sees */
+    double decay;          /* 1/s, the fastest decay of drag and body damping */
+    tb_spring_id spring;   /* the stiffest spring where the stiffest mode is largest */
+} tb__modes;
+/* The modes by power iteration (two scratch state vectors). */
+tb_status tb__modes_of(tb_world *w, tb__modes *modes);
+/* The stability limit (s) of method m on them: the least of its damped
+   limit on the stiffest mode, on the most damped mode, and its decay limit
+   on the fastest decay. *cause (may be NULL) is set to 1, 2 or 3 for the one
+   that binds, 0 when nothing limits the step. */
+double tb__limit_of(const tb__method *m, const tb__modes *modes, int *cause);
 /* The fastest drag or damping decay rate (1/s) of particles and bodies. */
 double tb__fastest_decay(const tb_world *w);
 /* Choose w->auto_method and w->auto_substeps for steps of h. */

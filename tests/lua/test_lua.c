@@ -452,7 +452,7 @@ static const char *fuzz_script =
     "local handles = {}\n"
     "local world_methods = { 'particle', 'tracer', 'spring', 'body', 'angular_momentum', 'shape', 'contacts',\n"
     "  'events', 'drag', 'field', 'force', 'step', 'time', 'dt', 'set_dt', 'integrator', 'set_integrator',\n"
-    "  'set_tolerance', 'set_guard', 'auto_choice', 'gravity', 'set_gravity', 'energy', 'momentum', 'counts' }\n"
+    "  'set_tolerance', 'set_guard', 'auto_choice', 'advise', 'gravity', 'set_gravity', 'energy', 'momentum', 'counts' }\n"
     "local handle_methods = { 'pos', 'rot', 'vel', 'omega', 'momentum', 'mass', 'set_pos', 'set_rot',\n"
     "  'set_vel', 'set_omega', 'push', 'push_local', 'torque', 'asleep', 'wake', 'remove', 'id' }\n"
     "local function call(object, name)\n"
@@ -477,6 +477,30 @@ static const char *fuzz_script =
     "end\n"
     "w:close()\n"
     "for _, h in ipairs(handles) do pcall(h.pos, h) end\n";
+
+/* w:advise(dt): the advisor's table. A unit mass on a spring of w = 3 rad/s
+   and damping ratio 0.3 under symplectic Euler: the limit is
+   2 (sqrt(1 + z^2) - z) / w (docs/integrators.md), the default step is the
+   world's dt, and a bad step is refused. */
+static void advise_from_lua(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{ gravity = {0, 0, 0}, dt = 0.1, integrator = 'symplectic_euler' }\n"
+                 "local p = w:particle{ pos = {1, 0, 0}, mass = 1 }\n"
+                 "w:spring(p, {0, 0, 0}, { k = 9, damping = 2 * 0.3 * 3, rest = 0 })\n"
+                 "local a = w:advise()\n"
+                 "local limit = 2 * (math.sqrt(1 + 0.09) - 0.3) / 3\n"
+                 "assert(math.abs(a.limit / limit - 1) < 1e-9, a.limit)\n"
+                 "assert(a.exceeded == false and math.abs(a.stiffest - 3) < 1e-9)\n"
+                 "assert(a.decay > 0 and a.fastest_spin == 0 and a.spring == 1)\n"
+                 "assert(a.text:find('of the limit'), a.text)\n"
+                 "local b = w:advise(0.6)\n"
+                 "assert(b.exceeded == true and b.text:find('exceeds the limit'), b.text)\n");
+    expect_error(L, "w:advise(-1)", "world:advise");
+    expect_error(L, "w:advise(0/0)", "world:advise");
+    lua_close(L);
+}
 
 static void random_calls_never_crash(void **state)
 {
@@ -505,5 +529,6 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(lua_field_matches_builtin_vortex),
     cmocka_unit_test(callback_error_leaves_state_bit_identical),
     cmocka_unit_test(structure_is_frozen_inside_callbacks),
+    cmocka_unit_test(advise_from_lua),
 };
 TB_TEST_MAIN(tests)
