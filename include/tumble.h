@@ -102,8 +102,11 @@ TB_API const char *tb_integrator_name(int index);   /* NULL past the end */
 TB_API int tb_integrator_order(int index);           /* 0 past the end */
 
 TB_API tb_status tb_world_set_integrator(tb_world *world, const char *name);
-/* The error per step asked of adaptive methods ("dopri5", "auto"), relative
-   to 1 + |y| per state component; from 1e-100 to 1e100. */
+/* The error per second of simulated time asked of adaptive methods
+   ("dopri5", "auto"), relative to 1 + |y| per state component: a substep
+   of s seconds may add an estimated error of tolerance x s, so a run of
+   T seconds ends about tolerance x T off, times what the problem itself
+   does to errors (docs/integrators.md); from 1e-100 to 1e100. */
 TB_API tb_status tb_world_set_tolerance(tb_world *world, double tolerance);
 TB_API double tb_world_tolerance(const tb_world *world);
 TB_API const char *tb_world_integrator(const tb_world *world);
@@ -112,6 +115,10 @@ TB_API const char *tb_world_integrator(const tb_world *world);
    first step) and the substeps per step. The choice is made again when the
    step, the tolerance or the set of objects changes. */
 TB_API const char *tb_world_auto_choice(const tb_world *world, long *substeps);
+
+/* The work of the steps taken so far: steps, substeps, substeps rejected
+   by "dopri5" and force evaluations (tb_work); zeros for NULL. */
+TB_API tb_work tb_world_work(const tb_world *world);
 
 /* Advance by h seconds (finite, from 1e-100 to 1e100). If a callback
    fails, the step is abandoned and the state is bit-identical to what it

@@ -1457,6 +1457,22 @@ static int world_advise(lua_State *L)
     return 1;
 }
 
+/* world:work(): {steps, substeps, rejected, evaluations} (tb_world_work) */
+static int world_work(lua_State *L)
+{
+    const tb_work k = tb_world_work(check_world(L, 1)->world);
+    lua_createtable(L, 0, 4);
+    lua_pushinteger(L, (lua_Integer)k.steps);
+    lua_setfield(L, -2, "steps");
+    lua_pushinteger(L, (lua_Integer)k.substeps);
+    lua_setfield(L, -2, "substeps");
+    lua_pushinteger(L, (lua_Integer)k.rejected);
+    lua_setfield(L, -2, "rejected");
+    lua_pushinteger(L, (lua_Integer)k.evaluations);
+    lua_setfield(L, -2, "evaluations");
+    return 1;
+}
+
 static int world_gravity(lua_State *L)
 {
     double g[3];
@@ -1614,7 +1630,7 @@ static const luaL_Reg world_methods[] = {
     { "step", world_step }, { "time", world_time }, { "dt", world_dt }, { "set_dt", world_set_dt },
     { "integrator", world_integrator }, { "set_integrator", world_set_integrator },
     { "set_tolerance", world_set_tolerance }, { "set_guard", world_set_guard },
-    { "auto_choice", world_auto_choice }, { "advise", world_advise },
+    { "auto_choice", world_auto_choice }, { "advise", world_advise }, { "work", world_work },
     { "gravity", world_gravity }, { "set_gravity", world_set_gravity },
     { "energy", world_energy }, { "momentum", world_momentum }, { "counts", world_counts },
     { "snapshot", world_snapshot }, { "restore", world_restore }, { "hash", world_hash },

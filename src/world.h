@@ -87,6 +87,7 @@ struct tb_world {
        also the largest energy growth per step */
     double guard;
     unsigned long steps;   /* completed steps, for messages */
+    tb_work work;          /* what the kept steps did (tb_world_work) */
 
     /* state vector and the offsets of its arrays (in doubles) */
     double *y;

@@ -25,8 +25,9 @@ typedef struct tb_world_def {
     double linear_drag;      /* N s/m; every particle feels -c v; default 0 */
     double quadratic_drag;   /* N s^2/m^2; every particle feels -c |v| v; default 0 */
     const char *integrator;  /* a name from tb_integrator_name(); NULL: "verlet" */
-    double tolerance;        /* error per step asked of adaptive methods ("dopri5"),
-                                relative to 1 + |y| per state component; 0: 1e-6 */
+    double tolerance;        /* error per second of simulated time asked of the
+                                adaptive methods ("dopri5", "auto"), relative to
+                                1 + |y| per state component; 0: 1e-6 */
     tb_allocator allocator;  /* all of the world's memory goes through it */
 } tb_world_def;
 
@@ -223,6 +224,19 @@ typedef struct tb_advice {
     tb_spring_id spring;      /* the stiffest mode's stiffest spring (null: none) */
     char text[TB_MESSAGE_SIZE]; /* one line: the verdict, and a step or method to use */
 } tb_advice;
+
+/* The work a world's steps did (tb_world_work), counted since it was made
+   over the steps it kept (a step undone by the guard or refused is not
+   counted; a restore puts the counts back with the rest). */
+typedef struct tb_work {
+    uint64_t steps;           /* completed steps */
+    uint64_t substeps;        /* the substeps they took: 1 a step for the fixed-step
+                                 methods, the chosen method's under "auto", the
+                                 accepted ones of "dopri5" */
+    uint64_t rejected;        /* substeps "dopri5" rejected and took again smaller */
+    uint64_t evaluations;     /* force evaluations made (each runs every force
+                                 callback once; a rejected substep's count) */
+} tb_work;
 
 /* ---------------------------------------------------------- diagnostics -- */
 

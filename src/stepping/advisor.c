@@ -33,7 +33,7 @@ static void product(const tb_world *w, int damping, const double *t, double *out
 }
 
 /* u.B u for the unit vector z / |z|, B = M^-1/2 P M^-1/2 (s holds the
-   M^-1/2 diagonal; t is scratch), using the force scratch. */
+   M^-1/2 diagonal; t is scratch of 6n: t, then P t). */
 static double quotient(tb_world *w, int damping, const double *z, const double *s, double *t)
 {
     const size_t n = 3 * w->particle_count;
@@ -45,9 +45,9 @@ static double quotient(tb_world *w, int damping, const double *z, const double *
         return 0;
     for (i = 0; i < n; ++i)
         t[i] = s[i] * z[i] / sqrt(norm);
-    product(w, damping, t, w->particle_force);
+    product(w, damping, t, t + n);
     for (i = 0; i < n; ++i)
-        q += t[i] * w->particle_force[i];
+        q += t[i] * t[n + i];
     return q;
 }
 
@@ -55,8 +55,9 @@ static double quotient(tb_world *w, int damping, const double *z, const double *
    the symmetric B = M^-1/2 P M^-1/2 (same eigenvalues), with Rayleigh
    quotients, which approach it from below. The start is a sign pattern
    that alternates from slot to slot (the zigzag of a chain), lightly
-   scrambled so that it overlaps every mode. `z`, `s`, `t` are scratch of
-   3n doubles; `z` ends as the estimated mode. */
+   scrambled so that it overlaps every mode. `z` and `s` are scratch of 3n
+   doubles, `t` of 6n (t, then P t); `z` ends as the estimated mode. The
+   world's arrays are not touched: the advisor changes nothing. */
 static double largest_mode(tb_world *w, int damping, double *z, double *s, double *t)
 {
     const size_t n = 3 * w->particle_count;
@@ -79,9 +80,9 @@ static double largest_mode(tb_world *w, int damping, double *z, double *s, doubl
             z[i] /= norm;
             t[i] = s[i] * z[i];
         }
-        product(w, damping, t, w->particle_force); /* P t, in the force scratch */
+        product(w, damping, t, t + n);
         for (i = 0; i < n; ++i) {
-            const double bz = s[i] * w->particle_force[i];
+            const double bz = s[i] * t[n + i];
             rayleigh += z[i] * bz;
             z[i] = bz;
         }
@@ -178,7 +179,7 @@ tb_status tb__modes_of(tb_world *w, tb__modes *modes)
     modes->decay = tb__fastest_decay(w);
     if (!w->particle_count)
         return TB_OK;
-    /* three vectors of 3n: a state vector holds at least 6n doubles
+    /* four vectors of 3n: a state vector holds at least 6n doubles
        (positions and velocities), so two of them are enough */
     if ((st = tb__state_scratch(w, 2)) != TB_OK)
         return st;
@@ -264,13 +265,24 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
             best_limit = limit, best = m;
     }
     if (w->method->plan) {
-        if ((st = w->method->plan(w, h)) != TB_OK)
+        /* the plan for h, made and put back: the world keeps the plan its
+           steps made, so that asking (as the guard does after a refused
+           step) changes nothing (test_snapshot.refused_step_leaves_no_trace) */
+        const tb__method *kept = w->auto_method;
+        const long kept_substeps = w->auto_substeps;
+        const char *name;
+        long substeps;
+        st = w->method->plan(w, h);
+        name = w->auto_method ? w->auto_method->name : "?";
+        substeps = w->auto_substeps;
+        w->auto_method = kept, w->auto_substeps = kept_substeps;
+        if (st != TB_OK)
             return st;
         snprintf(advice->text, sizeof advice->text,
                  "%s picks %s with %ld substep%s of %.4g s for tolerance %g (stiffest mode %.4g rad/s, "
-                 "damping ratio %.3g, decay %.4g 1/s, spin %.4g rad/s)", w->method->name, w->auto_method->name,
-                 w->auto_substeps, w->auto_substeps == 1 ? "" : "s", h / (double)w->auto_substeps, w->tolerance,
-                 advice->stiffest, advice->damping_ratio, advice->decay, advice->fastest_spin);
+                 "damping ratio %.3g, decay %.4g 1/s, spin %.4g rad/s)", w->method->name, name, substeps,
+                 substeps == 1 ? "" : "s", h / (double)substeps, w->tolerance, advice->stiffest,
+                 advice->damping_ratio, advice->decay, advice->fastest_spin);
     } else if (w->method->adaptive) {
         const double substep = tb__limit_of(w->method, &r, &cause);
         if (substep < INFINITY) {

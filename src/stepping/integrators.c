@@ -143,10 +143,16 @@ static tb_status implicit_euler(tb_world *w, double h)
 }
 
 /* Dormand-Prince 5(4): the fifth-order solution advances, the embedded
-   fourth-order one estimates the local error. A step of H is covered by
-   substeps whose size is set by the standard controller
-   h <- h min(5, max(0.2, 0.9 err^(-1/5))); a rejected substep (err > 1, or
-   a non-finite state) is retried smaller from the same state. The running
+   fourth-order one estimates the local error. The tolerance is an error per
+   unit of simulated time: a substep of s seconds is accepted when its
+   estimated error, relative to 1 + |y| per component, is at most
+   tolerance x s, so that the errors a run adds up stay near
+   tolerance x T after T seconds whatever the frame step, and a frame step
+   is divided whenever its estimate asks (test_integrators.dopri5_global_
+   error_follows_tolerance). With err the estimate over tolerance x s, the
+   controller sets h <- h min(5, max(0.2, 0.9 err^(-1/4))) (the estimate
+   grows as s^5, the bound as s); a rejected substep (err > 1, or a
+   non-finite state) is retried smaller from the same state. The running
    state lives in scratch and is written to the world only at the end, so a
    failing callback leaves the world as it was. */
 static const double DP_C[7] = { 0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1, 1 };
@@ -214,11 +220,13 @@ static tb_status dopri5(tb_world *w, double H)
         tb__state_scale(w, err, step * DP_E[0], k[0]);
         for (j = 2; j < 7; ++j)
             tb__state_axpy(w, err, err, step * DP_E[j], k[j]);
-        e = tb__state_error_norm(w, err, y, next, w->tolerance);
+        e = tb__state_error_norm(w, err, y, next, w->tolerance * step);
         if (!(e <= 1)) { /* rejected, or not finite: shrink and retry */
-            h = step * (isfinite(e) ? fmax(0.2, 0.9 * pow(e, -0.2)) : 0.2);
+            ++w->work.rejected;
+            h = step * (isfinite(e) ? fmax(0.2, 0.9 * pow(e, -0.25)) : 0.2);
             continue;
         }
+        ++w->work.substeps;
         tb__project(w, next);
         swap = y, y = next, next = swap;
         /* first same as last: the seventh stage is the next first, unless
@@ -227,7 +235,7 @@ static tb_status dopri5(tb_world *w, double H)
         have_k1 = w->body_count == 0;
         done = last ? H : done + step;
         if (!last || step == h)
-            h = step * fmin(5, fmax(0.2, 0.9 * pow(fmax(e, 1e-10), -0.2)));
+            h = step * fmin(5, fmax(0.2, 0.9 * pow(fmax(e, 1e-10), -0.25)));
     }
     w->adaptive_h = h;
     tb__state_copy(w, w->y, y);
@@ -252,7 +260,7 @@ static tb_status auto_step(tb_world *w, double h)
     }
     for (i = 0; i < w->auto_substeps && st == TB_OK; ++i) {
         w->time = t0 + (double)i * (h / (double)w->auto_substeps);
-        st = w->auto_method->step(w, h / (double)w->auto_substeps);
+        st = tb__method_step(w, w->auto_method, h / (double)w->auto_substeps);
     }
     w->time = t0;
     return st;
@@ -405,6 +413,14 @@ double tb__force_lever(const tb_world *w)
     if (w->method->plan && w->auto_method && w->auto_substeps > 0)
         return 0.5 + (w->auto_method->force_lever - 0.5) / (double)w->auto_substeps;
     return w->method->force_lever;
+}
+
+tb_status tb__method_step(tb_world *w, const tb__method *m, double h)
+{
+    const tb_status st = m->step(w, h);
+    if (st == TB_OK && !m->adaptive)
+        ++w->work.substeps;
+    return st;
 }
 
 const tb__method *tb__method_find(const char *name)

@@ -13,6 +13,9 @@
 /* ---- integrators.c ------------------------------------------------------- */
 const tb__method *tb__method_find(const char *name);
 const tb__method *tb__method_at(int index); /* NULL past the end */
+/* m->step, counting a fixed-step method's substep (the adaptive ones count
+   their own) in w->work. */
+tb_status tb__method_step(tb_world *w, const tb__method *m, double h);
 /* The force_lever of the step just taken (auto: of the method it chose,
    over its substeps). */
 double tb__force_lever(const tb_world *w);

@@ -452,7 +452,7 @@ static const char *fuzz_script =
     "local handles = {}\n"
     "local world_methods = { 'particle', 'tracer', 'spring', 'body', 'angular_momentum', 'shape', 'contacts',\n"
     "  'events', 'drag', 'field', 'force', 'step', 'time', 'dt', 'set_dt', 'integrator', 'set_integrator',\n"
-    "  'set_tolerance', 'set_guard', 'auto_choice', 'advise', 'gravity', 'set_gravity', 'energy', 'momentum', 'counts' }\n"
+    "  'set_tolerance', 'set_guard', 'auto_choice', 'advise', 'work', 'gravity', 'set_gravity', 'energy', 'momentum', 'counts' }\n"
     "local handle_methods = { 'pos', 'rot', 'vel', 'omega', 'momentum', 'mass', 'set_pos', 'set_rot',\n"
     "  'set_vel', 'set_omega', 'push', 'push_local', 'torque', 'asleep', 'wake', 'remove', 'id' }\n"
     "local function call(object, name)\n"
@@ -497,6 +497,10 @@ static void advise_from_lua(void **state)
                  "assert(a.text:find('of the limit'), a.text)\n"
                  "local b = w:advise(0.6)\n"
                  "assert(b.exceeded == true and b.text:find('exceeds the limit'), b.text)\n");
+    /* w:work(): symplectic Euler makes one substep and one evaluation a step */
+    expect_ok(L, "for i = 1, 3 do w:step() end\n"
+                 "local k = w:work()\n"
+                 "assert(k.steps == 3 and k.substeps == 3 and k.rejected == 0 and k.evaluations == 3)\n");
     expect_error(L, "w:advise(-1)", "world:advise");
     expect_error(L, "w:advise(0/0)", "world:advise");
     lua_close(L);
