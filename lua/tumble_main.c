@@ -39,7 +39,7 @@ static const char usage[] =
     "usage: tumble run SCENE.lua [--out FILE.csv] [--integrator NAME] [--dt SECONDS]\n"
     "                            [--tol TOLERANCE] [--guard FACTOR] [--until SECONDS]\n"
     "                            [--every SECONDS] [--trust] [--max-instructions N]\n"
-    "                            [--max-memory BYTES] [--quiet]\n"
+    "                            [--max-memory BYTES] [--quiet] [--check]\n"
     "       tumble --help | --version\n"
     "\n"
     "Runs a scene script and writes its trajectory as CSV. Options take their\n"
@@ -56,8 +56,8 @@ static const char usage[] =
     "  --integrator NAME  override the scene's integrator: %s\n"
     "  --dt SECONDS       override the step (default: the world's dt, 1/60 s\n"
     "                     unless the scene says otherwise)\n"
-    "  --tol TOLERANCE    the error per step asked of adaptive integrators\n"
-    "                     (dopri5, auto): relative to 1 + |y| per state value\n"
+    "  --tol TOLERANCE    error per simulated second asked of dopri5 and auto,\n"
+    "                     relative to 1 + |y| per state value\n"
     "  --guard FACTOR     the blow-up guard: stop when the state stops being\n"
     "                     finite (always on in the command) or when the energy\n"
     "                     grows more than FACTOR (> 1) times in one step; the\n"
@@ -77,6 +77,8 @@ static const char usage[] =
     "  --max-memory BYTES the bytes the scene's Lua and worlds may hold at once;\n"
     "                     default %.0fM, 0: no limit; K, M, G: KiB, MiB, GiB\n"
     "  --quiet            print no summary\n"
+    "  --check            rerun at dt/2 (dopri5, auto: tolerance/100), print\n"
+    "                     how far the ends differ (about the run's error)\n"
     "\n"
     "Output: header t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz then one row\n"
     "per object per recorded step, numbers as %%.17g. kind is particle, tracer\n"
@@ -88,7 +90,7 @@ static const char usage[] =
     "seconds (rounded to whole steps), and at the end.\n"
     "\n"
     "Before the run the stability advisor estimates the largest stable step\n"
-    "of the integrator (stiffest spring mode, drag) and warns on stderr when\n"
+    "of the integrator (spring modes and damping, drag) and warns when\n"
     "dt exceeds it, suggesting a step or an integrator.\n"
     "Summary (stdout): steps, simulated time, wall time, the advisor's\n"
     "verdict, the relative energy drift (E_end - E_start) / |E_start| of the\n"
@@ -103,7 +105,7 @@ typedef struct options {
     const char *scene, *out, *integrator;
     double dt, until, every, tol, guard;
     double max_instructions, max_memory; /* budgets; 0: no limit */
-    int quiet, trust;
+    int quiet, trust, check;
 } options;
 
 /* The first SIGINT, SIGTERM or SIGHUP; the Lua budgets' hook reads it too
@@ -196,7 +198,7 @@ static int parse_arguments(int argc, char **argv, options *o)
             memcpy(name, a, (size_t)(eq - a));
             name[eq - a] = 0;
             a = name, v = eq + 1, joined = 1;
-            if (!strcmp(a, "--trust") || !strcmp(a, "--quiet") || !strcmp(a, "--help"))
+            if (!strcmp(a, "--trust") || !strcmp(a, "--quiet") || !strcmp(a, "--help") || !strcmp(a, "--check"))
                 return die(2, "%s takes no value", a);
         }
         if (!strcmp(a, "--help") || !strcmp(a, "-h"))
@@ -243,6 +245,8 @@ static int parse_arguments(int argc, char **argv, options *o)
             i += !joined;
         } else if (!strcmp(a, "--quiet")) {
             o->quiet = 1;
+        } else if (!strcmp(a, "--check")) {
+            o->check = 1;
         } else if (a[0] == '-') {
             return die(2, "unknown option '%s' (try tumble --help)", a);
         } else if (!o->scene) {
@@ -587,6 +591,89 @@ static int write_shapes(const char *out_path, tb_world *w)
     return 0;
 }
 
+/* --check: the positions (m) and orientations of every particle, tracer
+   and body, in slot order, appended to out (room for them all). */
+static size_t copy_pose(const tb_world *w, double *out)
+{
+    const size_t np = tb_world_particle_count(w), nt = tb_world_tracer_count(w), nb = tb_world_body_count(w);
+    if (np)
+        memcpy(out, tb_world_particle_positions(w), 3 * np * sizeof(double));
+    if (nt)
+        memcpy(out + 3 * np, tb_world_tracer_positions(w), 3 * nt * sizeof(double));
+    if (nb) {
+        memcpy(out + 3 * (np + nt), tb_world_body_positions(w), 3 * nb * sizeof(double));
+        memcpy(out + 3 * (np + nt + nb), tb_world_body_orientations(w), 4 * nb * sizeof(double));
+    }
+    return 3 * (np + nt + nb) + 4 * nb;
+}
+
+/* --check: restore the start, run to the same time at h / 2 (or, for the
+   adaptive methods, at a tolerance 100 times tighter), and print the
+   largest distance (m) and turn (rad) between the two runs' ends. Both
+   errors fall with the step (tolerance) as the method's order (in
+   proportion), so the difference is close to the first run's error
+   (docs/command.md). Lua state the scene's callbacks keep is not rewound. */
+static int check_run(lua_State *L, int world_idx, tb_world *w, const tb_snapshot *start, double dt, long steps,
+                     FILE *report)
+{
+    const size_t np = tb_world_particle_count(w), nt = tb_world_tracer_count(w), nb = tb_world_body_count(w);
+    const char *name = tb_world_integrator(w);
+    const int adaptive = !strcmp(name, "dopri5") || !strcmp(name, "auto");
+    const size_t count = 3 * (np + nt + nb) + 4 * nb;
+    double *first = malloc(2 * (count ? count : 1) * sizeof(double)), *second, far = 0, turn = 0, share;
+    size_t i;
+    long step;
+    if (!first)
+        return die(1, "%s", "--check: out of memory");
+    second = first + count;
+    copy_pose(w, first);
+    if (tb_world_restore(w, start) != TB_OK ||
+        (adaptive && tb_world_set_tolerance(w, tb_world_tolerance(w) / 100) != TB_OK)) {
+        free(first);
+        return die(1, "--check: %s", tb_world_message(w));
+    }
+    for (step = 0; step < (adaptive ? steps : 2 * steps); ++step)
+        if (stop_signal || tb_lua_limit_error(L) || tb_lua_step(L, world_idx, adaptive ? dt : dt / 2) != TB_OK) {
+            free(first);
+            fprintf(stderr, "tumble: --check: the rerun stopped at t = %.17g s: %s\n", tb_world_time(w),
+                    stop_signal ? "interrupted" : tb_world_message(w));
+            return 1;
+        }
+    copy_pose(w, second);
+    for (i = 0; i < np + nt + nb; ++i)
+        far = fmax(far, sqrt(pow(first[3 * i] - second[3 * i], 2) + pow(first[3 * i + 1] - second[3 * i + 1], 2) +
+                             pow(first[3 * i + 2] - second[3 * i + 2], 2)));
+    for (i = 0; i < nb; ++i) { /* the turn between two unit quaternions: 2 atan2(|vector part of a* b|, |a.b|) */
+        const double *a = first + 3 * (np + nt + nb) + 4 * i, *b = second + 3 * (np + nt + nb) + 4 * i;
+        const double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+        const double x = a[0] * b[1] - a[1] * b[0] - (a[2] * b[3] - a[3] * b[2]);
+        const double y = a[0] * b[2] - a[2] * b[0] - (a[3] * b[1] - a[1] * b[3]);
+        const double z = a[0] * b[3] - a[3] * b[0] - (a[1] * b[2] - a[2] * b[1]);
+        turn = fmax(turn, 2 * atan2(sqrt(x * x + y * y + z * z), fabs(d)));
+    }
+    free(first);
+    /* a method of order p errs by e at h and e / 2^p at h / 2: the
+       difference is e (1 - 2^-p); the adaptive ones' error follows the
+       tolerance, so at tol / 100 the difference is nearly all of e */
+    for (i = 0; tb_integrator_name((int)i) && strcmp(tb_integrator_name((int)i), name); ++i)
+        continue;
+    share = adaptive ? 1 : 1 - pow(2, -tb_integrator_order((int)i));
+    if (adaptive)
+        fprintf(report, "check       rerun at tolerance %g: the ends differ by %.3g m", tb_world_tolerance(w), far);
+    else
+        fprintf(report, "check       rerun at dt %.6g s: the ends differ by %.3g m", dt / 2, far);
+    if (nb)
+        fprintf(report, " and %.3g rad", turn);
+    if (share < 1) {
+        fprintf(report, "; this run's error is about %.3g m", far / share);
+        if (nb)
+            fprintf(report, " and %.3g rad", turn / share);
+        fprintf(report, " (order %d: the difference / %.4g)\n", tb_integrator_order((int)i), share);
+    } else
+        fprintf(report, ", about this run's error\n");
+    return 0;
+}
+
 /* Run the scene whose text is in s (read by main). */
 static int run_scene(lua_State *L, const options *o, scene *s)
 {
@@ -601,6 +688,7 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     const int progress = !o->quiet && isatty(STDERR_FILENO);
     double shown;
     tb_advice advice;
+    tb_snapshot *start = NULL;
     FILE *f, *report;
 
     lua_pushcfunction(L, add_traceback);
@@ -645,6 +733,8 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         snprintf(out_path, sizeof out_path, "%s", o->out);
     else
         make_out_path(o->scene, out_path, sizeof out_path);
+    if (o->check && tb_world_snapshot(w, &start) != TB_OK)
+        return die(1, "--check: %s", tb_world_message(w));
     /* Before running: would this step blow up? Warn, but run as asked. */
     have_advice = tb_world_advise(w, dt, &advice) == TB_OK;
     if (have_advice && advice.exceeded)
@@ -744,6 +834,11 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         fprintf(report, "wrote       %s (%ld rows)\n", to_stdout ? "stdout" : out_path, rows);
         if (!to_stdout && tb_world_shape_count(w))
             fprintf(report, "shapes      %zu, beside it in .shapes.csv\n", tb_world_shape_count(w));
+    }
+    if (start) {
+        rc = check_run(L, world_idx, w, start, dt, steps, report);
+        tb_snapshot_destroy(start);
+        return rc;
     }
     return 0;
 }

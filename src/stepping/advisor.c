@@ -212,8 +212,10 @@ double tb__limit_of(const tb__method *m, const tb__modes *r, int *cause)
     if (r->damped_rate > 0) {
         l = r->damped_omega > 0 ? m->damped_limit(r->damped_rate / (2 * r->damped_omega)) / r->damped_omega
                                 : m->decay_limit / r->damped_rate;
+        /* where damping follows stiffness the two modes are one: it is
+           named as the stiffest unless clearly below */
         if (l < limit)
-            limit = l, why = 2;
+            why = l < 0.999 * limit ? 2 : why, limit = l;
     }
     if (r->decay > 0 && (l = m->decay_limit / r->decay) < limit)
         limit = l, why = 3;
