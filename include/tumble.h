@@ -401,6 +401,14 @@ TB_API size_t tb_world_sleeping_count(const tb_world *world);
    test_stability.advisor_predicts_damped_chains). Changes nothing. */
 TB_API tb_status tb_world_advise(tb_world *world, double h, tb_advice *advice);
 
+/* tb_world_energy with the potential energy force callbacks report
+   (tb_force_args.potential) in energy->potential and the total: each
+   callback runs once at the current state, its forces thrown away. A
+   callback that fails fails this call (TB_ERR_CALLBACK), *energy
+   untouched; refused while stepping (TB_ERR_BUSY). Lua worlds: the
+   binding's w:energy() and tb_lua_energy. */
+TB_API tb_status tb_world_energy_with_callbacks(tb_world *world, tb_energy *energy);
+
 /* ---------------------------------------------------------- diagnostics -- */
 
 TB_API tb_energy tb_world_energy(const tb_world *world);

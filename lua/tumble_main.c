@@ -681,6 +681,7 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     size_t cap = 0;
     tb_world *w;
     tb_energy e0, e1;
+    tb_work work0, work1;
     double dt, duration, every, t0, wall, *tracer_vel = NULL, n;
     long steps, step, every_steps, rows = 0, r, substeps;
     int world_idx, have_advice, rc, failed, unwritten, to_stdout, write_error;
@@ -748,9 +749,10 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     }
     fprintf(f, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n");
 
-    e0 = tb_world_energy(w);
+    work0 = tb_world_work(w);
     t0 = read_clock();
-    r = record_rows(f, L, world_idx, w, &tracer_vel, &cap);
+    /* the energy runs the force callbacks: their failure is the run's */
+    r = tb_lua_energy(L, world_idx, &e0) == TB_OK ? record_rows(f, L, world_idx, w, &tracer_vel, &cap) : -1;
     shown = t0 + 1; /* a progress line from the first second on */
     for (step = 1; r >= 0 && step <= steps; ++step) {
         rows += r;
@@ -768,6 +770,8 @@ static int run_scene(lua_State *L, const options *o, scene *s)
             shown = read_clock() + 0.25;
         }
     }
+    if (r >= 0 && tb_lua_energy(L, world_idx, &e1) != TB_OK)
+        r = -1;
     if (progress && shown > t0 + 1)
         fprintf(stderr, "\r\033[K"); /* the line goes once the run ends */
     wall = read_clock() - t0;
@@ -796,7 +800,7 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     temp_made = 0;
     if (!to_stdout && (rc = write_shapes(out_path, w)) != 0)
         return rc;
-    e1 = tb_world_energy(w);
+    work1 = tb_world_work(w);
     if (!o->quiet) {
         unsigned long long executed;
         size_t peak;
@@ -811,11 +815,19 @@ static int run_scene(lua_State *L, const options *o, scene *s)
                tb_world_tracer_count(w), tb_world_spring_count(w), tb_world_body_count(w));
         fprintf(report, "steps       %ld, simulated %.6g s, wall %.3f ms (%.3g us/step)\n", steps, tb_world_time(w),
                1e3 * wall, steps ? 1e6 * wall / (double)steps : 0.0);
+        /* the drift is the integrator's: what contacts, drag and damping
+           took is counted apart (tb_work), the callbacks' potential in */
+        const double contacts = work1.contact_work - work0.contact_work;
+        const double damping = work1.damping_work - work0.damping_work;
+        const double drift = e1.total - e0.total - contacts - damping;
+        fprintf(report, "energy      %.9g J -> %.9g J", e0.total, e1.total);
+        if (contacts != 0 || damping != 0)
+            fprintf(report, ", contacts %.6g J, drag and damping %.6g J", contacts, damping);
         if (e0.total != 0)
-            fprintf(report, "energy      %.9g J -> %.9g J, relative drift %.3e\n", e0.total, e1.total,
-                   (e1.total - e0.total) / fabs(e0.total));
+            fprintf(report, ", relative drift %.3e", drift / fabs(e0.total));
         else
-            fprintf(report, "energy      %.9g J -> %.9g J, relative drift n/a (starts at 0)\n", e0.total, e1.total);
+            fprintf(report, ", relative drift n/a (starts at 0)");
+        fprintf(report, "%s\n", e0.potential != 0 || e1.potential != 0 ? " (force callbacks' potential in)" : "");
         if (have_advice)
             fprintf(report, "stability   %s\n", advice.text);
         tb_lua_usage(L, &executed, &peak);

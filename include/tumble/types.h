@@ -120,6 +120,10 @@ typedef struct tb_force_args {
     double *body_forces;        /* 3 * body_count, N at the centre of mass: add to it */
     double *body_torques;       /* 3 * body_count, N m, world frame: add to it */
     char *message;              /* TB_MESSAGE_SIZE bytes */
+    double *potential;          /* NULL in a step; when tb_world_energy_with_callbacks
+                                   asks, a sum to add this force's potential energy (J)
+                                   at these positions to, so that it counts in the
+                                   total (optional: a force with none adds nothing) */
 } tb_force_args;
 typedef tb_status tb_force_fn(const tb_force_args *args, void *user);
 
@@ -236,6 +240,11 @@ typedef struct tb_work {
     uint64_t rejected;        /* substeps "dopri5" rejected and took again smaller */
     uint64_t evaluations;     /* force evaluations made (each runs every force
                                  callback once; a rejected substep's count) */
+    double contact_work;      /* J, the energy the contact solver changed (its impulses
+                                 and position corrections; negative: removed) */
+    double damping_work;      /* J, the work of drag, spring damping and body damping
+                                 (negative), by the trapezoid rule on their power at
+                                 each step's start and end: second order in h */
 } tb_work;
 
 /* ---------------------------------------------------------- diagnostics -- */
@@ -245,7 +254,9 @@ typedef struct tb_energy {
     double rotational;       /* J, bodies: sum of L . w / 2 */
     double gravity;          /* J, sum of -m g . x (zero at the origin) */
     double spring;           /* J, sum of k (|d| - rest)^2 / 2 */
-    double total;            /* J */
+    double total;            /* J, all of the above and `potential` */
+    double potential;        /* J, what force callbacks report as their potential
+                                energy (tb_world_energy_with_callbacks; 0 otherwise) */
 } tb_energy;
 
 #ifdef __cplusplus

@@ -137,8 +137,11 @@ tb_status tb_world_step(tb_world *w, double h)
     int snapshot, guard = w && w->guard != 0;
     double *saved = NULL;
     tb_work work;
+    double power = 0;
+    int damped;
     TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     work = w->work; /* a failed step leaves the counts as they were */
+    damped = tb__is_damped(w);
     if ((st = tb__check_scale(w, h, "step")) != TB_OK)
         return st;
     if ((st = tb__check_busy(w, "step")) != TB_OK)
@@ -159,6 +162,8 @@ tb_status tb_world_step(tb_world *w, double h)
             (void)tb__rollback(w); /* out of memory again: the state was not touched yet */
         return st;
     }
+    if (damped)
+        power = tb__damping_power(w);
     w->stepping = 1;
     st = tb__method_step(w, w->method, h);
     w->stepping = 0;
@@ -170,8 +175,14 @@ tb_status tb_world_step(tb_world *w, double h)
             tb__state_copy(w, w->y, saved);
         return st;
     }
-    if (tb__contacts_active(w))
+    if (tb__contacts_active(w)) {
+        /* what the solve changes of the energy is the contacts' work */
+        const double before = tb__energy_of(w, w->y).total;
         tb__contacts_solve(w, h, tb__force_lever(w));
+        w->work.contact_work += tb__energy_of(w, w->y).total - before;
+    }
+    if (damped)
+        w->work.damping_work += h / 2 * (power + tb__damping_power(w));
     if (guard && (st = tb__guard_check(w, h)) != TB_OK) {
         w->work = work;
         return st; /* rolled back, held forces kept */
@@ -191,7 +202,7 @@ tb_status tb_world_step(tb_world *w, double h)
 tb_work tb_world_work(const tb_world *w)
 {
     if (!w) {
-        const tb_work none = { 0, 0, 0, 0 };
+        const tb_work none = { 0, 0, 0, 0, 0, 0 };
         return none;
     }
     return w->work;

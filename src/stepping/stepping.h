@@ -80,6 +80,10 @@ tb_status tb__auto_plan(tb_world *w, double h);
 tb_status tb__guard_check(tb_world *w, double h);
 /* The energies of state y (any state vector of the world). */
 tb_energy tb__energy_of(const tb_world *w, const double *y);
+/* Whether drag, spring damping or body damping take energy, and the power
+   (W, <= 0) they take at the current state (tb_work.damping_work). */
+int tb__is_damped(const tb_world *w);
+double tb__damping_power(const tb_world *w);
 
 /* ---- snapshot.c: the guard's rollback ----------------------------------------
    tb__rollback_keep copies what a step can change into w->rollback, into

@@ -506,6 +506,40 @@ static void advise_from_lua(void **state)
     lua_close(L);
 }
 
+/* A force that returns its potential energy: w:energy() counts it (a
+   unit mass at (3, 4, 0) pulled by k = 2 towards the origin holds
+   k r^2 / 2 = 25 J), w:work() has the work fields, and a force that
+   returns something else than a number or nothing is an error that names
+   it. Inside a callback w:energy() leaves the callbacks out. */
+static void energy_from_lua_counts_callbacks(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{ gravity = {0, 0, 0}, dt = 0.01 }\n"
+                 "w:particle{ pos = {3, 4, 0}, mass = 1 }\n"
+                 "inside = nil\n"
+                 "w:force(function(t, s, f)\n"
+                 "  local u = 0\n"
+                 "  for i = 1, s.n do\n"
+                 "    for k = 1, 3 do f[3*i - 3 + k] = f[3*i - 3 + k] - 2 * s.pos[3*i - 3 + k] end\n"
+                 "    u = u + (s.pos[3*i - 2]^2 + s.pos[3*i - 1]^2 + s.pos[3*i]^2)\n"
+                 "  end\n"
+                 "  inside = inside or w:energy().potential\n"
+                 "  return u\n"
+                 "end)\n"
+                 "local e = w:energy()\n"
+                 "assert(e.potential == 25 and e.total == 25 and e.kinetic == 0, e.total)\n"
+                 "assert(inside == 0)\n"
+                 "w:step()\n"
+                 "local k = w:work()\n"
+                 "assert(k.contact_work == 0 and k.damping_work == 0 and k.evaluations == 2)\n");
+    expect_ok(L, "w2 = tumble.world{ gravity = {0, 0, 0} }\n"
+                 "w2:particle{ pos = {1, 0, 0} }\n"
+                 "w2:force(function() return 'lots' end)\n");
+    expect_error(L, "w2:energy()", "potential energy");
+    lua_close(L);
+}
+
 static void random_calls_never_crash(void **state)
 {
     int seed;
@@ -534,5 +568,6 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(callback_error_leaves_state_bit_identical),
     cmocka_unit_test(structure_is_frozen_inside_callbacks),
     cmocka_unit_test(advise_from_lua),
+    cmocka_unit_test(energy_from_lua_counts_callbacks),
 };
 TB_TEST_MAIN(tests)
