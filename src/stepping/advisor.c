@@ -241,7 +241,7 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
     tb__modes r;
     const tb__method *best = NULL;
     double best_limit = 0;
-    int i, cause;
+    int i, cause = 0;
     char why[128];
     TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if (!advice)

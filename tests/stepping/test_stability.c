@@ -578,6 +578,34 @@ static void advisor_predicts_damped_cloth(void **state)
     check_damped(damped_cloth, "damped cloth");
 }
 
+/* The guard blames the step, not the forces, when it passes the damped
+   limit: the damped chain at z = 1 under verlet at 1.3 times its damped
+   limit, 0.48 of its undamped one (where an advisor blind to damping saw
+   no limit passed and pointed at the forces). */
+static void guard_names_the_damped_limit(void **state)
+{
+    tb_world *w;
+    tb_advice advice;
+    const char *m;
+    int i;
+    tb_status st = TB_OK;
+    (void)state;
+    g_zeta = 1;
+    w = damped_chain("verlet");
+    assert_int_equal(tb_world_advise(w, 1e-5, &advice), TB_OK);
+    assert_true(1.3 * advice.limit < 0.5 * 2 / advice.stiffest); /* below the undamped limit 2 / w */
+    assert_int_equal(tb_world_set_guard(w, INFINITY), TB_OK);
+    for (i = 0; i < 100000 && st == TB_OK; ++i)
+        st = tb_world_step(w, 1.3 * advice.limit);
+    assert_int_equal(st, TB_ERR_UNSTABLE);
+    m = tb_world_message(w);
+    print_message("%s\n", m);
+    assert_non_null(strstr(m, "exceeds the limit"));
+    assert_non_null(strstr(m, "damp")); /* the damping ratio or the most damped mode sets it */
+    assert_null(strstr(m, "look at the forces"));
+    tb_world_destroy(w);
+}
+
 static void advisor_refuses_bad_steps(void **state)
 {
     tb_world *w = chain("euler");
@@ -867,6 +895,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(advisor_refuses_bad_steps),
     cmocka_unit_test(advisor_predicts_damped_chains),
     cmocka_unit_test(advisor_predicts_damped_cloth),
+    cmocka_unit_test(guard_names_the_damped_limit),
     cmocka_unit_test(symplectic_euler_boundary_is_2),
     cmocka_unit_test(verlet_boundary_is_2),
     cmocka_unit_test(rk4_boundary_is_2_sqrt_2),
