@@ -274,17 +274,21 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
         const long kept_substeps = w->auto_substeps;
         const char *name;
         long substeps;
-        st = w->method->plan(w, h);
+        char why[320];
+        int len;
+        st = tb__auto_plan_why(w, h, why, sizeof why);
         name = w->auto_method ? w->auto_method->name : "?";
         substeps = w->auto_substeps;
         w->auto_method = kept, w->auto_substeps = kept_substeps;
         if (st != TB_OK)
             return st;
-        snprintf(advice->text, sizeof advice->text,
-                 "%s picks %s with %ld substep%s of %.4g s for tolerance %g (stiffest mode %.4g rad/s, "
-                 "damping ratio %.3g, decay %.4g 1/s, spin %.4g rad/s)", w->method->name, name, substeps,
-                 substeps == 1 ? "" : "s", h / (double)substeps, w->tolerance, advice->stiffest,
-                 advice->damping_ratio, advice->decay, advice->fastest_spin);
+        len = snprintf(advice->text, sizeof advice->text,
+                       "%s picks %s with %ld substep%s of %.4g s for tolerance %g (stiffest mode %.4g rad/s, "
+                       "damping ratio %.3g, decay %.4g 1/s, spin %.4g rad/s)", w->method->name, name, substeps,
+                       substeps == 1 ? "" : "s", h / (double)substeps, w->tolerance, advice->stiffest,
+                       advice->damping_ratio, advice->decay, advice->fastest_spin);
+        if (len > 0 && (size_t)len < sizeof advice->text) /* and why: the costs it compared */
+            snprintf(advice->text + len, sizeof advice->text - (size_t)len, "; %s", why);
     } else if (w->method->adaptive) {
         const double substep = tb__limit_of(w->method, &r, &cause);
         if (substep < INFINITY) {

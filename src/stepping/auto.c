@@ -19,6 +19,7 @@
 #include "particles/particles.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* A candidate: the constants of its leading local error terms and its cost
@@ -114,12 +115,28 @@ static double substeps_for(double rate, double h, double c, int order, double to
 
 tb_status tb__auto_plan(tb_world *w, double h)
 {
+    return tb__auto_plan_why(w, h, NULL, 0);
+}
+
+tb_status tb__auto_plan_why(tb_world *w, double h, char *why, size_t size)
+{
     rates r;
     tb_status st;
     int i, best = -1;
+    size_t len = 0;
     double best_cost = INFINITY;
     if ((st = scene_rates(w, &r)) != TB_OK)
         return st;
+    if (why && size) {
+        why[0] = 0;
+        if (r.unknown)
+            len = (size_t)snprintf(why, size, "callbacks hide their rates, so only dopri5, which measures its "
+                                              "error; ");
+        if (w->tracer_count && len < size)
+            len += (size_t)snprintf(why + len, size - len, "tracers rule out the split methods; ");
+        if (len < size)
+            len += (size_t)snprintf(why + len, size - len, "estimated cost per step (rk4's = 4):");
+    }
     for (i = 0; i < CANDIDATES; ++i) {
         const candidate *c = &candidates[i];
         const tb__method *m = tb__method_find(c->name);
@@ -154,12 +171,18 @@ tb_status tb__auto_plan(tb_world *w, double h)
         }
         n = ceil(n * (1 - 1e-12));
         cost = n * (w->body_count > w->particle_count ? c->body_cost : c->cost);
+        if (why && len < size)
+            len += (size_t)snprintf(why + len, size - len, m->adaptive ? " %s about %.3g x %.3g substeps = %.3g,"
+                                                                       : " %s %.3g x %.3g = %.3g,",
+                                    c->name, cost / n, n, cost);
         if (cost < best_cost) {
             best_cost = cost;
             best = i;
             w->auto_substeps = m->adaptive ? 1 : (n > 1e6 ? 1000000 : (long)n);
         }
     }
+    if (why && len > 0 && len < size && why[len - 1] == ',')
+        why[len - 1] = 0;
     if (best < 0)
         return tb__fail(w, TB_ERR_ARGUMENT, "auto: no method can step this world");
     w->auto_method = tb__method_find(candidates[best].name);

@@ -72,8 +72,10 @@ tb_status tb__modes_of(tb_world *w, tb__modes *modes);
 double tb__limit_of(const tb__method *m, const tb__modes *modes, int *cause);
 /* The fastest drag or damping decay rate (1/s) of particles and bodies. */
 double tb__fastest_decay(const tb_world *w);
-/* Choose w->auto_method and w->auto_substeps for steps of h. */
+/* Choose w->auto_method and w->auto_substeps for steps of h; the _why
+   form also writes why (may be NULL): each candidate's estimated cost. */
 tb_status tb__auto_plan(tb_world *w, double h);
+tb_status tb__auto_plan_why(tb_world *w, double h, char *why, size_t size);
 /* After a step from the guard's snapshot (tb__rollback_keep): TB_OK, or
    the world rolled back to the snapshot and TB_ERR_UNSTABLE with a message
    naming the step, the object and the likely cause. */

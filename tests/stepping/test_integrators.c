@@ -595,6 +595,16 @@ static void auto_picks_from_what_the_scene_contains(void **state)
     b.angular_velocity[0] = 0.01, b.angular_velocity[1] = 5, b.angular_velocity[2] = 0.01;
     assert_int_equal(tb_world_add_body(world, &b, NULL), TB_OK);
     assert_string_equal(auto_choice_after_a_step(world, 1.0 / 60, 1e-9, &n), "verlet_exact");
+    {   /* the advice says why: every candidate's estimated cost */
+        tb_advice advice;
+        assert_int_equal(tb_world_advise(world, 1.0 / 60, &advice), TB_OK);
+        print_message("%s\n", advice.text);
+        assert_non_null(strstr(advice.text, "auto picks verlet_exact"));
+        assert_non_null(strstr(advice.text, "cost per step"));
+        assert_non_null(strstr(advice.text, " verlet 2.9 x "));
+        assert_non_null(strstr(advice.text, " rk4 4 x "));
+        assert_non_null(strstr(advice.text, " dopri5 about "));
+    }
     assert_string_equal(auto_choice_after_a_step(world, 1.0 / 60, 1e-1, &n), "verlet");
     tb_world_destroy(world);
 }
