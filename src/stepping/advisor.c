@@ -321,7 +321,7 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
                              w->method->name, advice->stiffest);
         if (len > 0 && (size_t)len < sizeof advice->text && best && best != w->method && best_limit >= h)
             snprintf(advice->text + len, sizeof advice->text - (size_t)len,
-                     best_limit == INFINITY ? " or integrator '%s' (stable at any step, dissipative)"
+                     best_limit == INFINITY ? " or integrator '%s' (stable at any step; it damps and slows oscillations)"
                                             : " or integrator '%s' (limit %.4g s)",
                      best->name, best_limit);
         if (!TB_ID_IS_NULL(advice->spring)) {
