@@ -88,6 +88,8 @@ TB_API tb_status tb_world_set_drag(tb_world *world, double linear, double quadra
                                                      (it damps them, and slows a
                                                      mode to atan(h w) / h)
      "dopri5"              5    6 or 7 per substep   substeps meet the tolerance
+                                                     (each stable below 0.997
+                                                     undamped, 3.2 at z = 0.3)
      "auto"                -    the chosen method's  the cheapest of verlet,
                                                      verlet_exact, rk4, dopri5 and
                                                      substeps that meet the
@@ -117,7 +119,8 @@ TB_API const char *tb_world_integrator(const tb_world *world);
 TB_API const char *tb_world_auto_choice(const tb_world *world, long *substeps);
 
 /* The work of the steps taken so far: steps, substeps, substeps rejected
-   by "dopri5" and force evaluations (tb_work); zeros for NULL. */
+   by "dopri5", force evaluations, and the energy the contacts and drag
+   and damping changed (tb_work); zeros for NULL. */
 TB_API tb_work tb_world_work(const tb_world *world);
 
 /* Advance by h seconds (finite, from 1e-100 to 1e100). If a callback
