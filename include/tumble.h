@@ -70,18 +70,26 @@ TB_API tb_status tb_world_set_drag(tb_world *world, double linear, double quadra
 /* ----------------------------------------------------------- stepping -- */
 
 /* Integrators, by name (what each does to bodies' rotations, and the
-   derivations: docs/integrators.md):
-     name                order  force evaluations    stable on oscillations
-     "euler"               1    1                    never
-     "symplectic_euler"    1    1                    h w < 2 (ODE's dWorldStep)
-     "verlet"              2    2                    h w < 2
-     "rk4"                 4    4                    h w < 2 sqrt 2, damps slightly
-     "verlet_exact"        2    2                    h w < 2; bodies turn to 4th
-                                                     order, ~2x "verlet" per
+   derivations: docs/integrators.md). Stability on x'' = -w^2 x - 2 z w x',
+   damping ratio z:
+     name                order  force evaluations    stable for h w below
+     "euler"               1    1                    2 z (z <= 1): never undamped
+     "symplectic_euler"    1    1                    2 (sqrt(1 + z^2) - z)
+                                                     (ODE's dWorldStep)
+     "verlet"              2    2                    2 / (z + sqrt(1 - 3 z^2))
+                                                     for z <= 1/2, 1 / z above:
+                                                     2, 1.73 at 0.3, 1 at 1
+     "rk4"                 4    4                    2 sqrt 2 undamped, 2.79 at
+                                                     z = 1; damps slightly
+     "verlet_exact"        2    2                    as "verlet"; bodies turn to
+                                                     4th order, ~2x "verlet" per
                                                      anisotropic body
      "implicit_euler"      1    1 + a CG solve       any step on springs and drag
-                                                     (it damps them)
-     "dopri5"              5    6 per substep        substeps meet the tolerance
+                                                     (it damps them, and slows a
+                                                     mode to atan(h w) / h)
+     "dopri5"              5    6 or 7 per substep   substeps meet the tolerance
+                                                     (each stable below 0.997
+                                                     undamped, 3.2 at z = 0.3)
      "auto"                -    the chosen method's  the cheapest of verlet,
                                                      verlet_exact, rk4, dopri5 and
                                                      substeps that meet the
@@ -96,8 +104,11 @@ TB_API const char *tb_integrator_name(int index);   /* NULL past the end */
 TB_API int tb_integrator_order(int index);           /* 0 past the end */
 
 TB_API tb_status tb_world_set_integrator(tb_world *world, const char *name);
-/* The error per step asked of adaptive methods ("dopri5", "auto"), relative
-   to 1 + |y| per state component; from 1e-100 to 1e100. */
+/* The error per second of simulated time asked of adaptive methods
+   ("dopri5", "auto"), relative to 1 + |y| per state component: a substep
+   of s seconds may add an estimated error of tolerance x s, so a run of
+   T seconds ends about tolerance x T off, times what the problem itself
+   does to errors (docs/integrators.md); from 1e-100 to 1e100. */
 TB_API tb_status tb_world_set_tolerance(tb_world *world, double tolerance);
 TB_API double tb_world_tolerance(const tb_world *world);
 TB_API const char *tb_world_integrator(const tb_world *world);
@@ -106,6 +117,11 @@ TB_API const char *tb_world_integrator(const tb_world *world);
    first step) and the substeps per step. The choice is made again when the
    step, the tolerance or the set of objects changes. */
 TB_API const char *tb_world_auto_choice(const tb_world *world, long *substeps);
+
+/* The work of the steps taken so far: steps, substeps, substeps rejected
+   by "dopri5", force evaluations, and the energy the contacts and drag
+   and damping changed (tb_work); zeros for NULL. */
+TB_API tb_work tb_world_work(const tb_world *world);
 
 /* Advance by h seconds (finite, from 1e-100 to 1e100). If a callback
    fails, the step is abandoned and the state is bit-identical to what it
@@ -392,10 +408,21 @@ TB_API size_t tb_world_sleeping_count(const tb_world *world);
 /* --------------------------------------------------------------- advisor -- */
 
 /* Before a run: the stability limit of the world's integrator for a step h
-   (as tb_world_step takes it), from the stiffest spring mode (power
-   iteration on M^-1 K, pinned particles excluded) and the fastest drag
-   decay. Changes nothing. */
+   (as tb_world_step takes it), damping counted: the method's damped limit
+   on the stiffest spring mode (power iteration on M^-1 K, pinned particles
+   excluded) with the damping ratio it sees, on the most damped mode, and
+   its decay limit on the fastest drag or body damping (docs/integrators.md;
+   within 10% of the measured blow-up on damped chains and cloth,
+   test_stability.advisor_predicts_damped_chains). Changes nothing. */
 TB_API tb_status tb_world_advise(tb_world *world, double h, tb_advice *advice);
+
+/* tb_world_energy with the potential energy force callbacks report
+   (tb_force_args.potential) in energy->potential and the total: each
+   callback runs once at the current state, its forces thrown away. A
+   callback that fails fails this call (TB_ERR_CALLBACK), *energy
+   untouched; refused while stepping (TB_ERR_BUSY). Lua worlds: the
+   binding's w:energy() and tb_lua_energy. */
+TB_API tb_status tb_world_energy_with_callbacks(tb_world *world, tb_energy *energy);
 
 /* ---------------------------------------------------------- diagnostics -- */
 

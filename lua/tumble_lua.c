@@ -731,7 +731,15 @@ static int run_force(lua_State *L)
     fill_array(L, get_scratch_table(L, t, "force_out"), NULL, 3 * a->count);
     fill_array(L, get_scratch_table(L, t, "body_force_out"), NULL, 3 * a->body_count);
     fill_array(L, get_scratch_table(L, t, "body_torque_out"), NULL, 3 * a->body_count);
-    lua_call(L, 5, 0);
+    lua_call(L, 5, a->potential ? 1 : 0);
+    if (a->potential) { /* asked for the energy: a number returned is the force's potential */
+        if (lua_type(L, -1) == LUA_TNUMBER)
+            *a->potential += lua_tonumber(L, -1);
+        else if (!lua_isnil(L, -1))
+            return luaL_error(L, "a force returns its potential energy (a number, J) or nothing (got %s)",
+                              luaL_typename(L, -1));
+        lua_pop(L, 1);
+    }
     check_world_table(L, t);
     add_from_table(L, get_scratch_table(L, t, "force_out"), a->forces, 3 * a->count, "forces");
     if (a->body_count) {
@@ -1424,6 +1432,60 @@ static int world_auto_choice(lua_State *L)
     return 2;
 }
 
+/* world:advise([dt]): the advisor's verdict for a step dt (the world's
+   dt when omitted) as a table {limit, exceeded, stiffest, damping_ratio,
+   decay, fastest_spin, spring (index, nil when none), text}; changes
+   nothing (tb_world_advise). */
+static int world_advise(lua_State *L)
+{
+    tl_world *lw = check_world(L, 1);
+    const double dt = lua_isnoneornil(L, 2) ? lw->dt : luaL_checknumber(L, 2);
+    tb_advice a;
+    if (tb_world_advise(lw->world, dt, &a) != TB_OK)
+        return raise_world_error(L, lw, "world:advise");
+    lua_createtable(L, 0, 8);
+    lua_pushnumber(L, a.limit);
+    lua_setfield(L, -2, "limit");
+    lua_pushboolean(L, a.exceeded);
+    lua_setfield(L, -2, "exceeded");
+    lua_pushnumber(L, a.stiffest);
+    lua_setfield(L, -2, "stiffest");
+    lua_pushnumber(L, a.damping_ratio);
+    lua_setfield(L, -2, "damping_ratio");
+    lua_pushnumber(L, a.decay);
+    lua_setfield(L, -2, "decay");
+    lua_pushnumber(L, a.fastest_spin);
+    lua_setfield(L, -2, "fastest_spin");
+    if (!TB_ID_IS_NULL(a.spring)) {
+        lua_pushinteger(L, (lua_Integer)a.spring.index1);
+        lua_setfield(L, -2, "spring");
+    }
+    lua_pushstring(L, a.text);
+    lua_setfield(L, -2, "text");
+    return 1;
+}
+
+/* world:work(): {steps, substeps, rejected, evaluations, contact_work,
+   damping_work} (tb_world_work) */
+static int world_work(lua_State *L)
+{
+    const tb_work k = tb_world_work(check_world(L, 1)->world);
+    lua_createtable(L, 0, 6);
+    lua_pushinteger(L, (lua_Integer)k.steps);
+    lua_setfield(L, -2, "steps");
+    lua_pushinteger(L, (lua_Integer)k.substeps);
+    lua_setfield(L, -2, "substeps");
+    lua_pushinteger(L, (lua_Integer)k.rejected);
+    lua_setfield(L, -2, "rejected");
+    lua_pushinteger(L, (lua_Integer)k.evaluations);
+    lua_setfield(L, -2, "evaluations");
+    lua_pushnumber(L, k.contact_work);
+    lua_setfield(L, -2, "contact_work");
+    lua_pushnumber(L, k.damping_work);
+    lua_setfield(L, -2, "damping_work");
+    return 1;
+}
+
 static int world_gravity(lua_State *L)
 {
     double g[3];
@@ -1441,10 +1503,19 @@ static int world_set_gravity(lua_State *L)
     return 0;
 }
 
+/* w:energy(): with the potential the Lua forces return (inside a callback,
+   where they cannot run again, without it) */
 static int world_energy(lua_State *L)
 {
-    tb_energy e = tb_world_energy(check_world(L, 1)->world);
-    lua_createtable(L, 0, 5);
+    tl_world *lw = check_world(L, 1);
+    tb_energy e;
+    if (lw->L)
+        e = tb_world_energy(lw->world);
+    else if (tb_lua_energy(L, 1, &e) != TB_OK)
+        return raise_world_error(L, lw, "world:energy");
+    lua_createtable(L, 0, 6);
+    lua_pushnumber(L, e.potential);
+    lua_setfield(L, -2, "potential");
     lua_pushnumber(L, e.kinetic);
     lua_setfield(L, -2, "kinetic");
     lua_pushnumber(L, e.rotational);
@@ -1581,7 +1652,7 @@ static const luaL_Reg world_methods[] = {
     { "step", world_step }, { "time", world_time }, { "dt", world_dt }, { "set_dt", world_set_dt },
     { "integrator", world_integrator }, { "set_integrator", world_set_integrator },
     { "set_tolerance", world_set_tolerance }, { "set_guard", world_set_guard },
-    { "auto_choice", world_auto_choice },
+    { "auto_choice", world_auto_choice }, { "advise", world_advise }, { "work", world_work },
     { "gravity", world_gravity }, { "set_gravity", world_set_gravity },
     { "energy", world_energy }, { "momentum", world_momentum }, { "counts", world_counts },
     { "snapshot", world_snapshot }, { "restore", world_restore }, { "hash", world_hash },
@@ -1696,21 +1767,30 @@ static int set_anchor(lua_State *L, int idx, tl_world *lw, int anchor)
     return ok;
 }
 
+/* The core call run_with_callbacks makes: a step, the tracers'
+   velocities, or the energy with the callbacks' potential. */
+static tb_status core_call(tl_world *lw, double h, double *velocities, tb_energy *energy)
+{
+    if (energy)
+        return tb_world_energy_with_callbacks(lw->world, energy);
+    return velocities ? tb_world_tracer_velocities(lw->world, velocities) : tb_world_step(lw->world, h);
+}
+
 /* Run a core call with the world's Lua callbacks pointed at thread L, the
    world anchored for the call. */
-static tb_status run_with_callbacks(lua_State *L, int idx, double h, double *velocities)
+static tb_status run_with_callbacks(lua_State *L, int idx, double h, double *velocities, tb_energy *energy)
 {
     tl_world *lw = test_world(L, idx);
     tb_status st;
     if (!lw || !lw->world)
         return TB_ERR_ARGUMENT;
     if (lw->L) /* nested: the core refuses it as busy */
-        return velocities ? tb_world_tracer_velocities(lw->world, velocities) : tb_world_step(lw->world, h);
+        return core_call(lw, h, velocities, energy);
     idx = lua_absindex(L, idx);
     if (!lua_checkstack(L, 4) || !set_anchor(L, idx, lw, 1))
         return TB_ERR_MEMORY;
     lw->L = L;
-    st = velocities ? tb_world_tracer_velocities(lw->world, velocities) : tb_world_step(lw->world, h);
+    st = core_call(lw, h, velocities, energy);
     lw->L = NULL;
     set_anchor(L, idx, lw, 0);
     return st;
@@ -1718,12 +1798,17 @@ static tb_status run_with_callbacks(lua_State *L, int idx, double h, double *vel
 
 tb_status tb_lua_step(lua_State *L, int idx, double h)
 {
-    return run_with_callbacks(L, idx, h, NULL);
+    return run_with_callbacks(L, idx, h, NULL, NULL);
 }
 
 tb_status tb_lua_tracer_velocities(lua_State *L, int idx, double *velocities)
 {
-    return run_with_callbacks(L, idx, 0, velocities);
+    return run_with_callbacks(L, idx, 0, velocities, NULL);
+}
+
+tb_status tb_lua_energy(lua_State *L, int idx, tb_energy *energy)
+{
+    return run_with_callbacks(L, idx, 0, NULL, energy);
 }
 
 /* ------------------------------------------------------------ budgets -- */

@@ -48,6 +48,9 @@ TB_LUA_API double tb_lua_world_dt(lua_State *L, int idx);
    come back as a status, with the reason in tb_world_message(). */
 TB_LUA_API tb_status tb_lua_step(lua_State *L, int idx, double h);
 TB_LUA_API tb_status tb_lua_tracer_velocities(lua_State *L, int idx, double *velocities);
+/* tb_world_energy_with_callbacks for the world at idx: a Lua force that
+   returns a number reports it as its potential energy (J). */
+TB_LUA_API tb_status tb_lua_energy(lua_State *L, int idx, tb_energy *energy);
 
 /* ---- running scripts that are not trusted ----------------------------------
 

@@ -43,7 +43,7 @@ static const char usage[] =
     "                            [--tol TOLERANCE] [--guard FACTOR] [--until SECONDS]\n"
     "                            [--every SECONDS] [--trust] [--max-instructions N]\n"
     "                            [--max-memory BYTES] [--gltf FILE.glb] [--plot FILE.png]\n"
-    "                            [--quiet]\n"
+    "                            [--quiet] [--check]\n"
     "       tumble --help | --version\n"
     "\n"
     "Runs a scene script and writes its trajectory as CSV. Options take their\n"
@@ -60,8 +60,8 @@ static const char usage[] =
     "  --integrator NAME  override the scene's integrator: %s\n"
     "  --dt SECONDS       override the step (default: the world's dt, 1/60 s\n"
     "                     unless the scene says otherwise)\n"
-    "  --tol TOLERANCE    the error per step asked of adaptive integrators\n"
-    "                     (dopri5, auto): relative to 1 + |y| per state value\n"
+    "  --tol TOLERANCE    error per simulated second asked of dopri5 and auto,\n"
+    "                     relative to 1 + |y| per state value\n"
     "  --guard FACTOR     the blow-up guard: stop when the state stops being\n"
     "                     finite (always on in the command) or when the energy\n"
     "                     grows more than FACTOR (> 1) times in one step; the\n"
@@ -85,7 +85,9 @@ static const char usage[] =
     "                     animated at the recorded frames (docs/command.md)\n"
     "  --plot FILE.png    also draw the energy terms, momentum and (with shapes)\n"
     "                     contacts at the recorded frames, with gnuplot\n"
-    "  --quiet            print no summary\n";
+    "  --quiet            print no summary\n"
+    "  --check            rerun at dt/2 (dopri5, auto: and tolerance/100), print\n"
+    "                     how far the ends differ (about the run's error)\n";
 
 /* The rest of the help: the output (a second string, as C99 promises
    string literals of 4095 characters only). */
@@ -101,12 +103,12 @@ static const char usage_output[] =
     "seconds (rounded to whole steps), and at the end.\n"
     "\n"
     "Before the run the stability advisor estimates the largest stable step\n"
-    "of the integrator (stiffest spring mode, drag) and warns on stderr when\n"
+    "of the integrator (spring modes and damping, drag) and warns when\n"
     "dt exceeds it, suggesting a step or an integrator.\n"
     "Summary (stdout): steps, simulated time, wall time, the advisor's\n"
-    "verdict, the relative energy drift (E_end - E_start) / |E_start| of the\n"
-    "particles and bodies (kinetic, rotational, gravitational, spring), and\n"
-    "what the scene's Lua used of its budgets.\n"
+    "verdict, the energy drift (E_end - E_start - W) / |E_start| with W\n"
+    "the work of contacts, drag and damping (E: kinetic, rotational,\n"
+    "gravity, springs, forces' potential), what the Lua used.\n"
     "Exit status: 0 on success, 1 when the scene or the run fails (a budget\n"
     "run out, a duration of more than 1e9 steps), 2 for a bad command line,\n"
     "128 + the signal's number after SIGINT, SIGTERM or SIGHUP (a second\n"
@@ -116,7 +118,7 @@ typedef struct options {
     const char *scene, *out, *integrator, *gltf, *plot;
     double dt, until, every, tol, guard;
     double max_instructions, max_memory; /* budgets; 0: no limit */
-    int quiet, trust;
+    int quiet, trust, check;
 } options;
 
 /* The first SIGINT, SIGTERM or SIGHUP; the Lua budgets' hook reads it too
@@ -210,7 +212,7 @@ static int parse_arguments(int argc, char **argv, options *o)
             memcpy(name, a, (size_t)(eq - a));
             name[eq - a] = 0;
             a = name, v = eq + 1, joined = 1;
-            if (!strcmp(a, "--trust") || !strcmp(a, "--quiet") || !strcmp(a, "--help"))
+            if (!strcmp(a, "--trust") || !strcmp(a, "--quiet") || !strcmp(a, "--help") || !strcmp(a, "--check"))
                 return die(2, "%s takes no value", a);
         }
         if (!strcmp(a, "--help") || !strcmp(a, "-h"))
@@ -265,6 +267,8 @@ static int parse_arguments(int argc, char **argv, options *o)
             i += !joined;
         } else if (!strcmp(a, "--quiet")) {
             o->quiet = 1;
+        } else if (!strcmp(a, "--check")) {
+            o->check = 1;
         } else if (a[0] == '-') {
             return die(2, "unknown option '%s' (try tumble --help)", a);
         } else if (!o->scene) {
@@ -697,6 +701,91 @@ static int write_plot(const char *path, run_plot *p, const char *title, int cont
     return 0;
 }
 
+/* --check: the positions (m) and orientations of every particle, tracer
+   and body, in slot order, appended to out (room for them all). */
+static size_t copy_pose(const tb_world *w, double *out)
+{
+    const size_t np = tb_world_particle_count(w), nt = tb_world_tracer_count(w), nb = tb_world_body_count(w);
+    if (np)
+        memcpy(out, tb_world_particle_positions(w), 3 * np * sizeof(double));
+    if (nt)
+        memcpy(out + 3 * np, tb_world_tracer_positions(w), 3 * nt * sizeof(double));
+    if (nb) {
+        memcpy(out + 3 * (np + nt), tb_world_body_positions(w), 3 * nb * sizeof(double));
+        memcpy(out + 3 * (np + nt + nb), tb_world_body_orientations(w), 4 * nb * sizeof(double));
+    }
+    return 3 * (np + nt + nb) + 4 * nb;
+}
+
+/* --check: restore the start, run to the same time at h / 2 (the
+   adaptive methods also at a tolerance 100 times tighter: a frame step
+   that passes both tolerances would give the same run), and print the
+   largest distance (m) and turn (rad) between the two runs' ends. Both
+   errors fall with the step (tolerance) as the method's order (in
+   proportion), so the difference is close to the first run's error
+   (docs/command.md). Lua state the scene's callbacks keep is not rewound. */
+static int check_run(lua_State *L, int world_idx, tb_world *w, const tb_snapshot *start, double dt, long steps,
+                     FILE *report)
+{
+    const size_t np = tb_world_particle_count(w), nt = tb_world_tracer_count(w), nb = tb_world_body_count(w);
+    const char *name = tb_world_integrator(w);
+    const int adaptive = !strcmp(name, "dopri5") || !strcmp(name, "auto");
+    const size_t count = 3 * (np + nt + nb) + 4 * nb;
+    double *first = malloc(2 * (count ? count : 1) * sizeof(double)), *second, far = 0, turn = 0, share;
+    size_t i;
+    long step;
+    if (!first)
+        return die(1, "%s", "--check: out of memory");
+    second = first + count;
+    copy_pose(w, first);
+    if (tb_world_restore(w, start) != TB_OK ||
+        (adaptive && tb_world_set_tolerance(w, tb_world_tolerance(w) / 100) != TB_OK)) {
+        free(first);
+        return die(1, "--check: %s", tb_world_message(w));
+    }
+    for (step = 0; step < 2 * steps; ++step)
+        if (stop_signal || tb_lua_limit_error(L) || tb_lua_step(L, world_idx, dt / 2) != TB_OK) {
+            free(first);
+            fprintf(stderr, "tumble: --check: the rerun stopped at t = %.17g s: %s\n", tb_world_time(w),
+                    stop_signal ? "interrupted" : tb_world_message(w));
+            return 1;
+        }
+    copy_pose(w, second);
+    for (i = 0; i < np + nt + nb; ++i)
+        far = fmax(far, sqrt(pow(first[3 * i] - second[3 * i], 2) + pow(first[3 * i + 1] - second[3 * i + 1], 2) +
+                             pow(first[3 * i + 2] - second[3 * i + 2], 2)));
+    for (i = 0; i < nb; ++i) { /* the turn between two unit quaternions: 2 atan2(|vector part of a* b|, |a.b|) */
+        const double *a = first + 3 * (np + nt + nb) + 4 * i, *b = second + 3 * (np + nt + nb) + 4 * i;
+        const double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+        const double x = a[0] * b[1] - a[1] * b[0] - (a[2] * b[3] - a[3] * b[2]);
+        const double y = a[0] * b[2] - a[2] * b[0] - (a[3] * b[1] - a[1] * b[3]);
+        const double z = a[0] * b[3] - a[3] * b[0] - (a[1] * b[2] - a[2] * b[1]);
+        turn = fmax(turn, 2 * atan2(sqrt(x * x + y * y + z * z), fabs(d)));
+    }
+    free(first);
+    /* a method of order p errs by e at h and e / 2^p at h / 2: the
+       difference is e (1 - 2^-p); the adaptive ones' error follows the
+       tolerance, so at tol / 100 the difference is nearly all of e */
+    for (i = 0; tb_integrator_name((int)i) && strcmp(tb_integrator_name((int)i), name); ++i)
+        continue;
+    share = adaptive ? 1 : 1 - pow(2, -tb_integrator_order((int)i));
+    if (adaptive)
+        fprintf(report, "check       rerun at dt %.6g s, tolerance %g: the ends differ by %.3g m", dt / 2,
+                tb_world_tolerance(w), far);
+    else
+        fprintf(report, "check       rerun at dt %.6g s: the ends differ by %.3g m", dt / 2, far);
+    if (nb)
+        fprintf(report, " and %.3g rad", turn);
+    if (share < 1) {
+        fprintf(report, "; this run's error is about %.3g m", far / share);
+        if (nb)
+            fprintf(report, " and %.3g rad", turn / share);
+        fprintf(report, " (order %d: the difference / %.4g)\n", tb_integrator_order((int)i), share);
+    } else
+        fprintf(report, ", about this run's error\n");
+    return 0;
+}
+
 /* Run the scene whose text is in s (read by main). */
 static int run_scene(lua_State *L, const options *o, scene *s)
 {
@@ -704,6 +793,7 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     size_t cap = 0;
     tb_world *w;
     tb_energy e0, e1;
+    tb_work work0, work1;
     double dt, duration, every, t0, wall, *tracer_vel = NULL, n;
     long steps, step, every_steps, rows = 0, r, substeps;
     int world_idx, have_advice, rc, failed, unwritten, to_stdout, write_error;
@@ -711,6 +801,7 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     const int progress = !o->quiet && isatty(STDERR_FILENO);
     double shown;
     tb_advice advice;
+    tb_snapshot *start = NULL;
     FILE *f, *report;
     gltf_writer *gw = NULL;
     run_plot *pr = NULL;
@@ -758,6 +849,8 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         snprintf(out_path, sizeof out_path, "%s", o->out);
     else
         make_out_path(o->scene, out_path, sizeof out_path);
+    if (o->check && tb_world_snapshot(w, &start) != TB_OK)
+        return die(1, "--check: %s", tb_world_message(w));
     /* Before running: would this step blow up? Warn, but run as asked. */
     have_advice = tb_world_advise(w, dt, &advice) == TB_OK;
     if (have_advice && advice.exceeded)
@@ -778,9 +871,10 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     }
     fprintf(f, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n");
 
-    e0 = tb_world_energy(w);
+    work0 = tb_world_work(w);
     t0 = read_clock();
-    r = record_rows(f, L, world_idx, w, &tracer_vel, &cap);
+    /* the energy runs the force callbacks: their failure is the run's */
+    r = tb_lua_energy(L, world_idx, &e0) == TB_OK ? record_rows(f, L, world_idx, w, &tracer_vel, &cap) : -1;
     if (r >= 0 && gw && gltf_record(gw, w))
         r = -1, gltf_failed = 1;
     if (r >= 0 && pr && plot_record(pr, w))
@@ -807,6 +901,8 @@ static int run_scene(lua_State *L, const options *o, scene *s)
             shown = read_clock() + 0.25;
         }
     }
+    if (r >= 0 && tb_lua_energy(L, world_idx, &e1) != TB_OK)
+        r = -1;
     if (progress && shown > t0 + 1)
         fprintf(stderr, "\r\033[K"); /* the line goes once the run ends */
     wall = read_clock() - t0;
@@ -851,7 +947,7 @@ static int run_scene(lua_State *L, const options *o, scene *s)
         plot_free(pr);
         return rc;
     }
-    e1 = tb_world_energy(w);
+    work1 = tb_world_work(w);
     if (!o->quiet) {
         unsigned long long executed;
         size_t peak;
@@ -866,11 +962,19 @@ static int run_scene(lua_State *L, const options *o, scene *s)
                tb_world_tracer_count(w), tb_world_spring_count(w), tb_world_body_count(w));
         fprintf(report, "steps       %ld, simulated %.6g s, wall %.3f ms (%.3g us/step)\n", steps, tb_world_time(w),
                1e3 * wall, steps ? 1e6 * wall / (double)steps : 0.0);
+        /* the drift is the integrator's: what contacts, drag and damping
+           took is counted apart (tb_work), the callbacks' potential in */
+        const double contacts = work1.contact_work - work0.contact_work;
+        const double damping = work1.damping_work - work0.damping_work;
+        const double drift = e1.total - e0.total - contacts - damping;
+        fprintf(report, "energy      %.9g J -> %.9g J", e0.total, e1.total);
+        if (contacts != 0 || damping != 0)
+            fprintf(report, ", contacts %.6g J, drag and damping %.6g J", contacts, damping);
         if (e0.total != 0)
-            fprintf(report, "energy      %.9g J -> %.9g J, relative drift %.3e\n", e0.total, e1.total,
-                   (e1.total - e0.total) / fabs(e0.total));
+            fprintf(report, ", relative drift %.3e", drift / fabs(e0.total));
         else
-            fprintf(report, "energy      %.9g J -> %.9g J, relative drift n/a (starts at 0)\n", e0.total, e1.total);
+            fprintf(report, ", relative drift n/a (starts at 0)");
+        fprintf(report, "%s\n", e0.potential != 0 || e1.potential != 0 ? " (force callbacks' potential in)" : "");
         if (have_advice)
             fprintf(report, "stability   %s\n", advice.text);
         tb_lua_usage(L, &executed, &peak);
@@ -896,6 +1000,11 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     }
     gltf_free(gw);
     plot_free(pr);
+    if (start) {
+        rc = check_run(L, world_idx, w, start, dt, steps, report);
+        tb_snapshot_destroy(start);
+        return rc;
+    }
     return 0;
 }
 

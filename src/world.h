@@ -37,10 +37,12 @@ typedef struct tb__method {
     int updates_before_last_evaluation;  /* needs a snapshot to roll back */
     int scratch;           /* state-sized scratch vectors it uses */
     tb_status (*step)(tb_world *w, double h);
-    /* Stability on x' = z x: the largest |h lambda| it survives along the
-       imaginary axis (oscillation, 0: none) and along the negative real
-       axis (decay). Used by the advisor (advisor.c). */
-    double oscillation_limit;
+    /* Stability (integrators.c, docs/integrators.md): the largest h w it
+       survives on the damped oscillator x'' = -w^2 x - 2 z w x' with
+       damping ratio z >= 0 (0: no step; INFINITY: any step), and the
+       largest h k on the decay v' = -k v. Used by the advisor (advisor.c)
+       and the plan of "auto" (auto.c). */
+    double (*damped_limit)(double zeta);
     double decay_limit;
     int adaptive;          /* chooses its own substeps: no limit on h */
     /* chooses another method and its substeps for a step h (auto.c), NULL
@@ -85,6 +87,7 @@ struct tb_world {
        also the largest energy growth per step */
     double guard;
     unsigned long steps;   /* completed steps, for messages */
+    tb_work work;          /* what the kept steps did (tb_world_work) */
 
     /* state vector and the offsets of its arrays (in doubles) */
     double *y;

@@ -25,8 +25,9 @@ typedef struct tb_world_def {
     double linear_drag;      /* N s/m; every particle feels -c v; default 0 */
     double quadratic_drag;   /* N s^2/m^2; every particle feels -c |v| v; default 0 */
     const char *integrator;  /* a name from tb_integrator_name(); NULL: "verlet" */
-    double tolerance;        /* error per step asked of adaptive methods ("dopri5"),
-                                relative to 1 + |y| per state component; 0: 1e-6 */
+    double tolerance;        /* error per second of simulated time asked of the
+                                adaptive methods ("dopri5", "auto"), relative to
+                                1 + |y| per state component; 0: 1e-6 */
     tb_allocator allocator;  /* all of the world's memory goes through it */
 } tb_world_def;
 
@@ -119,6 +120,10 @@ typedef struct tb_force_args {
     double *body_forces;        /* 3 * body_count, N at the centre of mass: add to it */
     double *body_torques;       /* 3 * body_count, N m, world frame: add to it */
     char *message;              /* TB_MESSAGE_SIZE bytes */
+    double *potential;          /* NULL in a step; when tb_world_energy_with_callbacks
+                                   asks, a sum to add this force's potential energy (J)
+                                   at these positions to, so that it counts in the
+                                   total (optional: a force with none adds nothing) */
 } tb_force_args;
 typedef tb_status tb_force_fn(const tb_force_args *args, void *user);
 
@@ -211,14 +216,36 @@ typedef struct tb_contact_event {
    oscillation), and c_decay = 2 (2.785 for RK4). */
 typedef struct tb_advice {
     double stiffest;          /* rad/s, the fastest spring oscillation (0: none) */
-    double decay;             /* 1/s, the fastest drag decay rate (0: none) */
+    double damping_ratio;     /* its damping ratio z (springs' damping and drag) */
+    double decay;             /* 1/s, the fastest decay: drag, body damping, and the
+                                 most damped mode of the springs (0: none) */
     double fastest_spin;      /* rad/s, the fastest body spin (information) */
-    double limit;             /* s, the largest stable step of the integrator;
-                                 INFINITY when nothing limits it, 0 when no step is stable */
+    double limit;             /* s, the largest stable step of the integrator with
+                                 damping counted; INFINITY when nothing limits it
+                                 (and for the adaptive methods), 0 when no step is
+                                 stable */
     int exceeded;             /* the step asked about is above the limit */
     tb_spring_id spring;      /* the stiffest mode's stiffest spring (null: none) */
     char text[TB_MESSAGE_SIZE]; /* one line: the verdict, and a step or method to use */
 } tb_advice;
+
+/* The work a world's steps did (tb_world_work), counted since it was made
+   over the steps it kept (a step undone by the guard or refused is not
+   counted; a restore puts the counts back with the rest). */
+typedef struct tb_work {
+    uint64_t steps;           /* completed steps */
+    uint64_t substeps;        /* the substeps they took: 1 a step for the fixed-step
+                                 methods, the chosen method's under "auto", the
+                                 accepted ones of "dopri5" */
+    uint64_t rejected;        /* substeps "dopri5" rejected and took again smaller */
+    uint64_t evaluations;     /* force evaluations made (each runs every force
+                                 callback once; a rejected substep's count) */
+    double contact_work;      /* J, the energy the contact solver changed (its impulses
+                                 and position corrections; negative: removed) */
+    double damping_work;      /* J, the work of drag, spring damping and body damping
+                                 (negative), by the trapezoid rule on their power at
+                                 each step's start and end: second order in h */
+} tb_work;
 
 /* ---------------------------------------------------------- diagnostics -- */
 
@@ -227,7 +254,9 @@ typedef struct tb_energy {
     double rotational;       /* J, bodies: sum of L . w / 2 */
     double gravity;          /* J, sum of -m g . x (zero at the origin) */
     double spring;           /* J, sum of k (|d| - rest)^2 / 2 */
-    double total;            /* J */
+    double total;            /* J, all of the above and `potential` */
+    double potential;        /* J, what force callbacks report as their potential
+                                energy (tb_world_energy_with_callbacks; 0 otherwise) */
 } tb_energy;
 
 #ifdef __cplusplus

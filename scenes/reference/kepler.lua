@@ -26,8 +26,10 @@ local period = 2 * math.pi * math.sqrt(a ^ 3 / GM)
 local w = tumble.world{ gravity = {0, 0, 0}, integrator = "rk4", dt = period / 400 }
 w:particle{ pos = {a * (1 - e), 0, 0}, vel = {0, math.sqrt(GM * (1 + e) / (a * (1 - e))), 0}, mass = 1 }
 
--- Once per force evaluation, over the whole arrays.
+-- Once per force evaluation, over the whole arrays; it returns its
+-- potential energy -GM m / r, which the energy line counts.
 w:force(function(t, s, f)
+  local u = 0
   for i = 1, s.n do
     local x, y, z = s.pos[3*i-2], s.pos[3*i-1], s.pos[3*i]
     local r2 = x * x + y * y + z * z
@@ -35,7 +37,9 @@ w:force(function(t, s, f)
     f[3*i-2] = f[3*i-2] - c * x
     f[3*i-1] = f[3*i-1] - c * y
     f[3*i]   = f[3*i]   - c * z
+    u = u - GM * s.mass[i] / math.sqrt(r2)
   end
+  return u
 end)
 
 return {

@@ -34,7 +34,7 @@ tb_status tb_world_remove_force(tb_world *w, tb_force_id id)
     return st;
 }
 
-static tb_status user_forces(tb_world *w, double t, const double *y, const double *seen)
+static tb_status user_forces(tb_world *w, double t, const double *y, const double *seen, double *potential)
 {
     size_t k;
     for (k = 0; k < w->forces.count; ++k) {
@@ -58,6 +58,7 @@ static tb_status user_forces(tb_world *w, double t, const double *y, const doubl
         args.body_forces = w->body_force;
         args.body_torques = w->body_force ? w->body_force + 3 * w->body_count : NULL;
         args.message = message;
+        args.potential = potential;
         st = f->fn(&args, f->user);
         if (st != TB_OK)
             return tb__fail(w, TB_ERR_CALLBACK, "force callback failed: %s",
@@ -84,5 +85,21 @@ tb_status tb__global_forces(tb_world *w, double t, const double *y, const double
     }
     if (w->spring_count)
         tb__spring_forces(w, y + w->off[TB__PARTICLE_POS], seen + w->off[TB__PARTICLE_VEL], w->particle_force);
-    return callbacks ? user_forces(w, t, y, seen) : TB_OK;
+    return callbacks ? user_forces(w, t, y, seen, NULL) : TB_OK;
+}
+
+tb_status tb__force_potential(tb_world *w, double *potential)
+{
+    tb_status st;
+    /* the forces go where a step's would and are cleared after: no step
+       reads them before computing them again */
+    if (w->body_count)
+        tb__body_motion(w, w->y, w->y);
+    st = user_forces(w, w->time, w->y, w->y, potential);
+    if (w->particle_count)
+        memset(w->particle_force, 0, 3 * w->particle_count * sizeof(double));
+    if (w->body_count)
+        memset(w->body_force, 0, 6 * w->body_count * sizeof(double));
+    w->force_ready = 0;
+    return st;
 }

@@ -44,5 +44,8 @@ tb_status tb__tracer_derive(tb_world *w, double t, const double *y, double *dy);
 /* Forces not local to one object (springs, callbacks) at positions from y,
    velocities from seen, into w->particle_force and w->body_force. */
 tb_status tb__global_forces(tb_world *w, double t, const double *y, const double *seen);
+/* The force callbacks at the current state with tb_force_args.potential
+   set: *potential gains what they report; their forces are thrown away. */
+tb_status tb__force_potential(tb_world *w, double *potential);
 
 #endif

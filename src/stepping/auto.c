@@ -19,6 +19,7 @@
 #include "particles/particles.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* A candidate: the constants of its leading local error terms and its cost
@@ -59,6 +60,8 @@ typedef struct rates {
                               the split methods turn exactly (only RK-type
                               methods err) */
     int unknown;           /* callbacks: rates the plan cannot see */
+    tb__modes modes;       /* what limits each method's step (advisor.c) */
+    double vortex;         /* rad/s, the fastest vortex field: an undamped turn */
 } rates;
 
 static tb_status scene_rates(tb_world *w, rates *r)
@@ -66,12 +69,10 @@ static tb_status scene_rates(tb_world *w, rates *r)
     size_t i;
     tb_status st;
     memset(r, 0, sizeof *r);
-    if (w->spring_count) {
-        tb_spring_id culprit;
-        if ((st = tb__stiffest_mode(w, &r->oscillation, &culprit)) != TB_OK)
-            return st;
-    }
-    r->decay = tb__fastest_decay(w);
+    if ((st = tb__modes_of(w, &r->modes)) != TB_OK)
+        return st;
+    r->oscillation = r->modes.omega;
+    r->decay = r->modes.decay;
     /* quadratic drag at rest has no rate yet; it reaches its largest near
        terminal speed, sqrt(m g / c2), where d(c2 |v| v)/dv / m = 2 sqrt(g c2 / m) */
     if (w->quadratic_drag > 0)
@@ -96,13 +97,15 @@ static tb_status scene_rates(tb_world *w, rates *r)
         if (f->kind == TB__FIELD_CALLBACK)
             r->unknown = 1;
         else if (f->kind == TB__FIELD_VORTEX)
-            r->oscillation = fmax(r->oscillation, tb__norm3(f->a));
+            r->vortex = fmax(r->vortex, tb__norm3(f->a));
     }
+    r->oscillation = fmax(r->oscillation, r->vortex);
     return TB_OK;
 }
 
-/* The substeps n of a step h whose errors add up to at most tol on one
-   rate: n C (r h / n)^(p+1) <= tol. */
+/* The substeps n of a step h whose errors add up to at most tol h on one
+   rate (the tolerance is an error per second of simulated time, as
+   dopri5's): n C (r h / n)^(p+1) <= tol h. */
 static double substeps_for(double rate, double h, double c, int order, double tol)
 {
     if (rate <= 0 || c <= 0 || order == 0)
@@ -112,12 +115,28 @@ static double substeps_for(double rate, double h, double c, int order, double to
 
 tb_status tb__auto_plan(tb_world *w, double h)
 {
+    return tb__auto_plan_why(w, h, NULL, 0);
+}
+
+tb_status tb__auto_plan_why(tb_world *w, double h, char *why, size_t size)
+{
     rates r;
     tb_status st;
     int i, best = -1;
+    size_t len = 0;
     double best_cost = INFINITY;
     if ((st = scene_rates(w, &r)) != TB_OK)
         return st;
+    if (why && size) {
+        why[0] = 0;
+        if (r.unknown)
+            len = (size_t)snprintf(why, size, "callbacks hide their rates, so only dopri5, which measures its "
+                                              "error; ");
+        if (w->tracer_count && len < size)
+            len += (size_t)snprintf(why + len, size - len, "tracers rule out the split methods; ");
+        if (len < size)
+            len += (size_t)snprintf(why + len, size - len, "estimated cost per step (rk4's = 4):");
+    }
     for (i = 0; i < CANDIDATES; ++i) {
         const candidate *c = &candidates[i];
         const tb__method *m = tb__method_find(c->name);
@@ -127,29 +146,43 @@ tb_status tb__auto_plan(tb_world *w, double h)
         if (r.unknown && !m->adaptive)
             continue;
         if (!m->adaptive) {
-            n = fmax(n, substeps_for(r.oscillation, h, c->c_oscillation, c->order, w->tolerance));
-            n = fmax(n, substeps_for(r.decay, h, c->c_decay, c->order, w->tolerance));
-            n = fmax(n, substeps_for(r.spin, h, c->c_spin, c->spin_order, w->tolerance));
-            n = fmax(n, substeps_for(r.iso_spin, h, c->c_spin, c->iso_spin_order, w->tolerance));
-            if (r.oscillation > 0)
-                n = fmax(n, h * r.oscillation / (0.9 * m->oscillation_limit));
+            /* 0.8 of the tolerance: C is only the leading term (rk4 at
+               1e-9 on the oscillator errs 8% past it without this margin,
+               test_integrators.auto_meets_its_tolerance_per_step) */
+            const double tol = 0.8 * w->tolerance * h;
+            n = fmax(n, substeps_for(r.oscillation, h, c->c_oscillation, c->order, tol));
+            n = fmax(n, substeps_for(r.decay, h, c->c_decay, c->order, tol));
+            n = fmax(n, substeps_for(r.spin, h, c->c_spin, c->spin_order, tol));
+            n = fmax(n, substeps_for(r.iso_spin, h, c->c_spin, c->iso_spin_order, tol));
+            /* each substep within 0.9 of the method's damped limit */
+            double limit = tb__limit_of(m, &r.modes, NULL);
+            if (r.vortex > 0)
+                limit = fmin(limit, m->damped_limit(0) / r.vortex);
             if (r.decay > 0)
-                n = fmax(n, h * r.decay / (0.9 * m->decay_limit));
+                limit = fmin(limit, m->decay_limit / r.decay);
+            n = fmax(n, h / (0.9 * limit));
         } else {
-            /* dopri5 keeps each of its own substeps within the tolerance;
-               estimate how many it takes, for the comparison */
+            /* dopri5 keeps each substep s within tol s: C (r s)^5 <= tol s
+               gives s = (tol / (C r^5))^(1/4); how many it takes, for the
+               comparison */
             const double rate = fmax(fmax(r.oscillation, r.decay), fmax(r.spin, r.iso_spin));
             if (rate > 0)
-                n = fmax(n, rate * h / pow(w->tolerance / c->c_oscillation, 1.0 / (c->order + 1)));
+                n = fmax(n, h / pow(w->tolerance / (c->c_oscillation * pow(rate, c->order + 1)), 1.0 / c->order));
         }
         n = ceil(n * (1 - 1e-12));
         cost = n * (w->body_count > w->particle_count ? c->body_cost : c->cost);
+        if (why && len < size)
+            len += (size_t)snprintf(why + len, size - len, m->adaptive ? " %s about %.3g x %.3g substeps = %.3g,"
+                                                                       : " %s %.3g x %.3g = %.3g,",
+                                    c->name, cost / n, n, cost);
         if (cost < best_cost) {
             best_cost = cost;
             best = i;
             w->auto_substeps = m->adaptive ? 1 : (n > 1e6 ? 1000000 : (long)n);
         }
     }
+    if (why && len > 0 && len < size && why[len - 1] == ',')
+        why[len - 1] = 0;
     if (best < 0)
         return tb__fail(w, TB_ERR_ARGUMENT, "auto: no method can step this world");
     w->auto_method = tb__method_find(candidates[best].name);

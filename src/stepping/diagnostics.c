@@ -6,7 +6,7 @@
 
 tb_energy tb__energy_of(const tb_world *w, const double *y)
 {
-    tb_energy e = { 0, 0, 0, 0, 0 };
+    tb_energy e = { 0, 0, 0, 0, 0, 0 };
     const double *x = y ? y + w->off[TB__PARTICLE_POS] : NULL;
     const double *v = y ? y + w->off[TB__PARTICLE_VEL] : NULL;
     const double *g = w->gravity;
@@ -27,10 +27,83 @@ tb_energy tb__energy_of(const tb_world *w, const double *y)
 tb_energy tb_world_energy(const tb_world *w)
 {
     if (!w) {
-        const tb_energy none = { 0, 0, 0, 0, 0 };
+        const tb_energy none = { 0, 0, 0, 0, 0, 0 };
         return none;
     }
     return tb__energy_of(w, w->y);
+}
+
+int tb__is_damped(const tb_world *w)
+{
+    size_t i;
+    if (w->linear_drag > 0 || w->quadratic_drag > 0 || w->body_damped)
+        return w->particle_count > 0 || w->body_damped;
+    for (i = 0; i < w->spring_count; ++i)
+        if (w->spring_c[i] > 0)
+            return 1;
+    return 0;
+}
+
+/* -(c1 + c2 |v|) |v|^2 per free particle, -c ((v_a - v_b).n)^2 per spring,
+   -c_lin |P|^2 / m and -c_ang w.L per body. */
+double tb__damping_power(const tb_world *w)
+{
+    const double *x = w->y + w->off[TB__PARTICLE_POS], *v = w->y + w->off[TB__PARTICLE_VEL];
+    double p = 0;
+    size_t i;
+    if (w->linear_drag > 0 || w->quadratic_drag > 0)
+        for (i = 0; i < w->particle_count; ++i) {
+            const double *vi = v + 3 * i, v2 = vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2];
+            if (w->particle_inv_mass[i] > 0)
+                p -= (w->linear_drag + w->quadratic_drag * sqrt(v2)) * v2;
+        }
+    for (i = 0; i < w->spring_count; ++i) {
+        const uint32_t a = w->spring_a[i], b = w->spring_b[i];
+        const double *xb = b == TB__ANCHOR ? w->spring_anchor + 3 * i : x + 3 * b;
+        const double d[3] = { x[3 * a] - xb[0], x[3 * a + 1] - xb[1], x[3 * a + 2] - xb[2] };
+        const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        double along = 0;
+        int k;
+        if (w->spring_c[i] == 0 || len == 0)
+            continue;
+        for (k = 0; k < 3; ++k)
+            along += d[k] / len * (v[3 * a + k] - (b == TB__ANCHOR ? 0 : v[3 * b + k]));
+        p -= w->spring_c[i] * along * along;
+    }
+    for (i = 0; w->body_damped && i < w->body_count; ++i) {
+        const double *P = w->y + w->off[TB__BODY_MOM] + 3 * i, *L = w->y + w->off[TB__BODY_ANG] + 3 * i;
+        const double *q = w->y + w->off[TB__BODY_ROT] + 4 * i;
+        double omega[3];
+        tb__through_inertia(q, w->body_inv_inertia + 3 * i, L, omega);
+        p -= w->body_damping[2 * i] * (P[0] * P[0] + P[1] * P[1] + P[2] * P[2]) * w->body_inv_mass[i];
+        p -= w->body_damping[2 * i + 1] * (omega[0] * L[0] + omega[1] * L[1] + omega[2] * L[2]);
+    }
+    return p;
+}
+
+/* The callbacks see the state as a step's evaluation would, write their
+   forces into scratch (thrown away) and add their potential energy; the
+   world is marked as stepping meanwhile, so they can change nothing. */
+tb_status tb_world_energy_with_callbacks(tb_world *w, tb_energy *energy)
+{
+    tb_status st;
+    double potential = 0;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if (!energy)
+        return tb__null(w, "tb_world_energy_with_callbacks", "the energy to write");
+    if ((st = tb__check_busy(w, "measure the energy")) != TB_OK)
+        return st;
+    if (w->forces.count) {
+        w->stepping = 1;
+        st = tb__force_potential(w, &potential);
+        w->stepping = 0;
+        if (st != TB_OK)
+            return st;
+    }
+    *energy = tb__energy_of(w, w->y);
+    energy->potential = potential;
+    energy->total += potential;
+    return TB_OK;
 }
 
 /* Both momenta at once: particles m v and m x x v, then the bodies. */

@@ -188,11 +188,16 @@ tb_status tb__guard_check(tb_world *w, double h)
     memset(&advice, 0, sizeof advice);
     {
         char was[256];
+        int advised = 0;
         if (find_unsound(w, before, was, sizeof was)) /* the guard came on after the harm was done */
             snprintf(cause, sizeof cause, "the state was unsound before this step already (%s): set it anew, no "
                      "step can mend it", was);
-        else if (tb_world_advise(w, h, &advice) == TB_OK && advice.exceeded)
+        else if ((advised = tb_world_advise(w, h, &advice) == TB_OK) != 0 && advice.exceeded)
             snprintf(cause, sizeof cause, "%s", advice.text);
+        else if (advised && h > 0.9 * advice.limit) /* the estimate errs by up to 10% (test_stability) */
+            snprintf(cause, sizeof cause, "step %g s is %.0f%% of the estimated limit %.4g s of %s, within the "
+                     "estimate's 10%% margin: use a smaller step", h, 100 * h / advice.limit, advice.limit,
+                     w->method->name);
         else if (advice.fastest_spin * h > 1) /* the advisor's limits leave spins out */
             snprintf(cause, sizeof cause, "the fastest body spins at %g rad/s, %g rad in a step of %g s: use a "
                      "smaller step", advice.fastest_spin, advice.fastest_spin * h, h);

@@ -143,10 +143,16 @@ static tb_status implicit_euler(tb_world *w, double h)
 }
 
 /* Dormand-Prince 5(4): the fifth-order solution advances, the embedded
-   fourth-order one estimates the local error. A step of H is covered by
-   substeps whose size is set by the standard controller
-   h <- h min(5, max(0.2, 0.9 err^(-1/5))); a rejected substep (err > 1, or
-   a non-finite state) is retried smaller from the same state. The running
+   fourth-order one estimates the local error. The tolerance is an error per
+   unit of simulated time: a substep of s seconds is accepted when its
+   estimated error, relative to 1 + |y| per component, is at most
+   tolerance x s, so that the errors a run adds up stay near
+   tolerance x T after T seconds whatever the frame step, and a frame step
+   is divided whenever its estimate asks (test_integrators.dopri5_global_
+   error_follows_tolerance). With err the estimate over tolerance x s, the
+   controller sets h <- h min(5, max(0.2, 0.9 err^(-1/4))) (the estimate
+   grows as s^5, the bound as s); a rejected substep (err > 1, or a
+   non-finite state) is retried smaller from the same state. The running
    state lives in scratch and is written to the world only at the end, so a
    failing callback leaves the world as it was. */
 static const double DP_C[7] = { 0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1, 1 };
@@ -214,11 +220,13 @@ static tb_status dopri5(tb_world *w, double H)
         tb__state_scale(w, err, step * DP_E[0], k[0]);
         for (j = 2; j < 7; ++j)
             tb__state_axpy(w, err, err, step * DP_E[j], k[j]);
-        e = tb__state_error_norm(w, err, y, next, w->tolerance);
+        e = tb__state_error_norm(w, err, y, next, w->tolerance * step);
         if (!(e <= 1)) { /* rejected, or not finite: shrink and retry */
-            h = step * (isfinite(e) ? fmax(0.2, 0.9 * pow(e, -0.2)) : 0.2);
+            ++w->work.rejected;
+            h = step * (isfinite(e) ? fmax(0.2, 0.9 * pow(e, -0.25)) : 0.2);
             continue;
         }
+        ++w->work.substeps;
         tb__project(w, next);
         swap = y, y = next, next = swap;
         /* first same as last: the seventh stage is the next first, unless
@@ -227,7 +235,7 @@ static tb_status dopri5(tb_world *w, double H)
         have_k1 = w->body_count == 0;
         done = last ? H : done + step;
         if (!last || step == h)
-            h = step * fmin(5, fmax(0.2, 0.9 * pow(fmax(e, 1e-10), -0.2)));
+            h = step * fmin(5, fmax(0.2, 0.9 * pow(fmax(e, 1e-10), -0.25)));
     }
     w->adaptive_h = h;
     tb__state_copy(w, w->y, y);
@@ -252,7 +260,7 @@ static tb_status auto_step(tb_world *w, double h)
     }
     for (i = 0; i < w->auto_substeps && st == TB_OK; ++i) {
         w->time = t0 + (double)i * (h / (double)w->auto_substeps);
-        st = w->auto_method->step(w, h / (double)w->auto_substeps);
+        st = tb__method_step(w, w->auto_method, h / (double)w->auto_substeps);
     }
     w->time = t0;
     return st;
@@ -270,19 +278,131 @@ const char *tb_world_auto_choice(const tb_world *w, long *substeps)
     return w->auto_method ? w->auto_method->name : NULL;
 }
 
-/* Stability limits (|h lambda|): explicit Euler's region |1 + z| <= 1 never
-   reaches the imaginary axis; the split methods are bounded for h w < 2 and
-   damp a decay for h k < 2; RK4's region reaches 2 sqrt 2 on the imaginary
-   axis and 2.785 on the negative real axis. */
+/* ---- stability on the damped oscillator ------------------------------------
+   Each method's largest a = h w on x'' = -w^2 x - 2 z w x' (damping ratio
+   z >= 0). A step maps (x, v) by a 2 x 2 amplification matrix G(a, z) with
+   trace T and determinant D; it is bounded while both eigenvalues of G lie
+   in the unit disc, that is (Jury) while |D| < 1, 1 - T + D > 0 and
+   1 + T + D > 0. The derivations are in docs/integrators.md; each limit is
+   checked against a bisection of simulated runs on a single damped spring
+   (test_stability.damped_limits_match_simulation). */
+
+/* Explicit Euler: T = 2 - 2 a z, D = 1 - 2 a z + a^2, so D < 1 needs
+   a < 2 z (z <= 1); for z > 1 the fast real root -w (z + sqrt(z^2 - 1))
+   needs a (z + sqrt(z^2 - 1)) < 2. Undamped: no step. */
+static double euler_limit(double z)
+{
+    return z <= 1 ? 2 * z : 2 / (z + sqrt(z * z - 1));
+}
+
+/* Symplectic Euler (damping taken at the start): T = 2 - a^2 - 2 a z,
+   D = 1 - 2 a z; 1 + T + D > 0 gives a^2 + 4 a z < 4, a < 2 (sqrt(1 + z^2) - z),
+   which is below D's bound 1 / z. */
+static double symplectic_limit(double z)
+{
+    return 2 / (sqrt(1 + z * z) + z);
+}
+
+/* tumble's Verlet, whose closing kick sees the damping at the predicted
+   velocity v_n + h a_n: 1 - T + D = a^2 (1 - a z) and
+   1 + T + D = 4 - 4 a z - a^2 (1 - 4 z^2); the first binds for z >= 1/2
+   (a < 1 / z), the second below (a < 2 / (z + sqrt(1 - 3 z^2))). Both give 2
+   at z = 0 and z = 1/2, and the limit dips to 1.73 at z = 0.3 between. */
+static double verlet_limit(double z)
+{
+    return z <= 0.5 ? 2 / (z + sqrt(1 - 3 * z * z)) : 1 / z;
+}
+
+/* The Runge-Kutta methods multiply each eigenvector of the oscillator by
+   R(h lambda), R their stability polynomial (coefficients c[0..n-1]) and
+   lambda = w (-z +- sqrt(z^2 - 1)): the eigenvalues of G are R(a lambda / w),
+   and its spectral radius is their largest modulus. No closed form gives
+   where it passes 1, so the limit is found by scanning a in steps of 1/50 of
+   the fast root's scale (the unstable bands are far wider) and bisecting the
+   first crossing: about 200 polynomial evaluations. */
+static double growth(const double *c, int n, double a, double z)
+{
+    double most = 0;
+    int root, k;
+    for (root = 0; root < 2; ++root) {
+        double re, im = 0, pr = 0, pi = 0;
+        if (z < 1) {
+            re = -z, im = sqrt(1 - z * z); /* the conjugate root has the same |R| */
+            if (root)
+                break;
+        } else
+            re = root ? -(z + sqrt(z * z - 1)) : -1 / (z + sqrt(z * z - 1));
+        re *= a, im *= a;
+        for (k = n - 1; k >= 0; --k) { /* Horner: p = p mu + c[k] */
+            const double t = pr * re - pi * im + c[k];
+            pi = pr * im + pi * re;
+            pr = t;
+        }
+        most = fmax(most, sqrt(pr * pr + pi * pi));
+    }
+    return most;
+}
+
+static double polynomial_limit(const double *c, int n, double z)
+{
+    const double scale = z < 1 ? 1 : 1 / (z + sqrt(z * z - 1)); /* a at which |a lambda| = 1 */
+    double lo = 0, hi = 0;
+    int i;
+    for (i = 1; i <= 400; ++i) {
+        hi = i * scale / 50;
+        if (growth(c, n, hi, z) > 1 + 1e-12)
+            break;
+        lo = hi;
+    }
+    if (i > 400)
+        return INFINITY;
+    for (i = 0; i < 50; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        if (growth(c, n, mid, z) > 1 + 1e-12)
+            hi = mid;
+        else
+            lo = mid;
+    }
+    return lo;
+}
+
+/* RK4: R = 1 + mu + mu^2/2 + mu^3/6 + mu^4/24; 2 sqrt 2 at z = 0, 2.835 at
+   z = 0.3, 2.785 at z = 1. */
+static double rk4_limit(double z)
+{
+    static const double c[5] = { 1, 1, 1.0 / 2, 1.0 / 6, 1.0 / 24 };
+    return polynomial_limit(c, 5, z);
+}
+
+/* Dormand-Prince 5: R = the degree-5 Taylor polynomial + mu^6 / 600; 0.997 at
+   z = 0 (just above it the growth is 1e-6 a step), 3.22 at z = 0.3, 3.31 at
+   z = 1. A limit on each substep, which the controller usually keeps far
+   below for accuracy. */
+static double dopri5_limit(double z)
+{
+    static const double c[7] = { 1, 1, 1.0 / 2, 1.0 / 6, 1.0 / 24, 1.0 / 120, 1.0 / 600 };
+    return polynomial_limit(c, 7, z);
+}
+
+/* Backward Euler is A-stable: bounded at any step for z >= 0. "auto" keeps
+   its substeps within the chosen method's limit, so its step has none. */
+static double no_limit(double z)
+{
+    (void)z;
+    return INFINITY;
+}
+
+/* decay limits h k on v' = -k v: 2 for the Euler methods and Verlet
+   (|1 - hk + (hk)^2/2| <= 1), 2.785 for RK4, 3.307 for dopri5 */
 static const tb__method methods[] = {
-    { "euler", 1, 0, 0, 1, euler, 0, 2, 0, NULL, 0 },
-    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, 2, 2, 0, NULL, 1 },
-    { "verlet", 2, 1, 1, 1, verlet, 2, 2, 0, NULL, 0.5 },
-    { "rk4", 4, 0, 0, 3, rk4, 2.8284271247461903, 2.785293563405282, 0, NULL, 0.5 },
-    { "verlet_exact", 2, 1, 1, 1, verlet_exact, 2, 2, 0, NULL, 0.5 },
-    { "implicit_euler", 1, 1, 0, 4, implicit_euler, INFINITY, INFINITY, 0, NULL, 1 },
-    { "dopri5", 5, 0, 0, 10, dopri5, INFINITY, INFINITY, 1, NULL, 0.5 },
-    { "auto", 0, 0, 1, 10, auto_step, INFINITY, INFINITY, 1, tb__auto_plan, 0.5 },
+    { "euler", 1, 0, 0, 1, euler, euler_limit, 2, 0, NULL, 0 },
+    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, symplectic_limit, 2, 0, NULL, 1 },
+    { "verlet", 2, 1, 1, 1, verlet, verlet_limit, 2, 0, NULL, 0.5 },
+    { "rk4", 4, 0, 0, 3, rk4, rk4_limit, 2.785293563405282, 0, NULL, 0.5 },
+    { "verlet_exact", 2, 1, 1, 1, verlet_exact, verlet_limit, 2, 0, NULL, 0.5 },
+    { "implicit_euler", 1, 1, 0, 4, implicit_euler, no_limit, INFINITY, 0, NULL, 1 },
+    { "dopri5", 5, 0, 0, 10, dopri5, dopri5_limit, 3.306567898702859, 1, NULL, 0.5 },
+    { "auto", 0, 0, 1, 10, auto_step, no_limit, INFINITY, 1, tb__auto_plan, 0.5 },
 };
 #define METHOD_COUNT ((int)(sizeof methods / sizeof methods[0]))
 
@@ -293,6 +413,14 @@ double tb__force_lever(const tb_world *w)
     if (w->method->plan && w->auto_method && w->auto_substeps > 0)
         return 0.5 + (w->auto_method->force_lever - 0.5) / (double)w->auto_substeps;
     return w->method->force_lever;
+}
+
+tb_status tb__method_step(tb_world *w, const tb__method *m, double h)
+{
+    const tb_status st = m->step(w, h);
+    if (st == TB_OK && !m->adaptive)
+        ++w->work.substeps;
+    return st;
 }
 
 const tb__method *tb__method_find(const char *name)

@@ -61,6 +61,7 @@ const char *tb_world_integrator(const tb_world *w)
 tb_status tb__derive(tb_world *w, double t, const double *y, double *dy)
 {
     tb_status st = TB_OK;
+    ++w->work.evaluations;
     if (w->tracer_count && (st = tb__tracer_derive(w, t, y, dy)) != TB_OK)
         return st;
     if ((st = tb__global_forces(w, t, y, y)) != TB_OK)
@@ -81,6 +82,7 @@ void tb__project(tb_world *w, double *y)
 tb_status tb__split_prepare(tb_world *w, double t, const double *seen)
 {
     w->kick_seen = seen;
+    ++w->work.evaluations;
     return tb__global_forces(w, t, w->y, seen ? seen : w->y);
 }
 
@@ -100,6 +102,7 @@ int tb__fused_rk4(tb_world *w, double h)
     if (!w->body_count || w->tracer_count || w->particle_count || w->forces.count)
         return 0;
     w->force_ready = 0; /* what tb__global_forces finds with no springs or callbacks */
+    w->work.evaluations += 4; /* each body's four stages */
     tb__body_rk4(w, h);
     return 1;
 }
@@ -133,7 +136,12 @@ tb_status tb_world_step(tb_world *w, double h)
     tb_status st;
     int snapshot, guard = w && w->guard != 0;
     double *saved = NULL;
+    tb_work work;
+    double power = 0;
+    int damped;
     TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    work = w->work; /* a failed step leaves the counts as they were */
+    damped = tb__is_damped(w);
     if ((st = tb__check_scale(w, h, "step")) != TB_OK)
         return st;
     if ((st = tb__check_busy(w, "step")) != TB_OK)
@@ -154,20 +162,31 @@ tb_status tb_world_step(tb_world *w, double h)
             (void)tb__rollback(w); /* out of memory again: the state was not touched yet */
         return st;
     }
+    if (damped)
+        power = tb__damping_power(w);
     w->stepping = 1;
-    st = w->method->step(w, h);
+    st = tb__method_step(w, w->method, h);
     w->stepping = 0;
     if (st != TB_OK) {
+        w->work = work;
         if (guard && tb__rollback(w) != TB_OK)
             tb__state_copy(w, w->y, tb__rollback_state(w)); /* out of memory: the state at least */
         else if (snapshot)
             tb__state_copy(w, w->y, saved);
         return st;
     }
-    if (tb__contacts_active(w))
+    if (tb__contacts_active(w)) {
+        /* what the solve changes of the energy is the contacts' work */
+        const double before = tb__energy_of(w, w->y).total;
         tb__contacts_solve(w, h, tb__force_lever(w));
-    if (guard && (st = tb__guard_check(w, h)) != TB_OK)
+        w->work.contact_work += tb__energy_of(w, w->y).total - before;
+    }
+    if (damped)
+        w->work.damping_work += h / 2 * (power + tb__damping_power(w));
+    if (guard && (st = tb__guard_check(w, h)) != TB_OK) {
+        w->work = work;
         return st; /* rolled back, held forces kept */
+    }
     if (w->body_count && w->body_held) /* held forces last one step, as in ODE */
         memset(w->body_applied, 0, 6 * w->body_count * sizeof(double));
     {   /* compensated sum: t after n steps of h is n h to the last bit */
@@ -176,5 +195,15 @@ tb_status tb_world_step(tb_world *w, double h)
         w->time = sum;
     }
     ++w->steps;
+    ++w->work.steps;
     return TB_OK;
+}
+
+tb_work tb_world_work(const tb_world *w)
+{
+    if (!w) {
+        const tb_work none = { 0, 0, 0, 0, 0, 0 };
+        return none;
+    }
+    return w->work;
 }

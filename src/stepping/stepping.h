@@ -13,6 +13,9 @@
 /* ---- integrators.c ------------------------------------------------------- */
 const tb__method *tb__method_find(const char *name);
 const tb__method *tb__method_at(int index); /* NULL past the end */
+/* m->step, counting a fixed-step method's substep (the adaptive ones count
+   their own) in w->work. */
+tb_status tb__method_step(tb_world *w, const tb__method *m, double h);
 /* The force_lever of the step just taken (auto: of the method it chose,
    over its substeps). */
 double tb__force_lever(const tb_world *w);
@@ -49,19 +52,40 @@ tb_status tb__implicit_particles(tb_world *w, double h);
 tb_status tb__implicit_step(tb_world *w, double h);
 
 /* ---- advisor.c, auto.c, guard.c, diagnostics.c ---------------------------- */
-/* The stiffest spring mode w (rad/s) by power iteration, and the stiffest
-   spring where that mode is largest. Uses two scratch state vectors. */
-tb_status tb__stiffest_mode(tb_world *w, double *omega, tb_spring_id *culprit);
+/* What limits a world's step (advisor.c): its stiffest spring mode and how
+   damped it is, its most damped mode and how stiff it is, and the fastest
+   decay of drag and body damping. */
+typedef struct tb__modes {
+    double omega;          /* rad/s, the stiffest mode of M^-1 K (0: none) */
+    double zeta;           /* its damping ratio: (u.M^-1/2 (C + D) M^-1/2 u) / (2 omega) */
+    double damped_rate;    /* 1/s, the largest eigenvalue of M^-1 (C + D) (0: none) */
+    double damped_omega;   /* rad/s, the stiffness that most damped mode sees */
+    double decay;          /* 1/s, the fastest decay of drag and body damping */
+    tb_spring_id spring;   /* the stiffest spring where the stiffest mode is largest */
+} tb__modes;
+/* The modes by power iteration (two scratch state vectors). */
+tb_status tb__modes_of(tb_world *w, tb__modes *modes);
+/* The stability limit (s) of method m on them: the least of its damped
+   limit on the stiffest mode, on the most damped mode, and its decay limit
+   on the fastest decay. *cause (may be NULL) is set to 1, 2 or 3 for the one
+   that binds, 0 when nothing limits the step. */
+double tb__limit_of(const tb__method *m, const tb__modes *modes, int *cause);
 /* The fastest drag or damping decay rate (1/s) of particles and bodies. */
 double tb__fastest_decay(const tb_world *w);
-/* Choose w->auto_method and w->auto_substeps for steps of h. */
+/* Choose w->auto_method and w->auto_substeps for steps of h; the _why
+   form also writes why (may be NULL): each candidate's estimated cost. */
 tb_status tb__auto_plan(tb_world *w, double h);
+tb_status tb__auto_plan_why(tb_world *w, double h, char *why, size_t size);
 /* After a step from the guard's snapshot (tb__rollback_keep): TB_OK, or
    the world rolled back to the snapshot and TB_ERR_UNSTABLE with a message
    naming the step, the object and the likely cause. */
 tb_status tb__guard_check(tb_world *w, double h);
 /* The energies of state y (any state vector of the world). */
 tb_energy tb__energy_of(const tb_world *w, const double *y);
+/* Whether drag, spring damping or body damping take energy, and the power
+   (W, <= 0) they take at the current state (tb_work.damping_work). */
+int tb__is_damped(const tb_world *w);
+double tb__damping_power(const tb_world *w);
 
 /* ---- snapshot.c: the guard's rollback ----------------------------------------
    tb__rollback_keep copies what a step can change into w->rollback, into

@@ -452,7 +452,7 @@ static const char *fuzz_script =
     "local handles = {}\n"
     "local world_methods = { 'particle', 'tracer', 'spring', 'body', 'angular_momentum', 'shape', 'contacts',\n"
     "  'events', 'drag', 'field', 'force', 'step', 'time', 'dt', 'set_dt', 'integrator', 'set_integrator',\n"
-    "  'set_tolerance', 'set_guard', 'auto_choice', 'gravity', 'set_gravity', 'energy', 'momentum', 'counts' }\n"
+    "  'set_tolerance', 'set_guard', 'auto_choice', 'advise', 'work', 'gravity', 'set_gravity', 'energy', 'momentum', 'counts' }\n"
     "local handle_methods = { 'pos', 'rot', 'vel', 'omega', 'momentum', 'mass', 'set_pos', 'set_rot',\n"
     "  'set_vel', 'set_omega', 'push', 'push_local', 'torque', 'asleep', 'wake', 'remove', 'id' }\n"
     "local function call(object, name)\n"
@@ -477,6 +477,68 @@ static const char *fuzz_script =
     "end\n"
     "w:close()\n"
     "for _, h in ipairs(handles) do pcall(h.pos, h) end\n";
+
+/* w:advise(dt): the advisor's table. A unit mass on a spring of w = 3 rad/s
+   and damping ratio 0.3 under symplectic Euler: the limit is
+   2 (sqrt(1 + z^2) - z) / w (docs/integrators.md), the default step is the
+   world's dt, and a bad step is refused. */
+static void advise_from_lua(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{ gravity = {0, 0, 0}, dt = 0.1, integrator = 'symplectic_euler' }\n"
+                 "local p = w:particle{ pos = {1, 0, 0}, mass = 1 }\n"
+                 "w:spring(p, {0, 0, 0}, { k = 9, damping = 2 * 0.3 * 3, rest = 0 })\n"
+                 "local a = w:advise()\n"
+                 "local limit = 2 * (math.sqrt(1 + 0.09) - 0.3) / 3\n"
+                 "assert(math.abs(a.limit / limit - 1) < 1e-9, a.limit)\n"
+                 "assert(a.exceeded == false and math.abs(a.stiffest - 3) < 1e-9)\n"
+                 "assert(a.decay > 0 and a.fastest_spin == 0 and a.spring == 1)\n"
+                 "assert(a.text:find('of the limit'), a.text)\n"
+                 "local b = w:advise(0.6)\n"
+                 "assert(b.exceeded == true and b.text:find('exceeds the limit'), b.text)\n");
+    /* w:work(): symplectic Euler makes one substep and one evaluation a step */
+    expect_ok(L, "for i = 1, 3 do w:step() end\n"
+                 "local k = w:work()\n"
+                 "assert(k.steps == 3 and k.substeps == 3 and k.rejected == 0 and k.evaluations == 3)\n");
+    expect_error(L, "w:advise(-1)", "world:advise");
+    expect_error(L, "w:advise(0/0)", "world:advise");
+    lua_close(L);
+}
+
+/* A force that returns its potential energy: w:energy() counts it (a
+   unit mass at (3, 4, 0) pulled by k = 2 towards the origin holds
+   k r^2 / 2 = 25 J), w:work() has the work fields, and a force that
+   returns something else than a number or nothing is an error that names
+   it. Inside a callback w:energy() leaves the callbacks out. */
+static void energy_from_lua_counts_callbacks(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{ gravity = {0, 0, 0}, dt = 0.01 }\n"
+                 "w:particle{ pos = {3, 4, 0}, mass = 1 }\n"
+                 "inside = nil\n"
+                 "w:force(function(t, s, f)\n"
+                 "  local u = 0\n"
+                 "  for i = 1, s.n do\n"
+                 "    for k = 1, 3 do f[3*i - 3 + k] = f[3*i - 3 + k] - 2 * s.pos[3*i - 3 + k] end\n"
+                 "    u = u + (s.pos[3*i - 2]^2 + s.pos[3*i - 1]^2 + s.pos[3*i]^2)\n"
+                 "  end\n"
+                 "  inside = inside or w:energy().potential\n"
+                 "  return u\n"
+                 "end)\n"
+                 "local e = w:energy()\n"
+                 "assert(e.potential == 25 and e.total == 25 and e.kinetic == 0, e.total)\n"
+                 "assert(inside == 0)\n"
+                 "w:step()\n"
+                 "local k = w:work()\n"
+                 "assert(k.contact_work == 0 and k.damping_work == 0 and k.evaluations == 2)\n");
+    expect_ok(L, "w2 = tumble.world{ gravity = {0, 0, 0} }\n"
+                 "w2:particle{ pos = {1, 0, 0} }\n"
+                 "w2:force(function() return 'lots' end)\n");
+    expect_error(L, "w2:energy()", "potential energy");
+    lua_close(L);
+}
 
 static void random_calls_never_crash(void **state)
 {
@@ -505,5 +567,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(lua_field_matches_builtin_vortex),
     cmocka_unit_test(callback_error_leaves_state_bit_identical),
     cmocka_unit_test(structure_is_frozen_inside_callbacks),
+    cmocka_unit_test(advise_from_lua),
+    cmocka_unit_test(energy_from_lua_counts_callbacks),
 };
 TB_TEST_MAIN(tests)

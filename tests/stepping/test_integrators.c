@@ -214,12 +214,12 @@ static void dopri5_refuses_a_stiff_step_quickly(void **state)
     tb_world_destroy(world);
 }
 
-/* dopri5 controls the local error per substep to the tolerance (relative
-   to 1 + |y|); over T = 5 s of the oscillator (w = 2, taken in outer steps
-   of 0.5 s, h w = 1) the global error must follow the tolerance down, in
-   proportion: the local errors of the substeps add up to a steady multiple
-   of the tolerance (measured 5.6 to 6.7 tol from 1e-4 to 1e-10); at most
-   10 tol is asserted at every level. */
+/* dopri5 keeps the estimated error of each substep of s seconds within
+   tolerance x s (relative to 1 + |y|); over T = 5 s of the oscillator
+   (w = 2, taken in outer steps of 0.5 s, h w = 1) the global error stays
+   within tolerance x T (measured 0.29, 0.065 and 0.011 tol T at 1e-4,
+   1e-7 and 1e-10: the fifth-order solution advances, so the error falls
+   a little faster than the tolerance). */
 static void dopri5_error_follows_tolerance(void **state)
 {
     const double tols[] = { 1e-4, 1e-7, 1e-10 };
@@ -237,9 +237,256 @@ static void dopri5_error_follows_tolerance(void **state)
         tb_particle_position(world, id, x);
         tb_particle_velocity(world, id, v);
         err = hypot(x[0] - cos(w0 * T), (v[0] + w0 * sin(w0 * T)) / w0);
-        print_message("dopri5 tol %.0e: error %.3e (%.2f tol)\n", tols[k], err, err / tols[k]);
-        assert_below(err, 10 * tols[k]);
+        print_message("dopri5 tol %.0e: error %.3e (%.3f tol T)\n", tols[k], err, err / (tols[k] * T));
+        assert_below(err, tols[k] * T);
         tb_world_destroy(world);
+    }
+}
+
+/* ---- the tolerance against the global error --------------------------------- */
+
+/* Gravity of GM = 1 m^3/s^2 at the origin, as a callback. */
+static tb_status central_gravity(const tb_force_args *a, void *user)
+{
+    size_t i;
+    int k;
+    (void)user;
+    for (i = 0; i < a->count; ++i) {
+        const double *x = a->positions + 3 * i;
+        const double r2 = x[0] * x[0] + x[1] * x[1] + x[2] * x[2], r3 = r2 * sqrt(r2);
+        for (k = 0; k < 3; ++k)
+            a->forces[3 * i + k] -= a->masses[i] * x[k] / r3;
+    }
+    return TB_OK;
+}
+
+/* Kepler orbit, a = 1 m, eccentricity 0.5, from periapsis (0.5 m, at
+   sqrt 3 m/s); after 10 periods (T = 20 pi s) it is back at the start. The
+   error is the distance from it, in frames of H. */
+static double kepler_error(double tol, double H, tb_work *work)
+{
+    const double T = 20 * PI;
+    const long n = (long)ceil(T / H);
+    tb_world_def def = tb_default_world_def();
+    tb_particle_def p = tb_default_particle_def();
+    tb_world *w;
+    tb_particle_id id;
+    double x[3];
+    long i;
+    def.gravity[2] = 0;
+    def.integrator = "dopri5";
+    def.tolerance = tol;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    p.position[0] = 0.5;
+    p.velocity[1] = sqrt(3.0);
+    assert_int_equal(tb_world_add_particle(w, &p, &id), TB_OK);
+    assert_int_equal(tb_world_add_force(w, central_gravity, NULL, NULL), TB_OK);
+    for (i = 0; i < n; ++i)
+        assert_int_equal(tb_world_step(w, T / (double)n), TB_OK);
+    tb_particle_position(w, id, x);
+    *work = tb_world_work(w);
+    tb_world_destroy(w);
+    return hypot(x[0] - 0.5, x[1]);
+}
+
+/* The angle (rad) of the turn from a to b, accurate for small angles. */
+static double turn_between(const double a[4], const double b[4])
+{
+    const double w = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+    const double x = a[0] * b[1] - a[1] * b[0] - (a[2] * b[3] - a[3] * b[2]);
+    const double y = a[0] * b[2] - a[2] * b[0] - (a[3] * b[1] - a[1] * b[3]);
+    const double z = a[0] * b[3] - a[3] * b[0] - (a[1] * b[2] - a[2] * b[1]);
+    return 2 * atan2(sqrt(x * x + y * y + z * z), fabs(w));
+}
+
+/* A box-like body, I = diag(1, 2, 3) kg m^2, tumbling from w = (4, 1, 2)
+   rad/s (about its least axis, away from the unstable middle one), for
+   T = 20 s in n steps; its orientation at the end. */
+static void tumble_run(const char *integrator, double tol, double h, long n, double q[4], tb_work *work)
+{
+    tb_world_def def = tb_default_world_def();
+    tb_body_def b = tb_default_body_def();
+    tb_world *w;
+    tb_body_id id;
+    long i;
+    def.gravity[2] = 0;
+    def.integrator = integrator;
+    def.tolerance = tol;
+    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+    b.mass.inertia[0] = 1, b.mass.inertia[1] = 2, b.mass.inertia[2] = 3;
+    b.angular_velocity[0] = 4, b.angular_velocity[1] = 1, b.angular_velocity[2] = 2;
+    assert_int_equal(tb_world_add_body(w, &b, &id), TB_OK);
+    for (i = 0; i < n; ++i)
+        assert_int_equal(tb_world_step(w, h), TB_OK);
+    tb_body_orientation(w, id, q);
+    if (work)
+        *work = tb_world_work(w);
+    tb_world_destroy(w);
+}
+
+/* The tolerance is an error per second of simulated time: after T seconds
+   the global error is about tolerance x T, whatever the frame step. On the
+   Kepler orbit (position, m; T = 62.8 s) and the tumbling body
+   (orientation, rad, against RK4 at 1/30720 s, itself checked to 1e-10
+   rad by halving; T = 20 s), in frames of 0.1 s, the error at tolerances
+   1e-4, 1e-6, 1e-8 and 1e-10 lies within [0.05, 5] tolerance x T
+   (measured 0.096 to 1.7 on the orbit, 0.56 to 2.8 on the body); in 60 Hz
+   frames, which cap the substeps, within 5 tolerance x T. The work counts
+   follow the method: with bodies, whose quaternions are projected after
+   each substep, every substep evaluates 7 stages (6 when it retries a
+   rejected one, whose first stage it keeps); without, the first stage of a
+   substep is the last of the one before (first same as last), so a step
+   costs 1 + 6 per substep. */
+static void dopri5_global_error_follows_tolerance(void **state)
+{
+    const double tols[] = { 1e-4, 1e-6, 1e-8, 1e-10 }, T = 20, h = 1.0 / 60;
+    double ref[4], ref2[4], gap;
+    size_t k;
+    int frames;
+    (void)state;
+    tumble_run("rk4", 0, h / 256, 1200 * 256, ref2, NULL);
+    tumble_run("rk4", 0, h / 512, 1200 * 512, ref, NULL);
+    gap = turn_between(ref, ref2);
+    print_message("tumbling body: reference rk4 at 1/15360 and 1/30720 s differ by %.3g rad\n", gap);
+    assert_below(gap, 1e-10);
+    for (frames = 0; frames < 2; ++frames) {
+        const double H = frames == 0 ? 0.1 : h, low = frames == 0 ? 0.05 : 0;
+        for (k = 0; k < sizeof tols / sizeof tols[0]; ++k) {
+            tb_work work;
+            double q[4], orbit, body;
+            orbit = kepler_error(tols[k], H, &work);
+            print_message("H %.4f tol %.0e: Kepler error %.3g m = %.3g tol T (%llu substeps, %llu rejected, "
+                          "%llu evaluations)\n", H, tols[k], orbit, orbit / (tols[k] * 20 * PI),
+                          (unsigned long long)work.substeps, (unsigned long long)work.rejected,
+                          (unsigned long long)work.evaluations);
+            assert_true(work.evaluations == work.steps + 6 * (work.substeps + work.rejected));
+            assert_below(orbit, 5 * tols[k] * 20 * PI);
+            assert_true(orbit >= low * tols[k] * 20 * PI);
+            tumble_run("dopri5", tols[k], H, (long)round(T / H), q, &work);
+            body = turn_between(q, ref);
+            print_message("H %.4f tol %.0e: body error %.3g rad = %.3g tol T (%llu substeps, %llu rejected, "
+                          "%llu evaluations)\n", H, tols[k], body, body / (tols[k] * T),
+                          (unsigned long long)work.substeps, (unsigned long long)work.rejected,
+                          (unsigned long long)work.evaluations);
+            assert_true(work.evaluations == 7 * work.substeps + 6 * work.rejected);
+            assert_below(body, 5 * tols[k] * T);
+            assert_true(body >= low * tols[k] * T);
+        }
+    }
+}
+
+/* ---- energy accounting -------------------------------------------------------- */
+
+/* Gravity of GM = 1 m^3/s^2 at the origin that reports its potential
+   -GM m / r when asked. */
+static tb_status central_gravity_with_potential(const tb_force_args *a, void *user)
+{
+    size_t i;
+    tb_status st = central_gravity(a, user);
+    for (i = 0; a->potential && i < a->count; ++i) {
+        const double *x = a->positions + 3 * i;
+        *a->potential -= a->masses[i] / sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    }
+    return st;
+}
+
+/* Energy that adds up. The Kepler orbit (1 kg from periapsis 0.5 m at
+   sqrt 3 m/s) has E = v^2 / 2 - GM / r = -0.5 J exactly, which the total
+   reaches only with the callback's potential (-2 J); after 10 periods at
+   60 Hz under rk4 it has drifted by what the integrator made (measured
+   below). A damped spring (z = 0.1) under verlet and a particle thrown
+   through linear and quadratic drag lose what tb_work.damping_work says,
+   to the trapezoid rule's O(h^2); a ball bouncing at restitution 0.5 under
+   verlet loses what contact_work says. */
+static void energy_accounting_adds_up(void **state)
+{
+    (void)state;
+    {
+        tb_world_def def = tb_default_world_def();
+        tb_particle_def p = tb_default_particle_def();
+        tb_world *w;
+        tb_energy e0, e1;
+        long i;
+        def.gravity[2] = 0;
+        def.integrator = "rk4";
+        assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+        p.position[0] = 0.5;
+        p.velocity[1] = sqrt(3.0);
+        assert_int_equal(tb_world_add_particle(w, &p, NULL), TB_OK);
+        assert_int_equal(tb_world_add_force(w, central_gravity_with_potential, NULL, NULL), TB_OK);
+        assert_int_equal(tb_world_energy_with_callbacks(w, &e0), TB_OK);
+        assert_rel(e0.total, -0.5, 1e-15);
+        assert_rel(e0.potential, -2, 1e-15);
+        assert_rel(tb_world_energy(w).total, 1.5, 1e-15); /* without the callback: kinetic alone */
+        for (i = 0; i < 3770; ++i) /* 10 periods of 2 pi s at 60 Hz */
+            assert_int_equal(tb_world_step(w, 20 * PI / 3770), TB_OK);
+        assert_int_equal(tb_world_energy_with_callbacks(w, &e1), TB_OK);
+        print_message("Kepler, rk4 at 60 Hz: E %.15g -> %.15g J (drift %.3g)\n", e0.total, e1.total,
+                      e1.total / e0.total - 1);
+        assert_below(fabs(e1.total / e0.total - 1), 1e-6);
+        tb_world_destroy(w);
+    }
+    {   /* damped spring, then drag */
+        int k;
+        for (k = 0; k < 2; ++k) {
+            tb_world_def def = tb_default_world_def();
+            tb_particle_def p = tb_default_particle_def();
+            tb_spring_def sp = tb_default_spring_def();
+            tb_world *w;
+            tb_particle_id id;
+            tb_work work;
+            double e0, e1;
+            int i;
+            def.gravity[2] = k == 0 ? 0 : -9.81;
+            def.linear_drag = k == 0 ? 0 : 0.2;
+            def.quadratic_drag = k == 0 ? 0 : 0.05;
+            assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+            p.position[0] = 1;
+            p.velocity[2] = k == 0 ? 0 : 10;
+            p.velocity[0] = k == 0 ? 0 : 5;
+            assert_int_equal(tb_world_add_particle(w, &p, &id), TB_OK);
+            if (k == 0) {
+                sp.a = id, sp.stiffness = 9, sp.damping = 2 * 0.1 * 3, sp.rest_length = 0;
+                assert_int_equal(tb_world_add_spring(w, &sp, NULL), TB_OK);
+            }
+            e0 = tb_world_energy(w).total;
+            for (i = 0; i < 5000; ++i)
+                assert_int_equal(tb_world_step(w, 1e-3), TB_OK);
+            e1 = tb_world_energy(w).total;
+            work = tb_world_work(w);
+            print_message("%s, verlet at 1 ms: energy change %.9g J, damping work %.9g J (off by %.2g)\n",
+                          k == 0 ? "damped spring" : "drag", e1 - e0, work.damping_work,
+                          (e1 - e0) / work.damping_work - 1);
+            assert_rel(work.damping_work, e1 - e0, 1e-5);
+            assert_true(work.contact_work == 0);
+            tb_world_destroy(w);
+        }
+    }
+    {   /* a bouncing ball */
+        tb_world_def def = tb_default_world_def();
+        tb_shape_def ground = tb_default_shape_def(), ball = tb_default_shape_def();
+        tb_body_def b = tb_default_body_def();
+        tb_world *w;
+        tb_work work;
+        double e0, e1;
+        int i;
+        assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
+        ground.type = TB_SHAPE_PLANE;
+        assert_int_equal(tb_world_add_shape(w, &ground, NULL), TB_OK);
+        b.position[2] = 1.5;
+        assert_int_equal(tb_world_add_body(w, &b, &ball.body), TB_OK);
+        ball.restitution = 0.5;
+        assert_int_equal(tb_world_add_shape(w, &ball, NULL), TB_OK);
+        e0 = tb_world_energy(w).total;
+        for (i = 0; i < 90; ++i)
+            assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        e1 = tb_world_energy(w).total;
+        work = tb_world_work(w);
+        print_message("bouncing ball, verlet at 60 Hz: energy change %.9g J, contact work %.9g J (off by %.2g)\n",
+                      e1 - e0, work.contact_work, (e1 - e0) / work.contact_work - 1);
+        assert_true(work.contact_work < 0);
+        assert_rel(work.contact_work, e1 - e0, 1e-9);
+        tb_world_destroy(w);
     }
 }
 
@@ -257,9 +504,10 @@ static void dopri5_moves_tracers(void **state)
 /* ---- auto ------------------------------------------------------------------- */
 
 /* "auto" plans substeps from the spring's rate so that each step of
-   h w = 1 errs by at most the tolerance (relative to 1 + |y|, the norm of
-   dopri5). The local error of every step is measured against the exact
-   flow from that step's start. */
+   h = 0.5 s (h w = 1) errs by at most the tolerance times h (an error per
+   second of simulated time, relative to 1 + |y|, the norm of dopri5). The
+   local error of every step is measured against the exact flow from that
+   step's start. */
 static void auto_meets_its_tolerance_per_step(void **state)
 {
     const double tols[] = { 1e-3, 1e-6, 1e-9 };
@@ -287,9 +535,9 @@ static void auto_meets_its_tolerance_per_step(void **state)
         }
         name = tb_world_auto_choice(world, &substeps);
         assert_non_null(name);
-        print_message("auto tol %.0e: %s x %ld substeps, worst local error %.3e (%.2f tol)\n", tols[k], name,
-                      substeps, worst, worst / tols[k]);
-        assert_below(worst, tols[k]);
+        print_message("auto tol %.0e: %s x %ld substeps, worst local error %.3e (%.2f tol h)\n", tols[k], name,
+                      substeps, worst, worst / (tols[k] * H));
+        assert_below(worst, tols[k] * H);
         tb_world_destroy(world);
     }
 }
@@ -347,7 +595,17 @@ static void auto_picks_from_what_the_scene_contains(void **state)
     b.angular_velocity[0] = 0.01, b.angular_velocity[1] = 5, b.angular_velocity[2] = 0.01;
     assert_int_equal(tb_world_add_body(world, &b, NULL), TB_OK);
     assert_string_equal(auto_choice_after_a_step(world, 1.0 / 60, 1e-9, &n), "verlet_exact");
-    assert_string_equal(auto_choice_after_a_step(world, 1.0 / 60, 1e-2, &n), "verlet");
+    {   /* the advice says why: every candidate's estimated cost */
+        tb_advice advice;
+        assert_int_equal(tb_world_advise(world, 1.0 / 60, &advice), TB_OK);
+        print_message("%s\n", advice.text);
+        assert_non_null(strstr(advice.text, "auto picks verlet_exact"));
+        assert_non_null(strstr(advice.text, "cost per step"));
+        assert_non_null(strstr(advice.text, " verlet 2.9 x "));
+        assert_non_null(strstr(advice.text, " rk4 4 x "));
+        assert_non_null(strstr(advice.text, " dopri5 about "));
+    }
+    assert_string_equal(auto_choice_after_a_step(world, 1.0 / 60, 1e-1, &n), "verlet");
     tb_world_destroy(world);
 }
 
@@ -355,6 +613,8 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(auto_meets_its_tolerance_per_step),
     cmocka_unit_test(auto_picks_from_what_the_scene_contains),
     cmocka_unit_test(dopri5_error_follows_tolerance),
+    cmocka_unit_test(dopri5_global_error_follows_tolerance),
+    cmocka_unit_test(energy_accounting_adds_up),
     cmocka_unit_test(dopri5_moves_tracers),
     cmocka_unit_test(dopri5_refuses_a_stiff_step_quickly),
     cmocka_unit_test(euler_is_first_order),
