@@ -100,6 +100,8 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->colours, c->colours_cap * sizeof *c->colours, 0);
     tb__alloc(w, c->bucket, c->bucket_cap * sizeof *c->bucket, 0);
     tb__alloc(w, c->owner, c->proxy_cap * sizeof(uint32_t), 0);
+    tb__alloc(w, c->still, c->proxy_cap * sizeof(uint32_t), 0);
+    tb__alloc(w, c->parked, c->parked_cap * sizeof *c->parked, 0);
     tb__alloc(w, c->poses, c->pose_cap * sizeof *c->poses, 0);
     tb__alloc(w, c->island_scratch, c->island_scratch_cap * sizeof(double), 0);
     tb__alloc(w, c->motion_block, TB__MOTION_BYTES(c->motion_cap), 0); /* velocity, motion, momenta */
@@ -389,8 +391,9 @@ double tb_world_deepest_overlap(const tb_world *w)
     int k;
     if (!w || !w->contacts)
         return 0;
-    for (i = 0; i < w->contacts->entry_count; ++i) {
-        const tb__entry *e = &w->contacts->entries[i];
+    for (i = 0; i < w->contacts->entry_count + w->contacts->parked_count; ++i) { /* (parked: contact.c) */
+        const tb__entry *e = i < w->contacts->entry_count ? &w->contacts->entries[i]
+                                                          : &w->contacts->parked[i - w->contacts->entry_count];
         for (k = 0; k < e->count; ++k)
             if (e->point[k].active && -e->point[k].separation > deepest)
                 deepest = -e->point[k].separation;

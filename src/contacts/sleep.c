@@ -21,6 +21,16 @@ static int sleep_allowed(const tb_world *w)
     return w->contacts && isfinite(w->contacts->settings.sleep_time) && w->forces.count == 0;
 }
 
+int tb__key_still(const tb_world *w, const tb__contacts *c, uint32_t key)
+{
+    const tb__shape *s;
+    uint32_t slot;
+    if (key & TB__PARTICLE_KEY)
+        return 0;
+    s = &c->shapes[c->ids.slot[key - 1]];
+    return !s->body || !tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot) || w->body_island[slot];
+}
+
 uint32_t tb__proxy_island(const tb_world *w, const tb__contacts *c, size_t k)
 {
     return c->owner[k] ? w->body_island[c->owner[k] - 1] : 0;
