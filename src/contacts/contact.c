@@ -743,18 +743,22 @@ static tb_status unpark(tb_world *w, tb__contacts *c, double h)
    key order and need no sort.) */
 static tb_status collide_planes(tb_world *w, tb__contacts *c)
 {
-    size_t i, k, before;
+    size_t i, k, before, planes = 0;
     tb_status st;
-    for (i = 0; i < c->shape_count; ++i) {
+    for (i = 0; i < c->shape_count && planes < c->planes; ++i) {
         const tb__shape *s = &c->shapes[i];
         tb__geom plane;
         if (s->kind != TB__SHAPE_PLANE)
             continue;
+        ++planes;
         place(s, NULL, NULL, &plane);
         for (k = 0; k < c->proxy_count; ++k) {
             const double *lo = c->lo + 3 * k, *hi = c->hi + 3 * k;
             double nearest = 0;
             int j;
+            /* (a sleeping proxy's pair is parked: first, as the cheapest) */
+            if (c->still[k] && !c->unparked && inert(w, c, k))
+                continue;
             if (!(s->category & c->mask[k]) || !(c->category[k] & s->mask) || c->group[k] == 0xFFFFFFFFu)
                 continue;
             for (j = 0; j < 3; ++j) /* the box corner deepest along -n */
@@ -776,6 +780,39 @@ static tb_status collide_planes(tb_world *w, tb__contacts *c)
     return TB_OK;
 }
 
+/* Proxy k for shape i: placed, its filter, margin and bounds; kept as it
+   is when its body sleeps in the island it slept in when it was made
+   (still). */
+static void make_proxy(tb_world *w, tb__contacts *c, size_t k, uint32_t i, double h)
+{
+    const tb__shape *s = &c->shapes[i];
+    tb__geom *g = &c->geoms[k];
+    uint32_t slot;
+    int j;
+    if (s->body && tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot)) {
+        const uint32_t island = w->body_island[slot];
+        if (island && c->still[k] == island && c->owner[k] == slot + 1 && c->proxy[k] == i)
+            return;
+        place(s, body_x(w, slot), body_q(w, slot), g);
+        c->owner[k] = slot + 1;
+        c->still[k] = island;
+    } else {
+        place(s, NULL, NULL, g);
+        c->owner[k] = 0;
+        c->still[k] = UINT32_MAX; /* static: still, but never kept */
+    }
+    c->proxy[k] = i;
+    c->category[k] = s->category;
+    c->mask[k] = s->mask;
+    c->group[k] = s->body ? s->body : 0xFFFFFFFFu;
+    c->margin[k] = motion_margin(w, c, c->proxy[k], h);
+    tb__geom_bounds(g, c->lo + 3 * k, c->hi + 3 * k);
+    for (j = 0; j < 3; ++j) {
+        c->lo[3 * k + j] -= c->margin[k];
+        c->hi[3 * k + j] += c->margin[k];
+    }
+}
+
 tb_status tb__contacts_prepare(tb_world *w, double h)
 {
     tb__contacts *c = w->contacts;
@@ -783,6 +820,7 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
     const size_t bodies_shapes = c->shape_count - c->planes;
     const size_t n = bodies_shapes + (particles ? w->particle_count : 0);
     size_t i, k, cap;
+    int carry, same;
     tb__entry *swap;
     tb__key *swap_order;
     uint32_t *swap_starts;
@@ -834,39 +872,24 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
         for (k = 0; k < c->proxy_count; ++k)
             c->still[k] = 0;
     c->still_h = h;
-    c->proxy_count = 0;
-    for (i = 0; i < c->shape_count; ++i) {
-        const tb__shape *s = &c->shapes[i];
-        uint32_t slot;
-        tb__geom *g;
-        int j;
-        if (s->kind == TB__SHAPE_PLANE)
-            continue;
-        k = c->proxy_count++;
-        g = &c->geoms[k];
-        if (s->body && tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot)) {
-            const uint32_t island = w->body_island[slot];
-            if (island && c->still[k] == island && c->owner[k] == slot + 1 && c->proxy[k] == (uint32_t)i)
-                continue;
-            place(s, body_x(w, slot), body_q(w, slot), g);
-            c->owner[k] = slot + 1;
-            c->still[k] = island;
-        } else {
-            place(s, NULL, NULL, g);
-            c->owner[k] = 0;
-            c->still[k] = 0;
+    /* With no shape added or removed since, the proxies are last step's
+       shapes in last step's places, and one whose body (owner) still sleeps
+       under its tag is kept without a look at its shape */
+    same = c->proxy_version == c->shape_version;
+    c->proxy_version = c->shape_version;
+    if (same) {
+        for (k = 0; k < c->shape_proxies; ++k) {
+            const uint32_t tag = c->still[k], owner = c->owner[k];
+            if (!(tag && tag != UINT32_MAX && owner && owner <= w->body_count && w->body_island[owner - 1] == tag))
+                make_proxy(w, c, k, c->proxy[k], h);
         }
-        c->proxy[k] = (uint32_t)i;
-        c->category[k] = s->category;
-        c->mask[k] = s->mask;
-        c->group[k] = s->body ? s->body : 0xFFFFFFFFu;
-        c->margin[k] = motion_margin(w, c, c->proxy[k], h);
-        tb__geom_bounds(g, c->lo + 3 * k, c->hi + 3 * k);
-        for (j = 0; j < 3; ++j) {
-            c->lo[3 * k + j] -= c->margin[k];
-            c->hi[3 * k + j] += c->margin[k];
-        }
+        c->proxy_count = c->shape_proxies;
+    } else {
+        for (i = 0, c->proxy_count = 0; i < c->shape_count; ++i)
+            if (c->shapes[i].kind != TB__SHAPE_PLANE)
+                make_proxy(w, c, c->proxy_count++, (uint32_t)i, h);
     }
+    c->shape_proxies = c->proxy_count;
     if (particles)
         for (i = 0; i < w->particle_count; ++i) {
             tb__geom *g;
@@ -891,7 +914,18 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
                 c->hi[3 * k + j] += c->margin[k];
             }
         }
-    if ((st = tb__sap_pairs(w, &c->sap, c->proxy_count, c->lo, c->hi, c->category, c->mask, c->group, &c->pairs,
+    /* The broadphase leaves out the pairs of two still proxies (sleeping or
+       static), whose entries are parked, unless the step carries such pairs
+       over (some came back from the parked ones: unpark), or an awake
+       proxy reaches a sleeping one: then the waking below, which goes pair
+       by pair, and the woken pairs' collisions need every pair, and it
+       runs again for them (test_contacts_sleep.islands_wake_together) */
+    carry = c->unparked || (c->parked_count && h != c->parked_h);
+    if ((st = tb__sap_moving_pairs(w, &c->sap, c->proxy_count, c->lo, c->hi, c->category, c->mask, c->group,
+                                   carry ? NULL : c->still, &c->pairs, &c->pair_count, &c->pair_cap)) != TB_OK)
+        return st;
+    if (!carry && tb__sleep_wakes(w, c) &&
+        (st = tb__sap_pairs(w, &c->sap, c->proxy_count, c->lo, c->hi, c->category, c->mask, c->group, &c->pairs,
                             &c->pair_count, &c->pair_cap)) != TB_OK)
         return st;
     if ((st = tb__sleep_prepare(w, c)) != TB_OK || (st = unpark(w, c, h)) != TB_OK ||

@@ -304,6 +304,9 @@ struct tb__contacts {
                                   when its geom, bounds and margin were made (0: awake or
                                   none): kept while that island sleeps, for steps of still_h */
     double still_h;            /* s */
+    uint64_t shape_version;    /* counts shapes added and removed */
+    uint64_t proxy_version;    /* ... when the proxies were last made, */
+    size_t shape_proxies;      /* and how many of them are shapes' (the first) */
     tb__geom *geoms;           /* [proxy_cap]: the proxies' shapes placed in the world */
     size_t proxy_count, proxy_cap;
     tb__pair *pairs;
@@ -411,6 +414,9 @@ uint32_t tb__proxy_island(const tb_world *w, const tb__contacts *c, size_t k);
    static shape, or its body asleep. */
 int tb__key_still(const tb_world *w, const tb__contacts *c, uint32_t key);
 tb_status tb__sleep_prepare(tb_world *w, tb__contacts *c);
+/* Whether tb__sleep_prepare would wake an island: some pair of this
+   step's has a sleeping side and a moving one. */
+int tb__sleep_wakes(const tb_world *w, const tb__contacts *c);
 void tb__sleep_restore(tb_world *w, tb__contacts *c);
 void tb__sleep_update(tb_world *w, tb__contacts *c, double h);
 

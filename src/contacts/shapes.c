@@ -220,6 +220,7 @@ tb_status tb_world_add_shape(tb_world *w, const tb_shape_def *def, tb_shape_id *
     c->planes += s->kind == TB__SHAPE_PLANE;
     tb__ids_acquire(&c->ids, w->id_tag, (uint32_t)c->shape_count, &made.index1, &made.generation);
     c->shape_count++;
+    c->shape_version++;
     tb__wake_all(w); /* it may reach into what sleeps */
     if (id)
         *id = made;
@@ -232,6 +233,7 @@ static void remove_slot(tb__contacts *c, uint32_t slot)
     uint32_t index1, generation;
     tb__ids_at(&c->ids, slot, &index1, &generation);
     c->planes -= c->shapes[slot].kind == TB__SHAPE_PLANE;
+    c->shape_version++;
     if (slot != last) {
         c->shapes[slot] = c->shapes[last];
         tb__ids_move(&c->ids, last, slot);

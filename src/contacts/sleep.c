@@ -47,6 +47,19 @@ static int moving(const tb_world *w, const tb__contacts *c, size_t k)
     return c->owner[k] && !w->body_island[c->owner[k] - 1];
 }
 
+int tb__sleep_wakes(const tb_world *w, const tb__contacts *c)
+{
+    size_t i;
+    if (!w->body_sleeping)
+        return 0;
+    for (i = 0; i < c->pair_count; ++i) {
+        const uint32_t a = c->pairs[i].a, b = c->pairs[i].b;
+        if ((tb__proxy_island(w, c, a) && moving(w, c, b)) || (tb__proxy_island(w, c, b) && moving(w, c, a)))
+            return 1;
+    }
+    return 0;
+}
+
 tb_status tb__sleep_prepare(tb_world *w, tb__contacts *c)
 {
     size_t i, n = 0;
@@ -104,7 +117,9 @@ void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
     size_t i;
     uint32_t *link, *tag;
     double *reach, *least;
-    if (!sleep_allowed(w) || n == 0)
+    /* (every body asleep: none can fall asleep, and the passes below would
+       look at each only to pass it over) */
+    if (!sleep_allowed(w) || n == 0 || w->body_sleeping == n)
         return;
     if (tb__reserve(w, (void **)&c->island_scratch, &c->island_scratch_cap, 3 * n, sizeof(double)) != TB_OK)
         return; /* out of memory: nothing falls asleep this step */
@@ -115,11 +130,12 @@ void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
         link[i] = (uint32_t)i;
         tag[i] = 0;
     }
-    for (i = 0; i < c->shape_count; ++i) {
-        const tb__shape *s = &c->shapes[i];
-        uint32_t slot;
-        if (s->body && tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot))
-            reach[slot] = fmax(reach[slot], s->reach);
+    /* the reach of the awake bodies' shapes, from their proxies (every
+       shape of a body has one, made this step) */
+    for (i = 0; i < c->proxy_count; ++i) {
+        const uint32_t owner = c->owner[i];
+        if (owner && !w->body_island[owner - 1])
+            reach[owner - 1] = fmax(reach[owner - 1], c->shapes[c->proxy[i]].reach);
     }
     /* rest times */
     for (i = 0; i < n; ++i) {
