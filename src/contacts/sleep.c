@@ -62,7 +62,8 @@ int tb__sleep_wakes(const tb_world *w, const tb__contacts *c)
 
 tb_status tb__sleep_prepare(tb_world *w, tb__contacts *c)
 {
-    size_t i, n = 0;
+    size_t i, b, n = 0;
+    int skipped;
     tb_status st;
     if (!w->body_sleeping) { /* (all woken since the last step: no pose to put back) */
         c->pose_count = 0;
@@ -78,16 +79,25 @@ tb_status tb__sleep_prepare(tb_world *w, tb__contacts *c)
         else if (ib && moving(w, c, a))
             tb__wake_island(w, ib);
     }
-    /* the poses to put back after the free motion */
+    /* the poses to put back after the free motion, but for those the
+       integrator leaves alone: a split method moves bodies by the sweep
+       alone, which passes over blocks whose bodies all sleep (so a sleeping
+       pile costs no integration either) */
     if ((st = tb__reserve(w, (void **)&c->poses, &c->pose_cap, w->body_sleeping + 1, sizeof *c->poses)) != TB_OK)
         return st;
-    for (i = 0; i < w->body_count && n < w->body_sleeping; ++i)
-        if (w->body_island[i]) {
-            tb__pose *p = &c->poses[n++];
-            p->slot = (uint32_t)i;
-            memcpy(p->x, w->y + w->off[TB__BODY_POS] + 3 * i, sizeof p->x);
-            memcpy(p->q, w->y + w->off[TB__BODY_ROT] + 4 * i, sizeof p->q);
-        }
+    skipped = w->method->split && tb__body_sweep_skips_sleeping(w);
+    for (b = 0; b < w->body_count && n < w->body_sleeping; b += TB__LANES) {
+        const size_t m = w->body_count - b < TB__LANES ? w->body_count - b : TB__LANES;
+        if (skipped && tb__body_block_asleep(w, b, m))
+            continue;
+        for (i = b; i < b + m; ++i)
+            if (w->body_island[i]) {
+                tb__pose *p = &c->poses[n++];
+                p->slot = (uint32_t)i;
+                memcpy(p->x, w->y + w->off[TB__BODY_POS] + 3 * i, sizeof p->x);
+                memcpy(p->q, w->y + w->off[TB__BODY_ROT] + 4 * i, sizeof p->q);
+            }
+    }
     c->pose_count = n;
     return TB_OK;
 }
