@@ -283,6 +283,14 @@ tb_status tb__sap_moving_pairs(tb_world *w, tb__sap *sap, size_t n, const double
         sap->count = 0;
         return TB_OK;
     }
+    /* every proxy still: no pair is wanted, and the kept order stays as it
+       is (it only speeds the next sort) */
+    if (still) {
+        for (k = 0; k < n && still[k]; ++k)
+            ;
+        if (k == n)
+            return TB_OK;
+    }
     status = tb__reserve(w, (void **)&sap->order, &sap->cap, layout.units, sizeof(uint32_t));
     if (status != TB_OK)
         return status;

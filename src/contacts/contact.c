@@ -589,8 +589,12 @@ static tb_status index_order(tb_world *w, const tb__contacts *c, const tb__key *
 {
     const size_t count = (size_t)c->ids.used + 2;
     size_t i;
-    tb_status st = tb__reserve(w, (void **)starts, cap, count, sizeof **starts);
-    if (st != TB_OK)
+    tb_status st;
+    if (n == 0) { /* (previous_entry finds nothing without a pass over the keys) */
+        *starts_count = 0;
+        return TB_OK;
+    }
+    if ((st = tb__reserve(w, (void **)starts, cap, count, sizeof **starts)) != TB_OK)
         return st;
     memset(*starts, 0, count * sizeof **starts);
     for (i = 0; i < n; ++i)
@@ -757,7 +761,8 @@ static tb_status collide_planes(tb_world *w, tb__contacts *c)
             double nearest = 0;
             int j;
             /* (a sleeping proxy's pair is parked: first, as the cheapest) */
-            if (c->still[k] && !c->unparked && inert(w, c, k))
+            if (c->still[k] && !c->unparked &&
+                (c->still[k] == UINT32_MAX || w->body_island[c->owner[k] - 1] == c->still[k]))
                 continue;
             if (!(s->category & c->mask[k]) || !(c->category[k] & s->mask) || c->group[k] == 0xFFFFFFFFu)
                 continue;
