@@ -56,6 +56,12 @@
      asleep within its 10 s: balls and capsules that rolled out of it roll
      on across the endless plane (no rolling resistance, in either engine),
      and those still rolling at its edge keep its island awake.
+   - asleep (also `bench_contacts --sleep`, alone): the ms per step once
+     every body sleeps (the median of 300 steps after the last fell
+     asleep, one run): the pyramid; a block of 1000 unit cubes in 10
+     levels of 10 x 10 columns 1 cm apart (one island: the pile does not
+     fall asleep); and 1000 and 10000 separate cubes, each an island, whose
+     difference over 9000 is the cost of one sleeping body a step.
 
    - scaling (`bench_contacts --scaling OUT`, run by `./dev.sh charts`,
      not by `./dev.sh bench`): the contact cost against the pile's size.
@@ -579,6 +585,10 @@ int main(int argc, char **argv)
            "%d steps (-1: not within the run; awake at the end: %zu) | ODE/tumble %.1f\n",
            ld.count, t_ms, ld.steps, pile_sleep.ms_median, pile_sleep.asleep_after, pile_sleep.awake_at_end,
            o_ms / t_ms);
+
+    fflush(stdout);
+    asleep_lines();
+    fflush(stdout);
 
     /* t = fixed + k points iterations, at two iteration counts, every sweep done */
     printf("contacts  ns per contact point per velocity iteration: %.1f for the whole step (pyramid, %.0f points x %d "

@@ -634,11 +634,14 @@ static int active_points(const tb__entry *e)
     return n;
 }
 
-/* Park every entry of this step whose sides both sleep or are static
-   (carried over, or of an island that fell asleep in this step), keeping
-   c->parked in found order, and index the entries left for the next
-   step. Out of memory: nothing is parked, and the next step carries them
-   over instead (c->unparked). */
+/* Park every entry of this step that was carried over (its sides both
+   sleep or are static), keeping c->parked in found order, and index the
+   entries left for the next step. The entries of an island that fell
+   asleep in this step are left as they are, and the next step carries
+   them over (c->unparked), to be parked after it: the state after each
+   step is the one carrying gives, to the bit (the step an island falls
+   asleep in, its entries are still this step's, not yet carried). Out of
+   memory: nothing is parked, and the next step carries over instead. */
 static void park(tb_world *w, tb__contacts *c, double h)
 {
     uint32_t *index = c->bucket; /* [entry_cap]: free once solved */
@@ -651,8 +654,10 @@ static void park(tb_world *w, tb__contacts *c, double h)
     for (i = 0; i < c->entry_count; ++i) {
         const tb__entry *e = &c->entries[i];
         index[i] = UINT32_MAX;
-        if (e->asleep || (tb__key_still(w, c, e->key_a) && tb__key_still(w, c, e->key_b)))
+        if (e->asleep)
             index[i] = 0, ++n;
+        else if (tb__key_still(w, c, e->key_a) && tb__key_still(w, c, e->key_b))
+            c->unparked = 1;
     }
     if (n == 0)
         return;
