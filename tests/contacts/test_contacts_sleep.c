@@ -166,6 +166,49 @@ static void sleeping_pairs_are_kept_and_come_back(void **state)
     tb_world_destroy(w);
 }
 
+/* 40 boxes asleep, in blocks of 32 that the split sweep passes over and
+   whose poses sleep then neither keeps nor puts back (body_step.c): under
+   verlet and symplectic Euler their poses stay the same to the bit and
+   their momenta zero, while a box falling beside them (in the second
+   block, which is swept) falls. */
+static void sleeping_blocks_stay_put(void **state)
+{
+    static const char *methods[2] = { "verlet", "symplectic_euler" };
+    int k;
+    (void)state;
+    for (k = 0; k < 2; ++k) {
+        tb_world *w = world_on_plane(0.6, 0);
+        tb_body_id id[40], falling;
+        double x0[40][3], x[3], P[3], L[3];
+        const double high[3] = { -5, 0, 20 };
+        int i;
+        assert_int_equal(tb_world_set_integrator(w, methods[k]), TB_OK);
+        for (i = 0; i < 40; ++i) {
+            const double at[3] = { 2.0 * (i % 8), 2.0 * (i / 8), 0.5 };
+            id[i] = add_box(w, at, 1, 0.6);
+        }
+        steps_to_sleep(w, id[39], 120);
+        assert_int_equal(tb_world_sleeping_count(w), 40);
+        falling = add_box(w, high, 1, 0.6); /* (a new shape wakes every island) */
+        steps_to_sleep(w, id[39], 120);
+        assert_int_equal(tb_world_sleeping_count(w), 40);
+        for (i = 0; i < 40; ++i)
+            tb_body_position(w, id[i], x0[i]);
+        for (i = 0; i < 60; ++i)
+            assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        assert_int_equal(tb_world_sleeping_count(w), 40);
+        for (i = 0; i < 40; ++i) {
+            tb_body_position(w, id[i], x);
+            tb_body_momentum(w, id[i], P, L);
+            assert_memory_equal(x, x0[i], sizeof x);
+            assert_true(P[0] == 0 && P[1] == 0 && P[2] == 0 && L[0] == 0 && L[1] == 0 && L[2] == 0);
+        }
+        tb_body_position(w, falling, x);
+        assert_true(x[2] < 15); /* (it fell for 1.5 s: 11 m) */
+        tb_world_destroy(w);
+    }
+}
+
 /* Everything asleep, then woken all at once: a box asleep on a static box
    (a plane 5 m lower) must fall when the static box is removed, and a box
    asleep on the plane must slide when gravity turns 8 m/s^2 sideways
@@ -253,6 +296,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(sleeping_box_wakes_when_a_ball_lands),
     cmocka_unit_test(islands_wake_together),
     cmocka_unit_test(sleeping_pairs_are_kept_and_come_back),
+    cmocka_unit_test(sleeping_blocks_stay_put),
     cmocka_unit_test(woken_world_moves_again),
     cmocka_unit_test(sleep_settings),
 };
