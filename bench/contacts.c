@@ -56,6 +56,12 @@
      asleep within its 10 s: balls and capsules that rolled out of it roll
      on across the endless plane (no rolling resistance, in either engine),
      and those still rolling at its edge keep its island awake.
+   - asleep (also `bench_contacts --sleep`, alone): the ms per step once
+     every body sleeps (the median of 300 steps after the last fell
+     asleep, one run): the pyramid; a block of 1000 unit cubes in 10
+     levels of 10 x 10 columns 1 cm apart (one island: the pile does not
+     fall asleep); and 1000 and 10000 separate cubes, each an island, whose
+     difference over 9000 is the cost of one sleeping body a step.
 
    - scaling (`bench_contacts --scaling OUT`, run by `./dev.sh charts`,
      not by `./dev.sh bench`): the contact cost against the pile's size.
@@ -194,6 +200,70 @@ static void run_timed(tb_world *w, double h, int steps, timing *t, const tb_body
     free(ms);
 }
 
+/* --------------------------------------------------------------- asleep -- */
+
+/* Steps timed once every body sleeps (ASLEEP_STEPS), and the most steps
+   waited for that (60 s at 60 Hz). */
+#define ASLEEP_STEPS 300
+#define ASLEEP_WAIT 3600
+
+/* Steps w until every body sleeps (at most ASLEEP_WAIT steps), then
+   `steps` more, each timed alone: their median in ms, or -1 when the
+   bodies did not all fall asleep or one woke during the timed steps (a
+   figure of a world not asleep). */
+static double asleep_ms(tb_world *w, double h, int steps)
+{
+    double *ms, result;
+    int n;
+    for (n = 0; n < ASLEEP_WAIT && tb_world_sleeping_count(w) < tb_world_body_count(w); ++n)
+        check(tb_world_step(w, h), w, "step to sleep");
+    if (tb_world_sleeping_count(w) < tb_world_body_count(w))
+        return -1;
+    ms = xmalloc((size_t)steps * sizeof *ms);
+    for (n = 0; n < steps; ++n) {
+        const double t0 = seconds();
+        check(tb_world_step(w, h), w, "asleep step");
+        ms[n] = 1e3 * (seconds() - t0);
+        if (tb_world_sleeping_count(w) < tb_world_body_count(w)) {
+            free(ms);
+            return -1;
+        }
+    }
+    result = median_of(ms, steps);
+    free(ms);
+    return result;
+}
+
+/* n cubes of `edge` m and 1000 kg/m^3 on the plane in columns of
+   `levels`, the columns `pitch` m apart on a square grid, asleep: the ms
+   per step (asleep_ms). Columns further apart than the edge are islands of
+   their own. */
+static double boxes_asleep_ms(int n, int levels, double edge, double pitch)
+{
+    tb_world *w = new_world(9.81, "sleeping boxes");
+    const int columns = (n + levels - 1) / levels, side = (int)ceil(sqrt((double)columns));
+    const double size[3] = { edge, edge, edge };
+    tb_body_def b = tb_default_body_def();
+    tb_shape_def s = tb_default_shape_def();
+    double result;
+    int i;
+    add_plane(w, 0.6);
+    check(tb_mass_box(1000, size, &b.mass, NULL), w, "box mass");
+    s.type = TB_SHAPE_BOX;
+    s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = edge / 2;
+    s.friction = 0.6;
+    for (i = 0; i < n; ++i) {
+        const int column = i / levels;
+        b.position[0] = pitch * (column % side), b.position[1] = pitch * (column / side);
+        b.position[2] = edge / 2 + edge * (i % levels);
+        check(tb_world_add_body(w, &b, &s.body), w, "box");
+        check(tb_world_add_shape(w, &s, NULL), w, "box shape");
+    }
+    result = asleep_ms(w, 1 / 60.0, ASLEEP_STEPS);
+    tb_world_destroy(w);
+    return result;
+}
+
 /* ------------------------------------------------------------- pyramid -- */
 
 typedef struct pyramid_run {
@@ -217,8 +287,10 @@ static void set_sleep(tb_world *w, int velocity_iterations, double tolerance, in
     check(tb_world_set_contact_settings(w, &cs), w, "contact settings");
 }
 
+/* asleep (or NULL): after the run, the ms per step once every body sleeps
+   (asleep_ms), -1 if they never all did. */
 static void tumble_pyramid(const ode_pyramid_def *d, int velocity_iterations, double tolerance, int sleep,
-                           pyramid_run *out)
+                           pyramid_run *out, double *asleep)
 {
     const int count = ode_pyramid_boxes(d->levels);
     const int steps = (int)ceil(d->duration * d->hz);
@@ -251,6 +323,8 @@ static void tumble_pyramid(const ode_pyramid_def *d, int velocity_iterations, do
     check(tb_body_position(w, top, x), w, "top cube");
     out->sink = pos[count - 1][2] - x[2];
     out->drift = hypot(x[0] - pos[count - 1][0], x[1] - pos[count - 1][1]);
+    if (asleep)
+        *asleep = asleep_ms(w, 1 / d->hz, ASLEEP_STEPS);
     tb_world_destroy(w);
     free(pos);
 }
@@ -361,6 +435,36 @@ static int scaling(const char *folder)
     return EXIT_SUCCESS;
 }
 
+/* The asleep lines: the ms per step once every body sleeps, one run each
+   (`bench_contacts --sleep` prints them alone): the pyramid; a block of
+   1000 unit cubes, 10 levels of 10 x 10 columns 1 cm apart, one island
+   (the pile does not fall asleep: see "sleep" above); and 1000 and 10000
+   separate cubes of 0.5 m, 1 m apart, each an island of its own, whose
+   difference is the cost of a sleeping body. */
+static void asleep_lines(void)
+{
+    const ode_pyramid_def pd = ode_default_pyramid_def();
+    static const int counts[2] = { 1000, 10000 };
+    pyramid_run pyr;
+    double ms, each[2];
+    int k;
+    tumble_pyramid(&pd, tb_default_contact_settings().velocity_iterations, -1, 1, &pyr, &ms);
+    printf("asleep    pyramid %d boxes, every body asleep: %.4f ms/step (median of %d steps after all slept at step "
+           "%d; -1: not asleep) | Bullet 0.041, MuJoCo 0.033 (issue 18's figures)\n",
+           ode_pyramid_boxes(pd.levels), ms, ASLEEP_STEPS, pyr.t.asleep_after);
+    fflush(stdout);
+    ms = boxes_asleep_ms(1000, 10, 1, 1.01);
+    printf("asleep    block of 1000 cubes (10 levels of 10 x 10, one island), every body asleep: %.4f ms/step "
+           "(median of %d steps)\n", ms, ASLEEP_STEPS);
+    fflush(stdout);
+    for (k = 0; k < 2; ++k)
+        each[k] = boxes_asleep_ms(counts[k], 1, 0.5, 1);
+    printf("asleep    %d separate cubes asleep: %.4f ms/step, %d: %.4f ms/step (medians of %d steps), "
+           "%.1f ns per sleeping body (from the difference)\n",
+           counts[0], each[0], counts[1], each[1], ASLEEP_STEPS,
+           1e6 * (each[1] - each[0]) / (counts[1] - counts[0]));
+}
+
 int main(int argc, char **argv)
 {
     const ode_pyramid_def pd = ode_default_pyramid_def();
@@ -386,8 +490,13 @@ int main(int argc, char **argv)
         free(shapes);
         return scaling(argv[2]);
     }
+    if (argc == 2 && !strcmp(argv[1], "--sleep")) {
+        free(shapes);
+        asleep_lines();
+        return 0;
+    }
     if (argc != 1) {
-        fprintf(stderr, "usage: " BENCH_NAME " [--scaling FOLDER]\n");
+        fprintf(stderr, "usage: " BENCH_NAME " [--scaling FOLDER | --sleep]\n");
         free(shapes);
         return 2;
     }
@@ -402,14 +511,14 @@ int main(int argc, char **argv)
     /* The scenes are deterministic: sink, drift and contact counts are the
        same in every run, so the last run's are printed. */
     for (r = 0; r < BENCH_RUNS; ++r) {
-        tumble_pyramid(&pd, iterations, -1, 0, &pyr);
+        tumble_pyramid(&pd, iterations, -1, 0, &pyr, NULL);
         if (!ode_pyramid(&pd, &pyr_ode)) {
             fprintf(stderr, BENCH_NAME ": ODE pyramid refused or failed\n");
             return EXIT_FAILURE;
         }
-        tumble_pyramid(&pd, iterations, 0, 0, &pyr1);
-        tumble_pyramid(&pd, 2 * iterations, 0, 0, &pyr2);
-        tumble_pyramid(&pd, iterations, -1, 1, &pyr_sleep);
+        tumble_pyramid(&pd, iterations, 0, 0, &pyr1, NULL);
+        tumble_pyramid(&pd, 2 * iterations, 0, 0, &pyr2, NULL);
+        tumble_pyramid(&pd, iterations, -1, 1, &pyr_sleep, NULL);
         pd_sleep.auto_disable = 1;
         if (!ode_pyramid(&pd_sleep, &pyr_ode_sleep)) {
             fprintf(stderr, BENCH_NAME ": ODE pyramid with auto-disable refused or failed\n");
@@ -476,6 +585,10 @@ int main(int argc, char **argv)
            "%d steps (-1: not within the run; awake at the end: %zu) | ODE/tumble %.1f\n",
            ld.count, t_ms, ld.steps, pile_sleep.ms_median, pile_sleep.asleep_after, pile_sleep.awake_at_end,
            o_ms / t_ms);
+
+    fflush(stdout);
+    asleep_lines();
+    fflush(stdout);
 
     /* t = fixed + k points iterations, at two iteration counts, every sweep done */
     printf("contacts  ns per contact point per velocity iteration: %.1f for the whole step (pyramid, %.0f points x %d "

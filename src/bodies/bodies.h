@@ -298,8 +298,15 @@ void tb__body_momenta(const tb_world *w, double linear[3], double angular[3]);
 
 /* dy = F(t, y) for the bodies, their callback forces already in w->body_force. */
 void tb__body_derive(tb_world *w, const double *y, double *dy);
-/* The split methods' kicks and drifts over every body, in blocks of lanes. */
+/* The split methods' kicks and drifts over every body, in blocks of lanes;
+   a block whose bodies all sleep is passed over when
+   tb__body_sweep_skips_sleeping (sleep puts their poses back after the
+   integrator anyway, and no force on an awake body can see where they
+   would have drifted). */
 void tb__body_sweep(tb_world *w, const tb__split_op *ops, int n);
+int tb__body_sweep_skips_sleeping(const tb_world *w);
+/* Whether bodies [b, b + m) all sleep. */
+int tb__body_block_asleep(const tb_world *w, size_t b, size_t m);
 /* Whether a body force depends on velocity (damping). */
 int tb__body_velocity_dependent(const tb_world *w);
 /* Put the bodies' q of y back on unit length after a generic stage. */

@@ -55,7 +55,7 @@ static const unsigned char tb__sap_popcount[16] = { 0, 1, 1, 2, 1, 2, 2, 3, 1, 2
    order[0, n) outlives a call, and it stays at the front, so growing the
    block by realloc keeps it. */
 typedef struct tb__sap_layout {
-    size_t keys, proxies, lanes, hits, counts, units; /* units: the block's size in uint32_t */
+    size_t keys, proxies, lanes, hits, counts, next, units; /* units: the block's size in uint32_t */
 } tb__sap_layout;
 
 #define TB__SAP_ROUND(x) (((x) + 15) & ~(size_t)15)
@@ -72,7 +72,7 @@ typedef struct tb__sap_layout {
 static int sap_layout_of(size_t n, tb__sap_layout *l)
 {
     const size_t per = sizeof(uint32_t) + sizeof(tb__sap_key) + sizeof(tb__sap_proxy) +
-                       TB__SAP_LANES * sizeof(float) + sizeof(uint32_t) + 2 * sizeof(size_t);
+                       TB__SAP_LANES * sizeof(float) + sizeof(uint32_t) + 2 * sizeof(size_t) + sizeof(uint32_t);
     if (n > (SIZE_MAX / 4 - 256) / per)
         return 0;
     l->keys = TB__SAP_ROUND(n * sizeof(uint32_t));
@@ -80,7 +80,8 @@ static int sap_layout_of(size_t n, tb__sap_layout *l)
     l->lanes = TB__SAP_ROUND(l->proxies + n * sizeof(tb__sap_proxy));
     l->hits = TB__SAP_ROUND(l->lanes + TB__SAP_LANES * (n + TB__SAP_PAD) * sizeof(float));
     l->counts = TB__SAP_ROUND(l->hits + (n + 2 * TB__SAP_PAD) * sizeof(uint32_t));
-    l->units = TB__SAP_ROUND(l->counts + 2 * n * sizeof(size_t)) / sizeof(uint32_t);
+    l->next = TB__SAP_ROUND(l->counts + 2 * n * sizeof(size_t));
+    l->units = TB__SAP_ROUND(l->next + (n + 1) * sizeof(uint32_t)) / sizeof(uint32_t);
     return 1;
 }
 
@@ -250,12 +251,19 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
                         const uint32_t *category, const uint32_t *mask, const uint32_t *group,
                         tb__pair **pairs, size_t *count, size_t *cap)
 {
+    return tb__sap_moving_pairs(w, sap, n, lo, hi, category, mask, group, NULL, pairs, count, cap);
+}
+
+tb_status tb__sap_moving_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, const double *hi,
+                               const uint32_t *category, const uint32_t *mask, const uint32_t *group,
+                               const uint32_t *still, tb__pair **pairs, size_t *count, size_t *cap)
+{
     tb__sap_layout layout;
     tb__sap_key *keys;
     tb__sap_proxy *proxy;
     float *lane[TB__SAP_LANES];
     size_t *counts;
-    uint32_t *order, *hits;
+    uint32_t *order, *hits, *next;
     tb__pair *out;
     size_t k, m, found, room;
     int axis, a1, a2, fits, d;
@@ -275,6 +283,14 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
         sap->count = 0;
         return TB_OK;
     }
+    /* every proxy still: no pair is wanted, and the kept order stays as it
+       is (it only speeds the next sort) */
+    if (still) {
+        for (k = 0; k < n && still[k]; ++k)
+            ;
+        if (k == n)
+            return TB_OK;
+    }
     status = tb__reserve(w, (void **)&sap->order, &sap->cap, layout.units, sizeof(uint32_t));
     if (status != TB_OK)
         return status;
@@ -286,6 +302,7 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
         lane[d] = lane[d - 1] + n + TB__SAP_PAD;
     hits = (uint32_t *)(void *)((unsigned char *)order + layout.hits);
     counts = (size_t *)(void *)((unsigned char *)order + layout.counts);
+    next = (uint32_t *)(void *)((unsigned char *)order + layout.next);
 
     axis = sap_axis(n, lo, hi, sap->axis, sap->count == 0);
     /* the world renumbers by swap-remove: a kept order still fits when n
@@ -328,6 +345,12 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
             lane[d][k] = (float)NAN;
     sap->count = n;
     sap->axis = axis;
+    /* next[k]: the first place from k on whose proxy is not still (n:
+       none), so that a still proxy with none in its reach is passed over
+       in one test (a sleeping pile costs no sweep) */
+    next[n] = (uint32_t)n;
+    for (k = n; k-- > 0;)
+        next[k] = still && still[order[k]] ? next[k + 1] : (uint32_t)k;
 
     /* the sweep: every box after this one in the order whose low end is
        not past this one's high end overlaps it on the sweep axis. Whether
@@ -341,7 +364,10 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
         const tb__sap_proxy p = proxy[k];
         const double *plo = p.lo, *phi = p.hi;
         const float top = (float)phi[axis];
+        const int p_still = next[k] != k;
         size_t h = 0, j;
+        if (p_still && (next[k + 1] == n || !(lane[0][next[k + 1]] <= top)))
+            continue;
 #if TB__SAP_SSE
         const __m128 y0 = _mm_set1_ps(top), y1 = _mm_set1_ps((float)phi[a1]), y2 = _mm_set1_ps((float)phi[a2]),
                      y3 = _mm_set1_ps(-(float)plo[a1]), y4 = _mm_set1_ps(-(float)plo[a2]);
@@ -375,6 +401,8 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
                   q->lo[2] <= phi[2] && plo[2] <= q->hi[2]))
                 continue;
             if (!(p.category & q->mask) || !(q->category & p.mask) || p.group == q->group)
+                continue;
+            if (p_still && next[hits[j]] != hits[j])
                 continue;
             if (found == room) {
                 status = tb__reserve(w, (void **)pairs, cap, found + 1, sizeof(tb__pair));

@@ -106,6 +106,15 @@ tb_status tb__sap_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, c
                         const uint32_t *category, const uint32_t *mask, const uint32_t *group,
                         tb__pair **pairs, size_t *count, size_t *cap);
 
+/* The same, but for the pairs of two proxies whose still[] entries are both
+   non-zero (a sleeping or static shape against another: pairs the caller
+   keeps as they were): those are left out, and a still proxy with no other
+   proxy in its reach along the sweep axis costs one test. still NULL: every
+   pair, as tb__sap_pairs. */
+tb_status tb__sap_moving_pairs(tb_world *w, tb__sap *sap, size_t n, const double *lo, const double *hi,
+                               const uint32_t *category, const uint32_t *mask, const uint32_t *group,
+                               const uint32_t *still, tb__pair **pairs, size_t *count, size_t *cap);
+
 /* Free the sap's memory and zero it (the pair buffer is the caller's). */
 void tb__sap_free(tb_world *w, tb__sap *sap);
 

@@ -594,22 +594,169 @@ static tb_status collide_pair(tb_world *w, tb__contacts *c, const tb__geom *a, c
 
 static tb_status colour_entries(tb_world *w, tb__contacts *c);
 
-/* Where each key_a's entries start in order (keys run to the ids handed
-   out), for the next step's previous_entry. */
-static tb_status index_keys(tb_world *w, tb__contacts *c)
+/* Where each key_a's entries start in order[n] (keys run to the ids
+   handed out), for previous_entry. */
+static tb_status index_order(tb_world *w, const tb__contacts *c, const tb__key *order, size_t n, uint32_t **starts,
+                             size_t *cap, size_t *starts_count)
 {
     const size_t count = (size_t)c->ids.used + 2;
     size_t i;
-    tb_status st = tb__reserve(w, (void **)&c->starts, &c->starts_cap, count, sizeof *c->starts);
-    if (st != TB_OK)
+    tb_status st;
+    if (n == 0) { /* (previous_entry finds nothing without a pass over the keys) */
+        *starts_count = 0;
+        return TB_OK;
+    }
+    if ((st = tb__reserve(w, (void **)starts, cap, count, sizeof **starts)) != TB_OK)
         return st;
-    memset(c->starts, 0, count * sizeof *c->starts);
-    for (i = 0; i < c->entry_count; ++i)
-        c->starts[(c->order[i].key >> 32) + 1]++;
+    memset(*starts, 0, count * sizeof **starts);
+    for (i = 0; i < n; ++i)
+        (*starts)[(order[i].key >> 32) + 1]++;
     for (i = 0; i + 1 < count; ++i)
-        c->starts[i + 1] += c->starts[i];
-    c->starts_count = count;
+        (*starts)[i + 1] += (*starts)[i];
+    *starts_count = count;
     return TB_OK;
+}
+
+/* ... of this step's entries, for the next step */
+static tb_status index_keys(tb_world *w, tb__contacts *c)
+{
+    return index_order(w, c, c->order, c->entry_count, &c->starts, &c->starts_cap, &c->starts_count);
+}
+
+/* ---- parked entries ---------------------------------------------------------
+
+   A pair whose sides both sleep (or are static) is left as it was: not
+   collided, not solved, its impulses kept for when it wakes. Such an
+   entry is moved out of the step's entries into c->parked once, after the
+   step its island fell asleep in, and stays there untouched while the
+   island sleeps: a sleeping pile costs no narrowphase and no copy per
+   pair a step (bench_contacts' asleep lines). It comes back among the
+   previous entries when a side wakes, before the narrowphase looks for it,
+   so the woken pair starts warm and its events are those of a pair that
+   was there all along (test_contacts_sleep). What a parked entry holds is
+   what carrying it over every step would hold (carry_over), and the state
+   hash walks it in its found place (TB__FOUND_PLANE): the bits of every
+   step are those of carrying. */
+
+static int active_points(const tb__entry *e)
+{
+    int k, n = 0;
+    for (k = 0; k < e->count; ++k)
+        n += e->point[k].active;
+    return n;
+}
+
+/* Park every entry of this step that was carried over (its sides both
+   sleep or are static), keeping c->parked in found order, and index the
+   entries left for the next step. The entries of an island that fell
+   asleep in this step are left as they are, and the next step carries
+   them over (c->unparked), to be parked after it: the state after each
+   step is the one carrying gives, to the bit (the step an island falls
+   asleep in, its entries are still this step's, not yet carried). Out of
+   memory: nothing is parked, and the next step carries over instead. */
+static void park(tb_world *w, tb__contacts *c, double h)
+{
+    uint32_t *index = c->bucket; /* [entry_cap]: free once solved */
+    size_t i, n = 0, kept = 0, from, to;
+    c->unparked = 0;
+    c->parked_h = h;
+    c->parked_sleeping = w->body_sleeping;
+    if (!w->body_sleeping)
+        return;
+    for (i = 0; i < c->entry_count; ++i) {
+        const tb__entry *e = &c->entries[i];
+        index[i] = UINT32_MAX;
+        if (e->asleep)
+            index[i] = 0, ++n;
+        else if (tb__key_still(w, c, e->key_a) && tb__key_still(w, c, e->key_b))
+            c->unparked = 1;
+    }
+    if (n == 0)
+        return;
+    if (tb__reserve(w, (void **)&c->parked, &c->parked_cap, c->parked_count + n, sizeof *c->parked) != TB_OK) {
+        c->unparked = 1;
+        return;
+    }
+    /* merged from the back: both lists are in found order */
+    from = c->parked_count, to = c->parked_count + n, i = c->entry_count;
+    while (to > from) { /* (then the new ones are all placed) */
+        tb__entry *e;
+        while (index[i - 1] == UINT32_MAX)
+            --i;
+        if (from > 0 && c->parked[from - 1].found > c->entries[i - 1].found) {
+            c->parked[--to] = c->parked[--from];
+            continue;
+        }
+        e = &c->parked[--to];
+        *e = c->entries[--i];
+        e->body_a = e->body_b = -1; /* as carry_over leaves it */
+        e->asleep = 1;
+        e->struck = 0;
+        c->parked_points += (size_t)active_points(e);
+    }
+    c->parked_count += n;
+    /* the rest moved down, the key order kept with their new places */
+    for (i = 0; i < c->entry_count; ++i)
+        if (index[i] == UINT32_MAX) {
+            index[i] = (uint32_t)kept;
+            if (kept != i)
+                c->entries[kept] = c->entries[i];
+            ++kept;
+        } else {
+            index[i] = UINT32_MAX;
+        }
+    for (i = 0, n = 0; i < c->entry_count; ++i)
+        if (index[c->order[i].index] != UINT32_MAX) {
+            c->order[n].key = c->order[i].key;
+            c->order[n++].index = index[c->order[i].index];
+        }
+    c->entry_count = kept;
+    if (index_keys(w, c) != TB_OK)
+        c->starts_count = 0; /* out of memory: the next step starts cold */
+}
+
+/* Before the narrowphase: the parked entries with a side awake again
+   (every one when the step changed, as the bounds they were found in
+   did) back among the previous entries; then those with both sides still
+   are found again by the broadphase and carried over (carry_over). */
+static tb_status unpark(tb_world *w, tb__contacts *c, double h)
+{
+    const int all = h != c->parked_h;
+    size_t i, kept = 0, n = c->previous_count;
+    tb_status st;
+    if (!c->parked_count || (!all && w->body_sleeping == c->parked_sleeping))
+        return TB_OK;
+    if ((st = tb__reserve(w, (void **)&c->previous, &c->previous_cap, n + c->parked_count, sizeof *c->previous)) !=
+            TB_OK ||
+        (st = tb__reserve(w, (void **)&c->previous_order, &c->previous_order_cap, n + c->parked_count,
+                          sizeof *c->previous_order)) != TB_OK ||
+        (st = tb__reserve(w, (void **)&c->order_scratch, &c->order_scratch_cap, n + c->parked_count,
+                          sizeof *c->order_scratch)) != TB_OK)
+        return st;
+    for (i = 0; i < c->parked_count; ++i) {
+        const tb__entry *e = &c->parked[i];
+        if (all || !tb__key_still(w, c, e->key_a) || !tb__key_still(w, c, e->key_b)) {
+            c->parked_points -= (size_t)active_points(e);
+            c->previous[n] = *e;
+            c->previous_order[n].key = key_of(e->key_a, e->key_b);
+            c->previous_order[n].index = (uint32_t)n;
+            ++n;
+        } else {
+            if (kept != i)
+                c->parked[kept] = *e;
+            ++kept;
+        }
+    }
+    c->parked_count = kept;
+    c->parked_h = h;
+    c->parked_sleeping = w->body_sleeping;
+    if (n == c->previous_count)
+        return TB_OK;
+    c->previous_count = n;
+    c->unparked = 1;
+    sort_keys(c->previous_order, c->order_scratch, n);
+    return index_order(w, c, c->previous_order, n, &c->previous_starts, &c->previous_starts_cap,
+                       &c->previous_starts_count);
 }
 
 /* Planes against every proxy whose box reaches them. (Before the pairs:
@@ -617,34 +764,75 @@ static tb_status index_keys(tb_world *w, tb__contacts *c)
    key order and need no sort.) */
 static tb_status collide_planes(tb_world *w, tb__contacts *c)
 {
-    size_t i, k;
+    size_t i, k, before, planes = 0;
     tb_status st;
-    for (i = 0; i < c->shape_count; ++i) {
+    for (i = 0; i < c->shape_count && planes < c->planes; ++i) {
         const tb__shape *s = &c->shapes[i];
         tb__geom plane;
         if (s->kind != TB__SHAPE_PLANE)
             continue;
+        ++planes;
         place(s, NULL, NULL, &plane);
         for (k = 0; k < c->proxy_count; ++k) {
             const double *lo = c->lo + 3 * k, *hi = c->hi + 3 * k;
             double nearest = 0;
             int j;
+            /* (a sleeping proxy's pair is parked: first, as the cheapest) */
+            if (c->still[k] && !c->unparked &&
+                (c->still[k] == UINT32_MAX || w->body_island[c->owner[k] - 1] == c->still[k]))
+                continue;
             if (!(s->category & c->mask[k]) || !(c->category[k] & s->mask) || c->group[k] == 0xFFFFFFFFu)
                 continue;
             for (j = 0; j < 3; ++j) /* the box corner deepest along -n */
                 nearest += s->normal[j] * (s->normal[j] > 0 ? lo[j] : hi[j]);
             if (nearest > s->offset)
                 continue;
-            if (inert(w, c, k)) {
-                if ((st = carry_over(w, c, (uint32_t)i, c->proxy[k])) != TB_OK)
-                    return st;
-                continue;
-            }
-            if ((st = collide_pair(w, c, &plane, &c->geoms[k], (uint32_t)i, c->proxy[k], c->margin[k])) != TB_OK)
+            before = c->entry_count;
+            /* a still pair: parked, unless it came back this step */
+            if (inert(w, c, k))
+                st = c->unparked ? carry_over(w, c, (uint32_t)i, c->proxy[k]) : TB_OK;
+            else
+                st = collide_pair(w, c, &plane, &c->geoms[k], (uint32_t)i, c->proxy[k], c->margin[k]);
+            if (st != TB_OK)
                 return st;
+            if (c->entry_count > before)
+                c->entries[before].found = TB__FOUND_PLANE(i, k);
         }
     }
     return TB_OK;
+}
+
+/* Proxy k for shape i: placed, its filter, margin and bounds; kept as it
+   is when its body sleeps in the island it slept in when it was made
+   (still). */
+static void make_proxy(tb_world *w, tb__contacts *c, size_t k, uint32_t i, double h)
+{
+    const tb__shape *s = &c->shapes[i];
+    tb__geom *g = &c->geoms[k];
+    uint32_t slot;
+    int j;
+    if (s->body && tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot)) {
+        const uint32_t island = w->body_island[slot];
+        if (island && c->still[k] == island && c->owner[k] == slot + 1 && c->proxy[k] == i)
+            return;
+        place(s, body_x(w, slot), body_q(w, slot), g);
+        c->owner[k] = slot + 1;
+        c->still[k] = island;
+    } else {
+        place(s, NULL, NULL, g);
+        c->owner[k] = 0;
+        c->still[k] = UINT32_MAX; /* static: still, but never kept */
+    }
+    c->proxy[k] = i;
+    c->category[k] = s->category;
+    c->mask[k] = s->mask;
+    c->group[k] = s->body ? s->body : 0xFFFFFFFFu;
+    c->margin[k] = motion_margin(w, c, c->proxy[k], h);
+    tb__geom_bounds(g, c->lo + 3 * k, c->hi + 3 * k);
+    for (j = 0; j < 3; ++j) {
+        c->lo[3 * k + j] -= c->margin[k];
+        c->hi[3 * k + j] += c->margin[k];
+    }
 }
 
 tb_status tb__contacts_prepare(tb_world *w, double h)
@@ -654,6 +842,7 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
     const size_t bodies_shapes = c->shape_count - c->planes;
     const size_t n = bodies_shapes + (particles ? w->particle_count : 0);
     size_t i, k, cap;
+    int carry, same;
     tb__entry *swap;
     tb__key *swap_order;
     uint32_t *swap_starts;
@@ -674,46 +863,59 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
     c->prepared = c->solved = 0;
     if ((st = map_reserve(w, c)) != TB_OK)
         return st;
-    if (n + c->shape_count > c->proxy_cap) {
+    /* (grown only when they must: the proxies kept from last step, the
+       sleeping ones, are copied along) */
+    if (n > c->proxy_cap) {
         size_t old = c->proxy_cap, want = n;
-        void **arrays[9];
-        size_t sizes[9] = { 3 * sizeof(double), 3 * sizeof(double), sizeof(uint32_t), sizeof(uint32_t),
-                            sizeof(uint32_t), sizeof(uint32_t), sizeof(double), sizeof(tb__geom), sizeof(uint32_t) };
+        void **arrays[10];
+        size_t sizes[10] = { 3 * sizeof(double), 3 * sizeof(double), sizeof(uint32_t), sizeof(uint32_t),
+                             sizeof(uint32_t), sizeof(uint32_t), sizeof(double), sizeof(tb__geom), sizeof(uint32_t),
+                             sizeof(uint32_t) };
         size_t new_cap = old ? old : 16;
         while (new_cap < want)
             new_cap *= 2;
         arrays[0] = (void **)&c->lo, arrays[1] = (void **)&c->hi, arrays[2] = (void **)&c->category;
         arrays[3] = (void **)&c->mask, arrays[4] = (void **)&c->group, arrays[5] = (void **)&c->proxy;
         arrays[6] = (void **)&c->margin, arrays[7] = (void **)&c->geoms, arrays[8] = (void **)&c->owner;
-        if ((st = tb__grow(w, arrays, sizes, 9, 0, old, new_cap)) != TB_OK)
+        arrays[9] = (void **)&c->still;
+        if ((st = tb__grow(w, arrays, sizes, 10, c->proxy_count, old, new_cap)) != TB_OK)
             return st;
+        for (k = old; k < new_cap; ++k)
+            c->still[k] = 0;
         c->proxy_cap = new_cap;
     }
-    /* proxies: every shape but planes, then the particles */
-    c->proxy_count = 0;
-    for (i = 0; i < c->shape_count; ++i) {
-        const tb__shape *s = &c->shapes[i];
-        uint32_t slot;
-        tb__geom *g;
-        if (s->kind == TB__SHAPE_PLANE)
-            continue;
-        k = c->proxy_count++;
-        g = &c->geoms[k];
-        c->owner[k] = 0;
-        if (s->body && tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot)) {
-            place(s, body_x(w, slot), body_q(w, slot), g);
-            c->owner[k] = slot + 1;
-        } else {
-            place(s, NULL, NULL, g);
+    /* proxies: every shape but planes, then the particles. A shape whose
+       body sleeps in the island it slept in when its proxy was last made
+       (still) keeps its geom, bounds and margin: its pose has not changed,
+       nor its speed (0), the step or the gravity (a change of either wakes
+       every island, and the step is compared), so they would come out
+       the same bits (test_snapshot.contact_scene_hash_is_recorded) */
+    if (h != c->still_h)
+        for (k = 0; k < c->proxy_count; ++k)
+            c->still[k] = 0;
+    c->still_h = h;
+    /* With no shape added or removed since, the proxies are last step's
+       shapes in last step's places, and one whose body (owner) still sleeps
+       under its tag is kept without a look at its shape */
+    same = c->proxy_version == c->shape_version;
+    c->proxy_version = c->shape_version;
+    if (same) {
+        for (k = 0; k < c->shape_proxies; ++k) {
+            const uint32_t tag = c->still[k], owner = c->owner[k];
+            if (!(tag && tag != UINT32_MAX && owner && owner <= w->body_count && w->body_island[owner - 1] == tag))
+                make_proxy(w, c, k, c->proxy[k], h);
         }
-        c->proxy[k] = (uint32_t)i;
-        c->category[k] = s->category;
-        c->mask[k] = s->mask;
-        c->group[k] = s->body ? s->body : 0xFFFFFFFFu;
+        c->proxy_count = c->shape_proxies;
+    } else {
+        for (i = 0, c->proxy_count = 0; i < c->shape_count; ++i)
+            if (c->shapes[i].kind != TB__SHAPE_PLANE)
+                make_proxy(w, c, c->proxy_count++, (uint32_t)i, h);
     }
+    c->shape_proxies = c->proxy_count;
     if (particles)
         for (i = 0; i < w->particle_count; ++i) {
             tb__geom *g;
+            int j;
             k = c->proxy_count++;
             g = &c->geoms[k];
             memset(g, 0, sizeof *g);
@@ -726,33 +928,45 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
             c->category[k] = 0xFFFFFFFFu;
             c->mask[k] = 0xFFFFFFFFu;
             c->group[k] = 0xFFFFFFFEu; /* particles never meet each other */
+            c->still[k] = 0;
+            c->margin[k] = motion_margin(w, c, c->proxy[k], h);
+            tb__geom_bounds(g, c->lo + 3 * k, c->hi + 3 * k);
+            for (j = 0; j < 3; ++j) {
+                c->lo[3 * k + j] -= c->margin[k];
+                c->hi[3 * k + j] += c->margin[k];
+            }
         }
-    for (k = 0; k < c->proxy_count; ++k) {
-        int j;
-        c->margin[k] = motion_margin(w, c, c->proxy[k], h);
-        tb__geom_bounds(&c->geoms[k], c->lo + 3 * k, c->hi + 3 * k);
-        for (j = 0; j < 3; ++j) {
-            c->lo[3 * k + j] -= c->margin[k];
-            c->hi[3 * k + j] += c->margin[k];
-        }
-    }
-    if ((st = tb__sap_pairs(w, &c->sap, c->proxy_count, c->lo, c->hi, c->category, c->mask, c->group, &c->pairs,
+    /* The broadphase leaves out the pairs of two still proxies (sleeping or
+       static), whose entries are parked, unless the step carries such pairs
+       over (some came back from the parked ones: unpark), or an awake
+       proxy reaches a sleeping one: then the waking below, which goes pair
+       by pair, and the woken pairs' collisions need every pair, and it
+       runs again for them (test_contacts_sleep.islands_wake_together) */
+    carry = c->unparked || (c->parked_count && h != c->parked_h);
+    if ((st = tb__sap_moving_pairs(w, &c->sap, c->proxy_count, c->lo, c->hi, c->category, c->mask, c->group,
+                                   carry ? NULL : c->still, &c->pairs, &c->pair_count, &c->pair_cap)) != TB_OK)
+        return st;
+    if (!carry && tb__sleep_wakes(w, c) &&
+        (st = tb__sap_pairs(w, &c->sap, c->proxy_count, c->lo, c->hi, c->category, c->mask, c->group, &c->pairs,
                             &c->pair_count, &c->pair_cap)) != TB_OK)
         return st;
-    if ((st = tb__sleep_prepare(w, c)) != TB_OK || (st = collide_planes(w, c)) != TB_OK)
+    if ((st = tb__sleep_prepare(w, c)) != TB_OK || (st = unpark(w, c, h)) != TB_OK ||
+        (st = collide_planes(w, c)) != TB_OK)
         return st;
     for (i = 0; i < c->pair_count; ++i) {
         const uint32_t a = c->pairs[i].a, b = c->pairs[i].b;
+        const size_t before = c->entry_count;
         if ((c->proxy[a] & TB__PARTICLE_KEY) && (c->proxy[b] & TB__PARTICLE_KEY))
             continue;
-        if (inert(w, c, a) && inert(w, c, b)) {
-            if ((st = carry_over(w, c, c->proxy[a], c->proxy[b])) != TB_OK)
-                return st;
-            continue;
-        }
-        if ((st = collide_pair(w, c, &c->geoms[a], &c->geoms[b], c->proxy[a], c->proxy[b],
-                               c->margin[a] + c->margin[b])) != TB_OK)
+        if (inert(w, c, a) && inert(w, c, b))
+            st = c->unparked ? carry_over(w, c, c->proxy[a], c->proxy[b]) : TB_OK;
+        else
+            st = collide_pair(w, c, &c->geoms[a], &c->geoms[b], c->proxy[a], c->proxy[b],
+                              c->margin[a] + c->margin[b]);
+        if (st != TB_OK)
             return st;
+        if (c->entry_count > before)
+            c->entries[before].found = TB__FOUND_PAIR(a, b);
     }
     /* the entries in key order: for finding them next step, for events, and
        for a sweep order that does not depend on how the broadphase found them */
@@ -1614,7 +1828,7 @@ static tb_status make_events(tb_world *w, tb__contacts *c)
     size_t i, j = 0;
     tb_status st;
     c->event_count = 0;
-    c->touching_points = 0;
+    c->touching_points = c->parked_points;
     for (i = 0; i < c->entry_count; ++i) {
         tb__entry *e = &c->entries[i];
         int k;
@@ -1809,6 +2023,7 @@ solved:
     if (make_events(w, c) != TB_OK)
         c->event_count = 0; /* out of memory for events: the step itself stands */
     tb__sleep_update(w, c, h);
+    park(w, c, h);
     c->prepared = 0;
     c->solved = 1;
 }

@@ -242,8 +242,18 @@ typedef struct tb__entry {
     double cache_rot[9];       /* b's shape frame in a's when the shapes last collided */
     double cache_pos[3];       /* m: b's shape centre then, in a's frame */
     double cache_normal[3];    /* the normal then, in a's frame */
+    uint64_t found;            /* where the step found it: TB__FOUND_PLANE or
+                                  TB__FOUND_PAIR; entries are made in this order */
     tb__point point[TB__MANIFOLD_POINTS];
 } tb__entry;
+
+/* tb__entry.found: plane shape slot i against proxy k, then the
+   broadphase's pairs (a, b) in their order. Entries are appended in
+   increasing order of it, so a parked entry (sleep.c) has its place among
+   a step's entries without being one of them (tb_world_hash walks both in
+   this order: test_snapshot.contact_scene_hash_is_recorded). */
+#define TB__FOUND_PLANE(i, k) ((uint64_t)(i) << 31 | (uint64_t)(k))
+#define TB__FOUND_PAIR(a, b) ((uint64_t)1 << 62 | (uint64_t)(a) << 31 | (uint64_t)(b))
 
 #define TB__PARTICLE_KEY 0x80000000u
 
@@ -294,6 +304,13 @@ struct tb__contacts {
                                   particle slot | TB__PARTICLE_KEY */
     double *margin;            /* [proxy_cap] m: how far the proxy may move this step */
     uint32_t *owner;           /* [proxy_cap] body slot + 1; 0: static or a particle */
+    uint32_t *still;           /* [proxy_cap] the sleep tag of the island its body slept in
+                                  when its geom, bounds and margin were made (0: awake or
+                                  none): kept while that island sleeps, for steps of still_h */
+    double still_h;            /* s */
+    uint64_t shape_version;    /* counts shapes added and removed */
+    uint64_t proxy_version;    /* ... when the proxies were last made, */
+    size_t shape_proxies;      /* and how many of them are shapes' (the first) */
     tb__geom *geoms;           /* [proxy_cap]: the proxies' shapes placed in the world */
     size_t proxy_count, proxy_cap;
     tb__pair *pairs;
@@ -352,6 +369,15 @@ struct tb__contacts {
     size_t pose_count, pose_cap;
     double *island_scratch;
     size_t island_scratch_cap;
+    /* entries parked while both their sides sleep or are static (sleep.c):
+       out of the step's entries, so a sleeping pair costs nothing a step;
+       in found order */
+    tb__entry *parked;
+    size_t parked_count, parked_cap;
+    size_t parked_points;      /* their touching points (tb_world_contact_count) */
+    double parked_h;           /* s: the step they were found at */
+    size_t parked_sleeping;    /* w->body_sleeping when last parked or looked at */
+    int unparked;              /* some came back this step (carry_over looks for them) */
     /* soft_step.c: the soft-step solver's rows and bodies */
     struct tb__soft_row *soft_rows;
     size_t soft_row_count, soft_row_cap;
@@ -388,7 +414,13 @@ void tb__soft_free(tb_world *w, tb__contacts *c);
    sleeping poses; after the integrator, put them back; after the solve,
    rest times and islands. */
 uint32_t tb__proxy_island(const tb_world *w, const tb__contacts *c, size_t k);
+/* Whether shape key's side of a contact neither moves nor is moved: a
+   static shape, or its body asleep. */
+int tb__key_still(const tb_world *w, const tb__contacts *c, uint32_t key);
 tb_status tb__sleep_prepare(tb_world *w, tb__contacts *c);
+/* Whether tb__sleep_prepare would wake an island: some pair of this
+   step's has a sleeping side and a moving one. */
+int tb__sleep_wakes(const tb_world *w, const tb__contacts *c);
 void tb__sleep_restore(tb_world *w, tb__contacts *c);
 void tb__sleep_update(tb_world *w, tb__contacts *c, double h);
 

@@ -100,6 +100,8 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->colours, c->colours_cap * sizeof *c->colours, 0);
     tb__alloc(w, c->bucket, c->bucket_cap * sizeof *c->bucket, 0);
     tb__alloc(w, c->owner, c->proxy_cap * sizeof(uint32_t), 0);
+    tb__alloc(w, c->still, c->proxy_cap * sizeof(uint32_t), 0);
+    tb__alloc(w, c->parked, c->parked_cap * sizeof *c->parked, 0);
     tb__alloc(w, c->poses, c->pose_cap * sizeof *c->poses, 0);
     tb__alloc(w, c->island_scratch, c->island_scratch_cap * sizeof(double), 0);
     tb__alloc(w, c->motion_block, TB__MOTION_BYTES(c->motion_cap), 0); /* velocity, motion, momenta */
@@ -218,6 +220,7 @@ tb_status tb_world_add_shape(tb_world *w, const tb_shape_def *def, tb_shape_id *
     c->planes += s->kind == TB__SHAPE_PLANE;
     tb__ids_acquire(&c->ids, w->id_tag, (uint32_t)c->shape_count, &made.index1, &made.generation);
     c->shape_count++;
+    c->shape_version++;
     tb__wake_all(w); /* it may reach into what sleeps */
     if (id)
         *id = made;
@@ -230,6 +233,7 @@ static void remove_slot(tb__contacts *c, uint32_t slot)
     uint32_t index1, generation;
     tb__ids_at(&c->ids, slot, &index1, &generation);
     c->planes -= c->shapes[slot].kind == TB__SHAPE_PLANE;
+    c->shape_version++;
     if (slot != last) {
         c->shapes[slot] = c->shapes[last];
         tb__ids_move(&c->ids, last, slot);
@@ -389,8 +393,9 @@ double tb_world_deepest_overlap(const tb_world *w)
     int k;
     if (!w || !w->contacts)
         return 0;
-    for (i = 0; i < w->contacts->entry_count; ++i) {
-        const tb__entry *e = &w->contacts->entries[i];
+    for (i = 0; i < w->contacts->entry_count + w->contacts->parked_count; ++i) { /* (parked: contact.c) */
+        const tb__entry *e = i < w->contacts->entry_count ? &w->contacts->entries[i]
+                                                          : &w->contacts->parked[i - w->contacts->entry_count];
         for (k = 0; k < e->count; ++k)
             if (e->point[k].active && -e->point[k].separation > deepest)
                 deepest = -e->point[k].separation;

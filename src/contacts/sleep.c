@@ -21,6 +21,16 @@ static int sleep_allowed(const tb_world *w)
     return w->contacts && isfinite(w->contacts->settings.sleep_time) && w->forces.count == 0;
 }
 
+int tb__key_still(const tb_world *w, const tb__contacts *c, uint32_t key)
+{
+    const tb__shape *s;
+    uint32_t slot;
+    if (key & TB__PARTICLE_KEY)
+        return 0;
+    s = &c->shapes[c->ids.slot[key - 1]];
+    return !s->body || !tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot) || w->body_island[slot];
+}
+
 uint32_t tb__proxy_island(const tb_world *w, const tb__contacts *c, size_t k)
 {
     return c->owner[k] ? w->body_island[c->owner[k] - 1] : 0;
@@ -37,9 +47,23 @@ static int moving(const tb_world *w, const tb__contacts *c, size_t k)
     return c->owner[k] && !w->body_island[c->owner[k] - 1];
 }
 
+int tb__sleep_wakes(const tb_world *w, const tb__contacts *c)
+{
+    size_t i;
+    if (!w->body_sleeping)
+        return 0;
+    for (i = 0; i < c->pair_count; ++i) {
+        const uint32_t a = c->pairs[i].a, b = c->pairs[i].b;
+        if ((tb__proxy_island(w, c, a) && moving(w, c, b)) || (tb__proxy_island(w, c, b) && moving(w, c, a)))
+            return 1;
+    }
+    return 0;
+}
+
 tb_status tb__sleep_prepare(tb_world *w, tb__contacts *c)
 {
-    size_t i, n = 0;
+    size_t i, b, n = 0;
+    int skipped;
     tb_status st;
     if (!w->body_sleeping) { /* (all woken since the last step: no pose to put back) */
         c->pose_count = 0;
@@ -55,16 +79,25 @@ tb_status tb__sleep_prepare(tb_world *w, tb__contacts *c)
         else if (ib && moving(w, c, a))
             tb__wake_island(w, ib);
     }
-    /* the poses to put back after the free motion */
+    /* the poses to put back after the free motion, but for those the
+       integrator leaves alone: a split method moves bodies by the sweep
+       alone, which passes over blocks whose bodies all sleep (so a sleeping
+       pile costs no integration either) */
     if ((st = tb__reserve(w, (void **)&c->poses, &c->pose_cap, w->body_sleeping + 1, sizeof *c->poses)) != TB_OK)
         return st;
-    for (i = 0; i < w->body_count && n < w->body_sleeping; ++i)
-        if (w->body_island[i]) {
-            tb__pose *p = &c->poses[n++];
-            p->slot = (uint32_t)i;
-            memcpy(p->x, w->y + w->off[TB__BODY_POS] + 3 * i, sizeof p->x);
-            memcpy(p->q, w->y + w->off[TB__BODY_ROT] + 4 * i, sizeof p->q);
-        }
+    skipped = w->method->split && tb__body_sweep_skips_sleeping(w);
+    for (b = 0; b < w->body_count && n < w->body_sleeping; b += TB__LANES) {
+        const size_t m = w->body_count - b < TB__LANES ? w->body_count - b : TB__LANES;
+        if (skipped && tb__body_block_asleep(w, b, m))
+            continue;
+        for (i = b; i < b + m; ++i)
+            if (w->body_island[i]) {
+                tb__pose *p = &c->poses[n++];
+                p->slot = (uint32_t)i;
+                memcpy(p->x, w->y + w->off[TB__BODY_POS] + 3 * i, sizeof p->x);
+                memcpy(p->q, w->y + w->off[TB__BODY_ROT] + 4 * i, sizeof p->q);
+            }
+    }
     c->pose_count = n;
     return TB_OK;
 }
@@ -94,7 +127,9 @@ void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
     size_t i;
     uint32_t *link, *tag;
     double *reach, *least;
-    if (!sleep_allowed(w) || n == 0)
+    /* (every body asleep: none can fall asleep, and the passes below would
+       look at each only to pass it over) */
+    if (!sleep_allowed(w) || n == 0 || w->body_sleeping == n)
         return;
     if (tb__reserve(w, (void **)&c->island_scratch, &c->island_scratch_cap, 3 * n, sizeof(double)) != TB_OK)
         return; /* out of memory: nothing falls asleep this step */
@@ -105,11 +140,12 @@ void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
         link[i] = (uint32_t)i;
         tag[i] = 0;
     }
-    for (i = 0; i < c->shape_count; ++i) {
-        const tb__shape *s = &c->shapes[i];
-        uint32_t slot;
-        if (s->body && tb__ids_lookup(&w->body_ids, s->body, s->body_generation, &slot))
-            reach[slot] = fmax(reach[slot], s->reach);
+    /* the reach of the awake bodies' shapes, from their proxies (every
+       shape of a body has one, made this step) */
+    for (i = 0; i < c->proxy_count; ++i) {
+        const uint32_t owner = c->owner[i];
+        if (owner && !w->body_island[owner - 1])
+            reach[owner - 1] = fmax(reach[owner - 1], c->shapes[c->proxy[i]].reach);
     }
     /* rest times */
     for (i = 0; i < n; ++i) {

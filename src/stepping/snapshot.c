@@ -130,10 +130,12 @@ static size_t list_blocks(tb_world *w, tb__contacts *c, block *b)
     add(b, &n, &c->proxy, nx * sizeof(uint32_t), xc * sizeof(uint32_t), 0);
     add(b, &n, &c->margin, nx * sizeof(double), xc * sizeof(double), 0);
     add(b, &n, &c->owner, nx * sizeof(uint32_t), xc * sizeof(uint32_t), 0);
+    add(b, &n, &c->still, nx * sizeof(uint32_t), xc * sizeof(uint32_t), 0);
     add(b, &n, &c->geoms, nx * sizeof(tb__geom), xc * sizeof(tb__geom), 0);
     add(b, &n, &c->pairs, c->pair_count * sizeof(tb__pair), c->pair_cap * sizeof(tb__pair), 0);
     add(b, &n, &c->entries, c->entry_count * sizeof(tb__entry), c->entry_cap * sizeof(tb__entry), 0);
     add(b, &n, &c->previous, previous * sizeof(tb__entry), c->previous_cap * sizeof(tb__entry), 0);
+    add(b, &n, &c->parked, c->parked_count * sizeof(tb__entry), c->parked_cap * sizeof(tb__entry), 0);
     add(b, &n, &c->order, c->entry_count * sizeof(tb__key), c->order_cap * sizeof(tb__key), 0);
     add(b, &n, &c->previous_order, previous * sizeof(tb__key), c->previous_order_cap * sizeof(tb__key), 0);
     add(b, &n, &c->starts, c->starts_count * sizeof(uint32_t), c->starts_cap * sizeof(uint32_t), 0);
@@ -547,12 +549,18 @@ uint64_t tb_world_hash(const tb_world *w)
     h = mix_u64(h, w->body_sleeping);
     if (w->contacts) {
         const tb__contacts *c = w->contacts;
+        size_t j = 0;
         h = mix_u64(h, c->shape_count);
-        h = mix_u64(h, c->entry_count);
+        h = mix_u64(h, c->entry_count + c->parked_count);
         h = mix_u64(h, c->next_island);
         h = mix_doubles(h, &c->kept_h, 1);
-        for (i = 0; i < c->entry_count; ++i) {
-            const tb__entry *e = &c->entries[i];
+        /* the step's entries and the parked ones (contact.c), merged in the
+           order the step found them (tb__entry.found): the entries a step
+           would have if it carried the sleeping pairs over */
+        for (i = 0; i < c->entry_count || j < c->parked_count;) {
+            const tb__entry *e = j < c->parked_count && (i == c->entry_count || c->parked[j].found < c->entries[i].found)
+                                     ? &c->parked[j++]
+                                     : &c->entries[i++];
             h = mix_u64(h, (uint64_t)e->key_a << 32 | e->key_b);
             h = mix_u64(h, (uint64_t)(uint32_t)e->count << 32 | (uint32_t)e->touching);
             h = mix_u64(h, (uint64_t)(uint32_t)e->asleep << 32 | (uint32_t)e->struck);

@@ -1,7 +1,8 @@
 /* test_contacts_sleep.c: sleep. A resting box falls asleep and stays
    put, sleeping bodies wake when something lands on them, is removed from
-   under them or changes their motion, islands wake together, and the
-   sleep settings are checked. */
+   under them or changes their motion, islands wake together, sleeping
+   pairs are kept and come back as they were, and the sleep settings are
+   checked. */
 #include "test_main.h"
 #include "tumble.h"
 #include "contact_scenes.h"
@@ -113,6 +114,101 @@ static void islands_wake_together(void **state)
     tb_world_destroy(w);
 }
 
+/* A column of three boxes asleep: its pairs are parked (contact.c), not
+   carried step by step, yet they are the same contacts throughout. Asleep,
+   its 12 points are still counted and no event comes, also at another step
+   size (which brings the parked pairs back for a step). A ball dropped on
+   the top box wakes the column: its pairs come back as they were, so the
+   steps that wake it end no contact and begin at most the ball's, and the
+   column, warm started, stays where it slept (within 1 mm). */
+static void sleeping_pairs_are_kept_and_come_back(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double at[3][3] = { { 0, 0, 0.5 }, { 0, 0, 1.5 }, { 0, 0, 2.5 } }, drop[3] = { 0, 0, 3.3 };
+    tb_body_id box[3];
+    double x0[3], x[3];
+    size_t events;
+    int i, k, asleep = 1, woke = 0;
+    (void)state;
+    for (k = 0; k < 3; ++k)
+        box[k] = add_box(w, at[k], 1, 0.6);
+    steps_to_sleep(w, box[2], 240);
+    assert_int_equal(tb_world_sleeping_count(w), 3);
+    assert_int_equal(tb_world_contact_count(w), 12);
+    tb_body_position(w, box[2], x0);
+    for (i = 0; i < 20; ++i) {
+        assert_int_equal(tb_world_step(w, i < 10 ? 1.0 / 60 : 1.0 / 120), TB_OK);
+        tb_world_contact_events(w, &events);
+        assert_int_equal(events, 0);
+        assert_int_equal(tb_world_contact_count(w), 12);
+        assert_int_equal(tb_world_sleeping_count(w), 3);
+    }
+    add_ball(w, drop, 0.2, 0);
+    for (i = 0; i < 60; ++i) {
+        const tb_contact_event *ev;
+        int begun = 0, ended = 0;
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        ev = tb_world_contact_events(w, &events);
+        for (k = 0; k < (int)events; ++k) {
+            begun += ev[k].type == TB_CONTACT_BEGIN;
+            ended += ev[k].type == TB_CONTACT_END;
+        }
+        if (asleep)
+            assert_true(ended == 0 && begun <= 1);
+        assert_int_equal(tb_body_asleep(w, box[0], &asleep), TB_OK);
+        woke |= !asleep;
+    }
+    assert_true(woke);
+    tb_body_position(w, box[2], x);
+    print_message("column woken by a ball: top box moved %.2e m\n",
+                  sqrt((x[0] - x0[0]) * (x[0] - x0[0]) + (x[1] - x0[1]) * (x[1] - x0[1]) + (x[2] - x0[2]) * (x[2] - x0[2])));
+    assert_true(fabs(x[0] - x0[0]) < 1e-3 && fabs(x[1] - x0[1]) < 1e-3 && fabs(x[2] - x0[2]) < 1e-3);
+    tb_world_destroy(w);
+}
+
+/* 40 boxes asleep, in blocks of 32 that the split sweep passes over and
+   whose poses sleep then neither keeps nor puts back (body_step.c): under
+   verlet and symplectic Euler their poses stay the same to the bit and
+   their momenta zero, while a box falling beside them (in the second
+   block, which is swept) falls. */
+static void sleeping_blocks_stay_put(void **state)
+{
+    static const char *methods[2] = { "verlet", "symplectic_euler" };
+    int k;
+    (void)state;
+    for (k = 0; k < 2; ++k) {
+        tb_world *w = world_on_plane(0.6, 0);
+        tb_body_id id[40], falling;
+        double x0[40][3], x[3], P[3], L[3];
+        const double high[3] = { -5, 0, 20 };
+        int i;
+        assert_int_equal(tb_world_set_integrator(w, methods[k]), TB_OK);
+        for (i = 0; i < 40; ++i) {
+            const double at[3] = { 2.0 * (i % 8), 2.0 * (i / 8), 0.5 };
+            id[i] = add_box(w, at, 1, 0.6);
+        }
+        steps_to_sleep(w, id[39], 120);
+        assert_int_equal(tb_world_sleeping_count(w), 40);
+        falling = add_box(w, high, 1, 0.6); /* (a new shape wakes every island) */
+        steps_to_sleep(w, id[39], 120);
+        assert_int_equal(tb_world_sleeping_count(w), 40);
+        for (i = 0; i < 40; ++i)
+            tb_body_position(w, id[i], x0[i]);
+        for (i = 0; i < 60; ++i)
+            assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        assert_int_equal(tb_world_sleeping_count(w), 40);
+        for (i = 0; i < 40; ++i) {
+            tb_body_position(w, id[i], x);
+            tb_body_momentum(w, id[i], P, L);
+            assert_memory_equal(x, x0[i], sizeof x);
+            assert_true(P[0] == 0 && P[1] == 0 && P[2] == 0 && L[0] == 0 && L[1] == 0 && L[2] == 0);
+        }
+        tb_body_position(w, falling, x);
+        assert_true(x[2] < 15); /* (it fell for 1.5 s: 11 m) */
+        tb_world_destroy(w);
+    }
+}
+
 /* Everything asleep, then woken all at once: a box asleep on a static box
    (a plane 5 m lower) must fall when the static box is removed, and a box
    asleep on the plane must slide when gravity turns 8 m/s^2 sideways
@@ -199,6 +295,8 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(resting_box_falls_asleep_and_stays_put),
     cmocka_unit_test(sleeping_box_wakes_when_a_ball_lands),
     cmocka_unit_test(islands_wake_together),
+    cmocka_unit_test(sleeping_pairs_are_kept_and_come_back),
+    cmocka_unit_test(sleeping_blocks_stay_put),
     cmocka_unit_test(woken_world_moves_again),
     cmocka_unit_test(sleep_settings),
 };
