@@ -52,7 +52,7 @@ typedef struct tb__soft_body {
     double v[3], w[3];          /* m/s, rad/s: velocities now */
     double kick_p[3], kick_l[3];/* N s, N m s: external change of P, L per substep */
     double inv_world[9];        /* R diag(invI) R^T at q (0 for particles) */
-    double shift[3], turn[3];   /* m, rad: x - x0 and the first-order turn from q0 */
+    double shift[3];            /* m: x - x0 */
     double delta[9];            /* the rotation from q0 to q */
     double v_struck[3], l_struck[3]; /* m/s, N m s: v and L before this substep's impacts */
     double struck_at;           /* s into the substep of its impact; < 0: none */
@@ -452,7 +452,6 @@ static void load(tb_world *w, tb__contacts *c, int n)
         memcpy(s->x, b->x0, sizeof s->x);
         memcpy(s->q, b->q0, sizeof s->q);
         memset(s->shift, 0, sizeof s->shift);
-        memset(s->turn, 0, sizeof s->turn);
         memset(s->delta, 0, sizeof s->delta);
         s->delta[0] = s->delta[4] = s->delta[8] = 1;
         if (b->tier == TB__BODIES) {
@@ -706,9 +705,20 @@ static void half_kick(tb__contacts *c)
     }
 }
 
+/* Body i's q changed: normalised, and its rotation since the start, its
+   inverse inertia and w at the new orientation */
+static void turned(tb__contacts *c, size_t i)
+{
+    const tb__solver_body *b = &c->bodies[i];
+    tb__soft_body *s = &c->soft_bodies[i];
+    tb__normalise(s->q);
+    rotation_since(s->q, b->q0, s->delta);
+    world_inverse(s->q, b->inv_inertia, s->inv_world);
+    tb__mul(s->inv_world, s->L, s->w);
+}
+
 /* Positions over hs: x by the velocity, q by the torque-free turn of L
-   (between the substep's half kicks); then the rotation since the start,
-   the inverse inertia and w at the new orientation. */
+   (between the substep's half kicks). */
 static void drift(tb__contacts *c, double hs)
 {
     size_t i;
@@ -722,11 +732,7 @@ static void drift(tb__contacts *c, double hs)
         }
         if (b->tier == TB__BODIES) {
             tb__rotation_split2(s->q, s->L, b->inv_inertia, hs);
-            tb__normalise(s->q);
-            first_turn(s->q, b->q0, s->turn);
-            rotation_since(s->q, b->q0, s->delta);
-            world_inverse(s->q, b->inv_inertia, s->inv_world);
-            tb__mul(s->inv_world, s->L, s->w);
+            turned(c, i);
         }
     }
 }
@@ -761,6 +767,8 @@ static double impact_time(double s, double u, double a, double *speed)
 
 static int impacts(tb__contacts *c, double hs)
 {
+    /* with a threshold of 0, a point must still approach by more than
+       rounding to be met again, or the passes would not end */
     const double threshold = fmax(c->settings.restitution_threshold, 1e-9);
     size_t i;
     int round, any = 0, changed = 1;
@@ -829,7 +837,7 @@ static void impacts_moved(tb__contacts *c)
     for (i = 0; i < c->body_count; ++i) {
         const tb__solver_body *b = &c->bodies[i];
         tb__soft_body *s = &c->soft_bodies[i];
-        double dl[3], dw[3], dq[4];
+        double dl[3], dw[3], q[4];
         int k;
         if (s->struck_at <= 0)
             continue;
@@ -841,19 +849,14 @@ static void impacts_moved(tb__contacts *c)
         if (b->tier != TB__BODIES)
             continue;
         tb__mul(s->inv_world, dl, dw);
-        for (k = 0; k < 3; ++k)
-            dw[k] *= -s->struck_at;
-        dq[0] = -0.5 * (dw[0] * s->q[1] + dw[1] * s->q[2] + dw[2] * s->q[3]);
-        dq[1] = 0.5 * (dw[0] * s->q[0] + dw[1] * s->q[3] - dw[2] * s->q[2]);
-        dq[2] = 0.5 * (-dw[0] * s->q[3] + dw[1] * s->q[0] + dw[2] * s->q[1]);
-        dq[3] = 0.5 * (dw[0] * s->q[2] - dw[1] * s->q[1] + dw[2] * s->q[0]);
-        for (k = 0; k < 4; ++k)
-            s->q[k] += dq[k];
-        tb__normalise(s->q);
-        first_turn(s->q, b->q0, s->turn);
-        rotation_since(s->q, b->q0, s->delta);
-        world_inverse(s->q, b->inv_inertia, s->inv_world);
-        tb__mul(s->inv_world, s->L, s->w);
+        {
+            /* q turned by -dw tau, to first order: (1, -dw tau / 2) q */
+            const double back[4] = { 1, -0.5 * s->struck_at * dw[0], -0.5 * s->struck_at * dw[1],
+                                     -0.5 * s->struck_at * dw[2] };
+            tb__quat_mul(back, s->q, q);
+            memcpy(s->q, q, sizeof q);
+        }
+        turned(c, i);
     }
 }
 
@@ -893,7 +896,10 @@ static void store(tb_world *w, tb__contacts *c, int n)
             memcpy(w->y + w->off[TB__PARTICLE_VEL] + 3 * b->slot, s->v, sizeof s->v);
         }
         memcpy(b->x, s->x, sizeof b->x);
-        memcpy(b->turn, s->turn, sizeof b->turn);
+        if (b->tier == TB__BODIES)
+            first_turn(s->q, b->q0, b->turn);
+        else
+            memset(b->turn, 0, sizeof b->turn);
     }
     memset(c->motion, 0, TB__MOTION * (c->body_count + 1) * sizeof *c->motion);
     /* the impulses of the step, for the next one's warm start; a point
