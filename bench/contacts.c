@@ -59,8 +59,8 @@
    - asleep (also `bench_contacts --sleep`, alone): the ms per step once
      every body sleeps (the median of 300 steps after the last fell
      asleep, one run): the pyramid; a block of 1000 unit cubes in 10
-     levels of 10 x 10 columns 1 cm apart (one island: the pile does not
-     fall asleep); and 1000 and 10000 separate cubes, each an island, whose
+     levels of 10 x 10 columns 1 cm apart (100 islands of 10, a column
+     each; it stands in for the pile, which does not fall asleep); and 1000 and 10000 separate cubes, each an island, whose
      difference over 9000 is the cost of one sleeping body a step.
 
    - scaling (`bench_contacts --scaling OUT`, run by `./dev.sh charts`,
@@ -437,8 +437,9 @@ static int scaling(const char *folder)
 
 /* The asleep lines: the ms per step once every body sleeps, one run each
    (`bench_contacts --sleep` prints them alone): the pyramid; a block of
-   1000 unit cubes, 10 levels of 10 x 10 columns 1 cm apart, one island
-   (the pile does not fall asleep: see "sleep" above); and 1000 and 10000
+   1000 unit cubes, 10 levels of 10 x 10 columns 1 cm apart, 100 islands
+   of 10 (it stands in for the pile, which does not fall asleep: see
+   "sleep" above); and 1000 and 10000
    separate cubes of 0.5 m, 1 m apart, each an island of its own, whose
    difference is the cost of a sleeping body. */
 static void asleep_lines(void)
@@ -454,7 +455,7 @@ static void asleep_lines(void)
            ode_pyramid_boxes(pd.levels), ms, ASLEEP_STEPS, pyr.t.asleep_after);
     fflush(stdout);
     ms = boxes_asleep_ms(1000, 10, 1, 1.01);
-    printf("asleep    block of 1000 cubes (10 levels of 10 x 10, one island), every body asleep: %.4f ms/step "
+    printf("asleep    block of 1000 cubes (10 levels of 10 x 10, an island a column), every body asleep: %.4f ms/step "
            "(median of %d steps)\n", ms, ASLEEP_STEPS);
     fflush(stdout);
     for (k = 0; k < 2; ++k)

@@ -2218,10 +2218,9 @@ static int sandbox_load(lua_State *L)
 static int sandbox_pattern(lua_State *L)
 {
     size_t n, m, k;
-    const char *subject = luaL_checklstring(L, 1, &n), *pattern = luaL_checklstring(L, 2, &m);
+    const char *pattern = (luaL_checklstring(L, 1, &n), luaL_checklstring(L, 2, &m));
     double work = m > 0 && pattern[0] == '^' ? 1 : (double)n + 1; /* anchored: one start */
     int repeats = 0, in_set = 0;
-    (void)subject;
     if (lua_toboolean(L, lua_upvalueindex(2)) && lua_toboolean(L, 4))
         return call_original(L); /* string.find(s, p, init, true): no pattern */
     for (k = 0; k < m; ++k) {

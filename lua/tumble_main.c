@@ -678,11 +678,8 @@ static int write_plot(const char *path, run_plot *p, const char *title, int cont
         return 1;
     }
     fclose(f);
-    if (plot_draw(p, temp_path, title, contacts, why, sizeof why)) {
+    if (plot_draw(p, temp_path, title, contacts, why, sizeof why) && !stop_signal) {
         remove_temp();
-        if (stop_signal)
-            return fprintf(stderr, "tumble: %s: interrupted by %s; not written\n", path, signal_name(stop_signal)),
-                   128 + stop_signal;
         fprintf(stderr, "tumble: --plot %s: %s\n", path, why);
         return 1;
     }
@@ -867,6 +864,7 @@ static int run_scene(lua_State *L, const options *o, scene *s)
     if (!f) {
         fprintf(stderr, "tumble: cannot write a temporary file next to '%s': %s\n", out_path, strerror(errno));
         gltf_free(gw);
+        plot_free(pr);
         return 1;
     }
     fprintf(f, "t,kind,id,x,y,z,vx,vy,vz,qw,qx,qy,qz,wx,wy,wz\n");

@@ -837,7 +837,7 @@ static void impacts_moved(tb__contacts *c)
     for (i = 0; i < c->body_count; ++i) {
         const tb__solver_body *b = &c->bodies[i];
         tb__soft_body *s = &c->soft_bodies[i];
-        double dl[3], dw[3], q[4];
+        double dl[3], dw[3], dq[4];
         int k;
         if (s->struck_at <= 0)
             continue;
@@ -849,13 +849,15 @@ static void impacts_moved(tb__contacts *c)
         if (b->tier != TB__BODIES)
             continue;
         tb__mul(s->inv_world, dl, dw);
-        {
-            /* q turned by -dw tau, to first order: (1, -dw tau / 2) q */
-            const double back[4] = { 1, -0.5 * s->struck_at * dw[0], -0.5 * s->struck_at * dw[1],
-                                     -0.5 * s->struck_at * dw[2] };
-            tb__quat_mul(back, s->q, q);
-            memcpy(s->q, q, sizeof q);
-        }
+        for (k = 0; k < 3; ++k)
+            dw[k] *= -s->struck_at;
+        /* q turned by dw, to first order: q + (0, dw / 2) q */
+        dq[0] = -0.5 * (dw[0] * s->q[1] + dw[1] * s->q[2] + dw[2] * s->q[3]);
+        dq[1] = 0.5 * (dw[0] * s->q[0] + dw[1] * s->q[3] - dw[2] * s->q[2]);
+        dq[2] = 0.5 * (-dw[0] * s->q[3] + dw[1] * s->q[0] + dw[2] * s->q[1]);
+        dq[3] = 0.5 * (dw[0] * s->q[2] - dw[1] * s->q[1] + dw[2] * s->q[0]);
+        for (k = 0; k < 4; ++k)
+            s->q[k] += dq[k];
         turned(c, i);
     }
 }

@@ -274,9 +274,9 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
         const long kept_substeps = w->auto_substeps;
         const char *name;
         long substeps;
-        char why[320];
+        char costs[320];
         int len;
-        st = tb__auto_plan_why(w, h, why, sizeof why);
+        st = tb__auto_plan_why(w, h, costs, sizeof costs);
         name = w->auto_method ? w->auto_method->name : "?";
         substeps = w->auto_substeps;
         w->auto_method = kept, w->auto_substeps = kept_substeps;
@@ -288,7 +288,7 @@ tb_status tb_world_advise(tb_world *w, double h, tb_advice *advice)
                        substeps == 1 ? "" : "s", h / (double)substeps, w->tolerance, advice->stiffest,
                        advice->damping_ratio, advice->decay, advice->fastest_spin);
         if (len > 0 && (size_t)len < sizeof advice->text) /* and why: the costs it compared */
-            snprintf(advice->text + len, sizeof advice->text - (size_t)len, "; %s", why);
+            snprintf(advice->text + len, sizeof advice->text - (size_t)len, "; %s", costs);
     } else if (w->method->adaptive) {
         const double substep = tb__limit_of(w->method, &r, &cause);
         if (substep < INFINITY) {

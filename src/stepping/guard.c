@@ -192,7 +192,7 @@ tb_status tb__guard_check(tb_world *w, double h)
         if (find_unsound(w, before, was, sizeof was)) /* the guard came on after the harm was done */
             snprintf(cause, sizeof cause, "the state was unsound before this step already (%s): set it anew, no "
                      "step can mend it", was);
-        else if ((advised = tb_world_advise(w, h, &advice) == TB_OK) != 0 && advice.exceeded)
+        else if ((advised = tb_world_advise(w, h, &advice) == TB_OK) && advice.exceeded)
             snprintf(cause, sizeof cause, "%s", advice.text);
         else if (advised && h > 0.9 * advice.limit) /* the estimate errs by up to 10% (test_stability) */
             snprintf(cause, sizeof cause, "step %g s is %.0f%% of the estimated limit %.4g s of %s, within the "

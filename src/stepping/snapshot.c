@@ -16,7 +16,7 @@
 
 #include <string.h>
 
-/* list_blocks lists 71 arrays: room for a few more */
+/* list_blocks lists some 70 arrays: room for a few more */
 #define MAX_BLOCKS 96
 
 struct tb_snapshot {
@@ -530,10 +530,10 @@ static const enum tb__tier tiers[TB__QUANTITY_COUNT] = {
 uint64_t tb_world_hash(const tb_world *w)
 {
     uint64_t h = FNV_OFFSET;
-    const size_t counts[TB__TIERS] = { w ? w->tracer_count : 0, w ? w->particle_count : 0, w ? w->body_count : 0 };
-    size_t i, k;
+    size_t counts[TB__TIERS], i, k;
     int q;
     TB__NEED_WORLD(w, 0);
+    counts[0] = w->tracer_count, counts[1] = w->particle_count, counts[2] = w->body_count;
     h = mix_u64(h, counts[0]);
     h = mix_u64(h, counts[1]);
     h = mix_u64(h, counts[2]);

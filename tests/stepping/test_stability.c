@@ -580,8 +580,8 @@ static void advisor_predicts_damped_cloth(void **state)
 
 /* The guard blames the step, not the forces, when it passes the damped
    limit: the damped chain at z = 1 under verlet at 1.3 times its damped
-   limit, 0.48 of its undamped one (where an advisor blind to damping saw
-   no limit passed and pointed at the forces). */
+   limit, 0.48 of its undamped one, a step the undamped limit would
+   pass. */
 static void guard_names_the_damped_limit(void **state)
 {
     tb_world *w;
