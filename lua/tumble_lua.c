@@ -1238,6 +1238,19 @@ static int world_contacts(lua_State *L)
     return 0;
 }
 
+/* t[name] = v on the table at the top of the stack */
+static void set_number(lua_State *L, const char *name, double v)
+{
+    lua_pushnumber(L, v);
+    lua_setfield(L, -2, name);
+}
+
+static void set_integer(lua_State *L, const char *name, lua_Integer v)
+{
+    lua_pushinteger(L, v);
+    lua_setfield(L, -2, name);
+}
+
 /* world:events(): the contacts that began or ended in the last step, as
    { type = "begin" | "end", a = shape index, b = shape index or nil,
      particle = particle index or nil, speed, point = {x, y, z},
@@ -1251,18 +1264,14 @@ static int world_events(lua_State *L)
         lua_createtable(L, 0, 7);
         lua_pushstring(L, ev[i].type == TB_CONTACT_BEGIN ? "begin" : "end");
         lua_setfield(L, -2, "type");
-        lua_pushinteger(L, (lua_Integer)ev[i].a.index1);
-        lua_setfield(L, -2, "a");
+        set_integer(L, "a", (lua_Integer)ev[i].a.index1);
         if (!TB_ID_IS_NULL(ev[i].b)) {
-            lua_pushinteger(L, (lua_Integer)ev[i].b.index1);
-            lua_setfield(L, -2, "b");
+            set_integer(L, "b", (lua_Integer)ev[i].b.index1);
         }
         if (!TB_ID_IS_NULL(ev[i].particle)) {
-            lua_pushinteger(L, (lua_Integer)ev[i].particle.index1);
-            lua_setfield(L, -2, "particle");
+            set_integer(L, "particle", (lua_Integer)ev[i].particle.index1);
         }
-        lua_pushnumber(L, ev[i].speed);
-        lua_setfield(L, -2, "speed");
+        set_number(L, "speed", ev[i].speed);
         push_vec3_table(L, ev[i].point);
         lua_setfield(L, -2, "point");
         push_vec3_table(L, ev[i].normal);
@@ -1444,21 +1453,15 @@ static int world_advise(lua_State *L)
     if (tb_world_advise(lw->world, dt, &a) != TB_OK)
         return raise_world_error(L, lw, "world:advise");
     lua_createtable(L, 0, 8);
-    lua_pushnumber(L, a.limit);
-    lua_setfield(L, -2, "limit");
+    set_number(L, "limit", a.limit);
     lua_pushboolean(L, a.exceeded);
     lua_setfield(L, -2, "exceeded");
-    lua_pushnumber(L, a.stiffest);
-    lua_setfield(L, -2, "stiffest");
-    lua_pushnumber(L, a.damping_ratio);
-    lua_setfield(L, -2, "damping_ratio");
-    lua_pushnumber(L, a.decay);
-    lua_setfield(L, -2, "decay");
-    lua_pushnumber(L, a.fastest_spin);
-    lua_setfield(L, -2, "fastest_spin");
+    set_number(L, "stiffest", a.stiffest);
+    set_number(L, "damping_ratio", a.damping_ratio);
+    set_number(L, "decay", a.decay);
+    set_number(L, "fastest_spin", a.fastest_spin);
     if (!TB_ID_IS_NULL(a.spring)) {
-        lua_pushinteger(L, (lua_Integer)a.spring.index1);
-        lua_setfield(L, -2, "spring");
+        set_integer(L, "spring", (lua_Integer)a.spring.index1);
     }
     lua_pushstring(L, a.text);
     lua_setfield(L, -2, "text");
@@ -1471,18 +1474,12 @@ static int world_work(lua_State *L)
 {
     const tb_work k = tb_world_work(check_world(L, 1)->world);
     lua_createtable(L, 0, 6);
-    lua_pushinteger(L, (lua_Integer)k.steps);
-    lua_setfield(L, -2, "steps");
-    lua_pushinteger(L, (lua_Integer)k.substeps);
-    lua_setfield(L, -2, "substeps");
-    lua_pushinteger(L, (lua_Integer)k.rejected);
-    lua_setfield(L, -2, "rejected");
-    lua_pushinteger(L, (lua_Integer)k.evaluations);
-    lua_setfield(L, -2, "evaluations");
-    lua_pushnumber(L, k.contact_work);
-    lua_setfield(L, -2, "contact_work");
-    lua_pushnumber(L, k.damping_work);
-    lua_setfield(L, -2, "damping_work");
+    set_integer(L, "steps", (lua_Integer)k.steps);
+    set_integer(L, "substeps", (lua_Integer)k.substeps);
+    set_integer(L, "rejected", (lua_Integer)k.rejected);
+    set_integer(L, "evaluations", (lua_Integer)k.evaluations);
+    set_number(L, "contact_work", k.contact_work);
+    set_number(L, "damping_work", k.damping_work);
     return 1;
 }
 
@@ -1514,18 +1511,12 @@ static int world_energy(lua_State *L)
     else if (tb_lua_energy(L, 1, &e) != TB_OK)
         return raise_world_error(L, lw, "world:energy");
     lua_createtable(L, 0, 6);
-    lua_pushnumber(L, e.potential);
-    lua_setfield(L, -2, "potential");
-    lua_pushnumber(L, e.kinetic);
-    lua_setfield(L, -2, "kinetic");
-    lua_pushnumber(L, e.rotational);
-    lua_setfield(L, -2, "rotational");
-    lua_pushnumber(L, e.gravity);
-    lua_setfield(L, -2, "gravity");
-    lua_pushnumber(L, e.spring);
-    lua_setfield(L, -2, "spring");
-    lua_pushnumber(L, e.total);
-    lua_setfield(L, -2, "total");
+    set_number(L, "potential", e.potential);
+    set_number(L, "kinetic", e.kinetic);
+    set_number(L, "rotational", e.rotational);
+    set_number(L, "gravity", e.gravity);
+    set_number(L, "spring", e.spring);
+    set_number(L, "total", e.total);
     return 1;
 }
 
