@@ -570,20 +570,23 @@ tb_body_id tb_world_body_at(const tb_world *w, size_t slot)
 
 /* ---- diagnostics ----------------------------------------------------------------- */
 
+void tb__body_energy_at(const tb_world *w, const double *y, size_t s, tb_energy *e)
+{
+    const double *x = y + w->off[TB__BODY_POS] + 3 * s, *q = y + w->off[TB__BODY_ROT] + 4 * s;
+    const double *p = y + w->off[TB__BODY_MOM] + 3 * s, *l = y + w->off[TB__BODY_ANG] + 3 * s;
+    const double *g = w->gravity;
+    double omega[3];
+    tb__through_inertia(q, w->body_inv_inertia + 3 * s, l, omega);
+    e->kinetic += 0.5 * (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) * w->body_inv_mass[s];
+    e->rotational += 0.5 * (l[0] * omega[0] + l[1] * omega[1] + l[2] * omega[2]);
+    e->gravity -= w->body_mass[s] * (g[0] * x[0] + g[1] * x[1] + g[2] * x[2]);
+}
+
 void tb__body_energy(const tb_world *w, const double *y, tb_energy *e)
 {
-    const double *x = y + w->off[TB__BODY_POS], *q = y + w->off[TB__BODY_ROT];
-    const double *P = y + w->off[TB__BODY_MOM], *L = y + w->off[TB__BODY_ANG];
-    const double *g = w->gravity;
     size_t s;
-    for (s = 0; s < w->body_count; ++s) {
-        const double *p = P + 3 * s, *l = L + 3 * s;
-        double omega[3];
-        tb__through_inertia(q + 4 * s, w->body_inv_inertia + 3 * s, l, omega);
-        e->kinetic += 0.5 * (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) * w->body_inv_mass[s];
-        e->rotational += 0.5 * (l[0] * omega[0] + l[1] * omega[1] + l[2] * omega[2]);
-        e->gravity -= w->body_mass[s] * (g[0] * x[3 * s] + g[1] * x[3 * s + 1] + g[2] * x[3 * s + 2]);
-    }
+    for (s = 0; s < w->body_count; ++s)
+        tb__body_energy_at(w, y, s, e);
 }
 
 void tb__body_momenta(const tb_world *w, double linear[3], double angular[3])

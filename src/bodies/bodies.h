@@ -294,6 +294,8 @@ void tb__wake_all(tb_world *w);
 void tb__bodies_free(tb_world *w);
 /* Add the bodies' energies and momenta (about the origin) to the totals. */
 void tb__body_energy(const tb_world *w, const double *y, tb_energy *e);
+/* ... of body slot s alone, added into e */
+void tb__body_energy_at(const tb_world *w, const double *y, size_t s, tb_energy *e);
 void tb__body_momenta(const tb_world *w, double linear[3], double angular[3]);
 
 /* dy = F(t, y) for the bodies, their callback forces already in w->body_force. */

@@ -1945,6 +1945,32 @@ static int sweep_until_settled(tb__contacts *c, int most, double tolerance)
 #define TB__COLD_TIMES 16
 #define TB__COLD_SETTLED 1e-3
 
+double tb__contacts_energy(const tb_world *w)
+{
+    const tb__contacts *c = w->contacts;
+    const double *g = w->gravity;
+    tb_energy e = { 0, 0, 0, 0, 0, 0 };
+    size_t i;
+    int particles = 0;
+    if (!c || !(c->prepared || c->solved)) /* the step's bodies, before or after its solve */
+        return 0;
+    for (i = 0; i < c->body_count; ++i) {
+        const tb__solver_body *b = &c->bodies[i];
+        if (b->tier == TB__BODIES) {
+            tb__body_energy_at(w, w->y, b->slot, &e);
+        } else {
+            const double *x = w->y + w->off[TB__PARTICLE_POS] + 3 * b->slot;
+            const double *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * b->slot, m = w->particle_mass[b->slot];
+            e.kinetic += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            e.gravity -= m * (g[0] * x[0] + g[1] * x[1] + g[2] * x[2]);
+            particles = 1;
+        }
+    }
+    if (particles && w->spring_count)
+        e.spring = tb_world_energy(w).spring;
+    return e.kinetic + e.rotational + e.gravity + e.spring;
+}
+
 void tb__contacts_solve(tb_world *w, double h, double force_lever)
 {
     tb__contacts *c = w->contacts;

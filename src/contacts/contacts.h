@@ -400,6 +400,12 @@ tb_status tb__contacts_prepare(tb_world *w, double h);
    world.h): a resting contact's impulse moves positions by that lever, so
    a body at rest stays put under every method. */
 void tb__contacts_solve(tb_world *w, double h, double force_lever);
+/* The energy (J) of what the solve may change: the prepared step's
+   bodies and particles in contact, and with a particle among them the
+   springs' (springs join particles). Its change over the solve is the
+   contacts' work (tb_work), found without a pass over the world: a
+   sleeping pile costs nothing (docs/contacts.md, "Sleep"). */
+double tb__contacts_energy(const tb_world *w);
 void tb__contacts_free(tb_world *w);
 
 /* soft_step.c: the step's contacts solved by the soft-step solver

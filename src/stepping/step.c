@@ -176,10 +176,11 @@ tb_status tb_world_step(tb_world *w, double h)
         return st;
     }
     if (tb__contacts_active(w)) {
-        /* what the solve changes of the energy is the contacts' work */
-        const double before = tb__energy_of(w, w->y).total;
+        /* what the solve changes of the energy is the contacts' work; it
+           changes only the bodies and particles in contact */
+        const double before = tb__contacts_energy(w);
         tb__contacts_solve(w, h, tb__force_lever(w));
-        w->work.contact_work += tb__energy_of(w, w->y).total - before;
+        w->work.contact_work += tb__contacts_energy(w) - before;
     }
     if (damped)
         w->work.damping_work += h / 2 * (power + tb__damping_power(w));
