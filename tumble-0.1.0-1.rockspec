@@ -47,7 +47,7 @@ build = {
             "src/contacts/contact_lanes.c",
             "src/contacts/cold_start.c",
             "src/contacts/sleep.c",
-            "src/contacts/soft_step.c",
+            "src/contacts/soft_step.c", "src/contacts/stack_solve.c",
             "lua/tumble_lua.c",
             },
             incdirs = { "include", "src", "lua" },

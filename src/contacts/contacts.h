@@ -385,6 +385,7 @@ struct tb__contacts {
     size_t soft_body_cap;
     struct tb__soft_patch *soft_patches;
     size_t soft_patch_count, soft_patch_cap;
+    struct tb__stacks *stacks; /* stack_solve.c: rows solved together */
     int prepared;              /* entries hold this step's contacts, to solve */
     int solved;                /* entries hold the last step's solved contacts */
 };

@@ -41,68 +41,10 @@
    start, the pose its mass was found at; the separation is recomputed
    every substep from the bodies' displacements and their turns since the
    start, exactly. */
-#include "contacts/contacts.h"
+#include "contacts/soft_step.h"
 
 #include <math.h>
 #include <string.h>
-
-typedef struct tb__soft_body {
-    double x[3], q[4];          /* m: pose now */
-    double P[3], L[3];          /* N s, N m s: momenta now (particles: P only) */
-    double v[3], w[3];          /* m/s, rad/s: velocities now */
-    double kick_p[3], kick_l[3];/* N s, N m s: external change of P, L per substep */
-    double inv_world[9];        /* R diag(invI) R^T at q (0 for particles) */
-    double shift[3];            /* m: x - x0 */
-    double delta[9];            /* the rotation from q0 to q */
-    double v_struck[3], l_struck[3]; /* m/s, N m s: v and L before this substep's impacts */
-    double struck_at;           /* s into the substep of its impact; < 0: none */
-} tb__soft_body;
-
-/* A manifold: its points' normal rows, then friction (two rows at the
-   centre of the points), twist (about the normal, within mu times the
-   points' normal impulses times their levers from the centre) and
-   rolling resistance (about the tangents, within rho times the normal
-   impulse), solved together after the points. */
-typedef struct tb__soft_patch {
-    tb__entry *entry;
-    int32_t a, b;
-    size_t first, count;        /* its rows */
-    double tangent[2][3];
-    double ca[3], cb[3];        /* m: the centre of the points from each side's centre */
-    double arm_a[2][3], arm_b[2][3]; /* centre x tangent */
-    double spin_a[2][3], spin_b[2][3]; /* the start's inverse inertia times those */
-    double turn_a[3][3], turn_b[3][3]; /* ... times the normal and the tangents */
-    double tangent_mass[3];     /* the 2 x 2 inverse of J M^-1 J^T: xx, xy, yy */
-    double twist_mass;
-    double rolling_mass[3];     /* 2 x 2 inverse, about the tangents */
-    double friction, rolling;
-    double round;               /* m: the entry's radius of curvature at one point */
-    double friction_impulse[2], twist_impulse, rolling_impulse[2]; /* N s, N m s: this substep's */
-    double settled[2], settled_twist, settled_rolling[2]; /* what settle added */
-} tb__soft_patch;
-
-typedef struct tb__soft_row {
-    tb__point *point;
-    int32_t a, b;               /* solver bodies, -1: the static world */
-    double normal[3];           /* a to b */
-    double arm_a[3], arm_b[3];  /* r x normal at each side */
-    double spin_a[3], spin_b[3];/* the start's inverse inertia times those */
-    double ra[3], rb[3];        /* m: the point from each centre at the start */
-    double core_a[3], core_b[3];/* m: each side's core point under it from each centre (a
-                                   round shape turns about its core, its surface stays) */
-    double mass;                /* 1 / (J M^-1 J^T), at the start pose */
-    double impulse;             /* N s: accumulated in the current substep */
-    double separation;          /* m: at the start of the step */
-    double lever;               /* m: from the patch's centre (a's side) */
-    double restitution;
-    double approach;            /* m/s (< 0): normal velocity at which the point struck */
-    double most;                /* N s: the largest normal impulse of any substep */
-    int struck;                 /* the normal row has pushed in some substep */
-    double settled;             /* N s: what settle added */
-    double bounce;              /* N s: this substep's impact impulse (impacts) */
-    int bounced;                /* bounced by impacts in some substep */
-} tb__soft_row;
-
 
 /* R diag(inv) R^T for the unit quaternion q */
 static void world_inverse(const double q[4], const double inv[3], double out[9])
@@ -160,7 +102,7 @@ static void apply(tb__contacts *c, int32_t i, double lambda, const double d[3], 
 }
 
 /* A scalar impulse along row o's normal, equal and opposite on its sides. */
-static void push_row(tb__contacts *c, const tb__soft_row *o, double lambda)
+void tb__soft_push(tb__contacts *c, const tb__soft_row *o, double lambda)
 {
     if (o->b >= 0)
         apply(c, o->b, lambda, o->normal, o->arm_b, o->spin_b);
@@ -169,7 +111,7 @@ static void push_row(tb__contacts *c, const tb__soft_row *o, double lambda)
 }
 
 /* The relative velocity of b against a along row d */
-static double rate(const tb__contacts *c, const tb__soft_row *o)
+double tb__soft_rate(const tb__contacts *c, const tb__soft_row *o)
 {
     double r = 0;
     if (o->b >= 0) {
@@ -202,7 +144,7 @@ static double kick_rate(const tb__contacts *c, const tb__soft_row *o)
 
 /* The separation now, from the bodies' displacements and first-order
    turns at the start's arms */
-static double separation_now(const tb__contacts *c, const tb__soft_row *o)
+double tb__soft_separation(const tb__contacts *c, const tb__soft_row *o)
 {
     double s = o->separation, d[3];
     if (o->b >= 0) {
@@ -229,6 +171,7 @@ static double separation_now(const tb__contacts *c, const tb__soft_row *o)
    the load. */
 typedef struct soft {
     double bias_rate, mass_scale, impulse_scale;
+    double omega;               /* 1/s: the spring's angular frequency */
 } soft;
 
 static soft softness(double hertz, double zeta, double hs)
@@ -239,6 +182,7 @@ static soft softness(double hertz, double zeta, double hs)
     s.bias_rate = omega / a1;
     s.mass_scale = a2 * a3;
     s.impulse_scale = a3;
+    s.omega = omega;
     return s;
 }
 
@@ -306,10 +250,11 @@ static double slip(const tb__contacts *c, const tb__soft_patch *p, int d)
    pushes overlaps out; without (the relax), rigid and aiming at no
    approach. A point still apart (s > 0) lets its gap close within the
    substep, never more: positions move by the velocity the solve leaves. */
-static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const soft *sf, int bias, int *closing)
+static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const soft *sf, int bias, int *closing,
+                           int stacked)
 {
     const double max_push = c->settings.max_push;
-    const double s = separation_now(c, o), vn = rate(c, o);
+    const double s = tb__soft_separation(c, o), vn = tb__soft_rate(c, o);
     double target, mass_scale = 1, impulse_scale = 0, lambda, total;
     *closing |= bias && s >= 0 && vn * hs < -s;
     if (s > 0 && bias) {
@@ -318,8 +263,10 @@ static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const so
         return o->impulse;
     } else if (bias) {
         target = fmax(sf->bias_rate * s, -max_push);
-        mass_scale = sf->mass_scale;
-        impulse_scale = sf->impulse_scale;
+        if (!stacked) {
+            mass_scale = sf->mass_scale;
+            impulse_scale = sf->impulse_scale;
+        }
     } else {
         target = 0;
     }
@@ -327,8 +274,14 @@ static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const so
     total = fmax(o->impulse + lambda, 0);
     lambda = total - o->impulse;
     o->impulse = total;
-    push_row(c, o, lambda);
-    if (total > 0 && !o->struck) {
+    tb__soft_push(c, o, lambda);
+    tb__soft_note(c, o, vn, s, hs);
+    return total;
+}
+
+void tb__soft_note(tb__contacts *c, tb__soft_row *o, double vn, double s, double hs)
+{
+    if (o->impulse > 0 && !o->struck) {
         /* the speed it struck at: from the start of this substep (u,
            before its half kick, and s) under the kick's acceleration a,
            u^2 - 2 a s at the surface, within what the substep's
@@ -342,8 +295,7 @@ static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const so
         o->struck = 1;
         o->approach = fmin(approach, 0);
     }
-    o->most = fmax(o->most, total);
-    return total;
+    o->most = fmax(o->most, o->impulse);
 }
 
 /* A pair of rows that share a disc: the accumulated impulse (acc) less
@@ -376,14 +328,14 @@ static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft
     size_t k;
     for (k = 0; k < p->count; ++k) {
         tb__soft_row *o = &c->soft_rows[p->first + k];
-        const double f = solve_normal(c, o, hs, sf, bias, &closing) + o->bounce;
+        const double f = (p->stacked ? o->impulse : solve_normal(c, o, hs, sf, bias, &closing, p->stacked)) + o->bounce;
         total += f;
         twist_limit += o->lever * f;
     }
     if (p->count == 1 && p->round > 0) {
         /* one round point: the soft overlap's disc, of radius
            sqrt(2 r overlap), pressed evenly, its friction at 2/3 of it */
-        const double overlap = fmax(-separation_now(c, &c->soft_rows[p->first]), 0);
+        const double overlap = fmax(-tb__soft_separation(c, &c->soft_rows[p->first]), 0);
         twist_limit = total * (2.0 / 3) * sqrt(2 * p->round * overlap);
     }
     if (p->friction > 0) {
@@ -626,6 +578,7 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
         pa->friction = e->friction;
         pa->rolling = e->rolling;
         pa->round = e->round;
+        pa->stacked = 0;
         for (d = 0; d < 2; ++d) {
             pa->friction_impulse[d] = scale * tb__dot3(e->friction_impulse, e->tangent[d]);
             pa->rolling_impulse[d] = scale * tb__dot3(e->rolling_impulse, e->tangent[d]);
@@ -674,7 +627,7 @@ static void warm_start(tb__contacts *c)
     for (i = 0; i < c->soft_row_count; ++i) {
         const tb__soft_row *o = &c->soft_rows[i];
         if (o->impulse != 0)
-            push_row(c, o, o->impulse);
+            tb__soft_push(c, o, o->impulse);
     }
     for (i = 0; i < c->soft_patch_count; ++i) {
         const tb__soft_patch *p = &c->soft_patches[i];
@@ -784,9 +737,9 @@ static int impacts(tb__contacts *c, double hs)
             tb__soft_row *o = &c->soft_rows[i];
             double s, vn, target, tau = -1, lambda;
             int k;
-            if (o->restitution == 0 || (vn = rate(c, o)) > -threshold)
+            if (o->restitution == 0 || (vn = tb__soft_rate(c, o)) > -threshold)
                 continue;
-            s = separation_now(c, o);
+            s = tb__soft_separation(c, o);
             if (s > 0) {
                 /* a gap closing in the substep: when, and how fast */
                 const double kick = kick_rate(c, o), u = vn - 0.5 * kick, a = kick / hs;
@@ -819,7 +772,7 @@ static int impacts(tb__contacts *c, double hs)
                     sb->struck_at = tau;
                 }
             }
-            push_row(c, o, lambda);
+            tb__soft_push(c, o, lambda);
             o->bounce += lambda;
             o->bounced = 1;
             changed = any = 1;
@@ -873,9 +826,9 @@ static void restitution(tb__contacts *c)
         double lambda, total;
         if (o->restitution == 0 || o->bounced || !o->struck || o->approach > -threshold || o->most == 0)
             continue;
-        lambda = -o->mass * (rate(c, o) + o->restitution * o->approach);
+        lambda = -o->mass * (tb__soft_rate(c, o) + o->restitution * o->approach);
         total = fmax(o->impulse + lambda, 0);
-        push_row(c, o, total - o->impulse);
+        tb__soft_push(c, o, total - o->impulse);
         o->impulse = total;
     }
 }
@@ -946,6 +899,7 @@ static void settle(tb__contacts *c, double hs, const soft *sf)
         p->settled_twist = p->twist_impulse;
         memcpy(p->settled_rolling, p->rolling_impulse, sizeof p->settled_rolling);
     }
+    tb__stacks_solve(c, hs, 0);
     solve_patches(c, hs, sf, 0);
     for (i = 0; i < c->soft_row_count; ++i)
         c->soft_rows[i].settled = c->soft_rows[i].impulse - c->soft_rows[i].settled;
@@ -971,16 +925,21 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
                           sizeof *c->soft_bodies)) != TB_OK)
         return st;
     load(w, c, n);
-    if ((st = set_up_rows(w, c, h, n)) != TB_OK)
+    if ((st = set_up_rows(w, c, h, n)) != TB_OK || (st = tb__stacks_set_up(w, c, hs, sf.omega)) != TB_OK)
         return st;
     for (i = 0; i < n; ++i) {
         half_kick(c);
         warm_start(c);
         struck = impacts(c, hs);
+        tb__stacks_solve(c, hs, 1);
         solve_patches(c, hs, &sf, 1);
+        tb__stacks_solve(c, hs, 1);
+        tb__stacks_push(c, sf.bias_rate, 1);
         drift(c, hs);
+        tb__stacks_push(c, sf.bias_rate, -1);
         if (struck)
             impacts_moved(c);
+        tb__stacks_solve(c, hs, 0);
         solve_patches(c, hs, &sf, 0);
         half_kick(c);
     }
@@ -994,6 +953,7 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
 
 void tb__soft_free(tb_world *w, tb__contacts *c)
 {
+    tb__stacks_free(w, c);
     tb__alloc(w, c->soft_patches, c->soft_patch_cap * sizeof *c->soft_patches, 0);
     tb__alloc(w, c->soft_rows, c->soft_row_cap * sizeof *c->soft_rows, 0);
     tb__alloc(w, c->soft_bodies, c->soft_body_cap * sizeof *c->soft_bodies, 0);

@@ -1,0 +1,86 @@
+/* soft_step.h: the soft-step solver's bodies, patches and rows (not
+   public), shared by soft_step.c (the substeps) and stack_solve.c (the
+   normal rows of a stack solved together). docs/contacts.md, "The
+   soft-step solver". */
+#ifndef TB_SOFT_STEP_H
+#define TB_SOFT_STEP_H
+
+#include "contacts/contacts.h"
+
+typedef struct tb__soft_body {
+    double x[3], q[4];          /* m: pose now */
+    double P[3], L[3];          /* N s, N m s: momenta now (particles: P only) */
+    double v[3], w[3];          /* m/s, rad/s: velocities now */
+    double kick_p[3], kick_l[3];/* N s, N m s: external change of P, L per substep */
+    double inv_world[9];        /* R diag(invI) R^T at q (0 for particles) */
+    double shift[3];            /* m: x - x0 */
+    double delta[9];            /* the rotation from q0 to q */
+    double v_struck[3], l_struck[3]; /* m/s, N m s: v and L before this substep's impacts */
+    double struck_at;           /* s into the substep of its impact; < 0: none */
+} tb__soft_body;
+
+/* A manifold: its points' normal rows, then friction (two rows at the
+   centre of the points), twist (about the normal, within mu times the
+   points' normal impulses times their levers from the centre) and
+   rolling resistance (about the tangents, within rho times the normal
+   impulse), solved together after the points. */
+typedef struct tb__soft_patch {
+    tb__entry *entry;
+    int32_t a, b;
+    size_t first, count;        /* its rows */
+    double tangent[2][3];
+    double ca[3], cb[3];        /* m: the centre of the points from each side's centre */
+    double arm_a[2][3], arm_b[2][3]; /* centre x tangent */
+    double spin_a[2][3], spin_b[2][3]; /* the start's inverse inertia times those */
+    double turn_a[3][3], turn_b[3][3]; /* ... times the normal and the tangents */
+    double tangent_mass[3];     /* the 2 x 2 inverse of J M^-1 J^T: xx, xy, yy */
+    double twist_mass;
+    double rolling_mass[3];     /* 2 x 2 inverse, about the tangents */
+    double friction, rolling;
+    double round;               /* m: the entry's radius of curvature at one point */
+    double friction_impulse[2], twist_impulse, rolling_impulse[2]; /* N s, N m s: this substep's */
+    double settled[2], settled_twist, settled_rolling[2]; /* what settle added */
+    int stacked;                /* its normal rows are solved with its stack's (stack_solve.c) */
+} tb__soft_patch;
+
+typedef struct tb__soft_row {
+    tb__point *point;
+    int32_t a, b;               /* solver bodies, -1: the static world */
+    double normal[3];           /* a to b */
+    double arm_a[3], arm_b[3];  /* r x normal at each side */
+    double spin_a[3], spin_b[3];/* the start's inverse inertia times those */
+    double ra[3], rb[3];        /* m: the point from each centre at the start */
+    double core_a[3], core_b[3];/* m: each side's core point under it from each centre (a
+                                   round shape turns about its core, its surface stays) */
+    double mass;                /* 1 / (J M^-1 J^T), at the start pose */
+    double impulse;             /* N s: accumulated in the current substep */
+    double separation;          /* m: at the start of the step */
+    double lever;               /* m: from the patch's centre (a's side) */
+    double restitution;
+    double approach;            /* m/s (< 0): normal velocity at which the point struck */
+    double most;                /* N s: the largest normal impulse of any substep */
+    int struck;                 /* the normal row has pushed in some substep */
+    double settled;             /* N s: what settle added */
+    double bounce;              /* N s: this substep's impact impulse (impacts) */
+    int bounced;                /* bounced by impacts in some substep */
+} tb__soft_row;
+
+/* The relative velocity of b against a along row o's normal */
+double tb__soft_rate(const tb__contacts *c, const tb__soft_row *o);
+/* Row o's separation now, from the bodies' motion since the start */
+double tb__soft_separation(const tb__contacts *c, const tb__soft_row *o);
+/* A scalar impulse along row o's normal, equal and opposite on its sides */
+void tb__soft_push(tb__contacts *c, const tb__soft_row *o, double lambda);
+/* After row o's impulse changed in a substep of hs, at the normal velocity
+   vn and separation s it was solved at: whether and how fast it struck,
+   and its largest impulse */
+void tb__soft_note(tb__contacts *c, tb__soft_row *o, double vn, double s, double hs);
+
+/* stack_solve.c: the normal rows of islands whose band is narrow enough,
+   solved together (their patches marked stacked) */
+tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c, double hs, double omega);
+void tb__stacks_solve(tb__contacts *c, double hs, int bias);
+void tb__stacks_push(tb__contacts *c, double bias_rate, int sign);
+void tb__stacks_free(tb_world *w, tb__contacts *c);
+
+#endif

@@ -1,0 +1,606 @@
+/* stack_solve.c: the normal rows of a loaded island solved together,
+   rigid and exactly, in the soft step's solves (docs/contacts.md,
+   "Stacks solved together").
+   A soft row holds a load F at an overlap of F over its own effective
+   mass times omega^2: a light body under a heavy one sinks by the mass
+   ratio, and a tall stack's interfaces lean under the moments its offsets
+   put on them until the lean tips it (a soft interface resists a tilt
+   only by its springs). Rows solved one at a time cannot be stiffer than
+   the substep follows. Solved together, by a factorisation of
+   J M^-1 J^T (plus a small compliance) over the touching rows of an
+   island, they meet every point's target at once and carry any load
+   without a sink: a tilt must open a gap. Which points push is found by
+   active sets: a point solved to pull lets go, a point let go that
+   approaches (or closes more than its gap) is taken in, and the rows are
+   solved again.
+   - Which islands: those with a row whose warm start (the load it
+     carried last step) a soft row would hold at an overlap beyond
+     TB__STACK_SINK of the slop, and whose band is narrow enough
+     (TB__STACK_WIDTH): a tower, a light plank under a heavy beam. Heaps
+     and walls, whose band grows with their size, stay soft.
+   - The rows aim at no approach (or at closing at most their gap): what
+     the velocities ask is always a motion the bodies can make, so the
+     compliance never meets a contradiction. Overlap beyond a twentieth of
+     the slop is pushed out apart, as velocities that move positions over
+     the drift and are then taken back (tb__stacks_push), levelled per
+     patch: pushing the overlap of the rows' own compliance, or pushing it
+     within the solve where friction meets it, rocks a stack
+     (offset_tower_stands).
+   The rows are ordered island by island along a breadth-first walk of
+   its bodies from one end (a stack: bottom to top), each row after the
+   first of its two bodies, so the matrix is a band as wide as the rows
+   around a body: 8 for a tower of boxes. */
+#include "contacts/soft_step.h"
+
+#include <math.h>
+#include <string.h>
+
+#define TB__STACK_WIDTH 32
+/* an island is solved together where a soft row would hold the load one
+   of its rows carries at an overlap of more than this share of the slop */
+#define TB__STACK_SINK 0.2
+/* active-set rounds of one solve: each refactors the band */
+#define TB__STACK_ROUNDS 6
+/* the rows' compliance, relative to their own inverse mass: it shares a
+   load between points that are redundant (a box's four corners on a
+   face) and keeps the factor positive */
+#define TB__STACK_COMPLIANCE 1e-3
+#define TB__NONE ((size_t)-1)
+
+struct tb__stacks {
+    size_t island_count;
+    size_t *island_start;      /* [island_count + 1]: island k's rows are at
+                                  positions island_start[k] .. island_start[k + 1] */
+    size_t *order;             /* the soft row at each position */
+    size_t *first;             /* the first column of each position's band */
+    size_t *offset;            /* where each position's band starts in a and l */
+    size_t *position;          /* [rows]: a soft row's position, TB__NONE: soft */
+    double *x, *vn0, *push;    /* right side and solution; the rate a solve starts at; the push */
+    unsigned char *solved;     /* the position's row is solved (else held) */
+    size_t row_cap;
+    size_t *body_rows;         /* [2 rows]: the rows of each body, from body_start */
+    size_t link_cap;
+    size_t *body_start;        /* [bodies + 1] */
+    int32_t *body_order, *queue;
+    size_t body_cap;
+    double *a, *l;             /* the band of J M^-1 J^T, and its factor */
+    size_t env_cap;
+};
+
+/* Every array at least the step's size: all or nothing */
+static tb_status reserve(tb_world *w, struct tb__stacks *s, size_t rows, size_t bodies, size_t env)
+{
+    void **row_arrays[] = { (void **)&s->island_start, (void **)&s->order, (void **)&s->first,
+                            (void **)&s->offset, (void **)&s->position, (void **)&s->x, (void **)&s->vn0,
+                            (void **)&s->push, (void **)&s->solved };
+    const size_t row_sizes[] = { sizeof(size_t), sizeof(size_t), sizeof(size_t), sizeof(size_t),
+                                 sizeof(size_t), sizeof(double), sizeof(double), sizeof(double), 1 };
+    void **body_arrays[] = { (void **)&s->body_start, (void **)&s->body_order, (void **)&s->queue };
+    const size_t body_sizes[] = { sizeof(size_t), sizeof(int32_t), sizeof(int32_t) };
+    void **env_arrays[] = { (void **)&s->a, (void **)&s->l };
+    const size_t env_sizes[] = { sizeof(double), sizeof(double) };
+    tb_status st;
+    if (rows + 1 > s->row_cap) {
+        if ((st = tb__grow(w, row_arrays, row_sizes, 9, 0, s->row_cap, 2 * rows + 1)) != TB_OK)
+            return st;
+        s->row_cap = 2 * rows + 1;
+    }
+    if ((st = tb__reserve(w, (void **)&s->body_rows, &s->link_cap, 2 * rows, sizeof *s->body_rows)) != TB_OK)
+        return st;
+    if (bodies + 1 > s->body_cap) {
+        if ((st = tb__grow(w, body_arrays, body_sizes, 3, 0, s->body_cap, 2 * bodies + 1)) != TB_OK)
+            return st;
+        s->body_cap = 2 * bodies + 1;
+    }
+    if (env > s->env_cap) {
+        if ((st = tb__grow(w, env_arrays, env_sizes, 2, 0, s->env_cap, 2 * env)) != TB_OK)
+            return st;
+        s->env_cap = 2 * env;
+    }
+    return TB_OK;
+}
+
+/* The other side of row o from body i (-1: static) */
+static int32_t other(const tb__soft_row *o, int32_t i)
+{
+    return o->a == i ? o->b : o->a;
+}
+
+/* Breadth-first from body start over the rows, writing the walk into
+   queue[*count ...]; body_order marks the visited with tag. The last
+   body reached. */
+static int32_t walk(tb__contacts *c, struct tb__stacks *s, int32_t start, int32_t tag, size_t *count)
+{
+    size_t head = *count, k;
+    s->queue[(*count)++] = start;
+    s->body_order[start] = tag;
+    while (head < *count) {
+        const int32_t i = s->queue[head++];
+        for (k = s->body_start[i]; k < s->body_start[i + 1]; ++k) {
+            const int32_t j = other(&c->soft_rows[s->body_rows[k]], i);
+            if (j >= 0 && s->body_order[j] != tag) {
+                s->body_order[j] = tag;
+                s->queue[(*count)++] = j;
+            }
+        }
+    }
+    return s->queue[*count - 1];
+}
+
+/* J M^-1 J^T between rows o and p through body i, with the signs of
+   their sides (b +, a -) */
+static double coupling(const tb__contacts *c, const tb__soft_row *o, const tb__soft_row *p, int32_t i)
+{
+    const double so = o->b == i ? 1 : -1, sp = p->b == i ? 1 : -1;
+    const double *arm = o->b == i ? o->arm_b : o->arm_a, *spin = p->b == i ? p->spin_b : p->spin_a;
+    double k = c->bodies[i].inv_mass * tb__dot3(o->normal, p->normal);
+    if (c->bodies[i].tier == TB__BODIES)
+        k += tb__dot3(arm, spin);
+    return so * sp * k;
+}
+
+/* Island k's band assembled into a: the rows of every body coupled in
+   pairs */
+static void assemble(tb__contacts *c, struct tb__stacks *s, size_t k)
+{
+    const size_t from = s->island_start[k], to = s->island_start[k + 1];
+    size_t i, m, n;
+    for (i = from; i < to; ++i)
+        memset(s->a + s->offset[i], 0, (i - s->first[i] + 1) * sizeof *s->a);
+    for (i = from; i < to; ++i) {
+        const tb__soft_row *o = &c->soft_rows[s->order[i]];
+        int side;
+        for (side = 0; side < 2; ++side) {
+            const int32_t b = side ? o->b : o->a;
+            if (b < 0)
+                continue;
+            for (m = s->body_start[b]; m < s->body_start[b + 1]; ++m) {
+                n = s->position[s->body_rows[m]];
+                if (n <= i)
+                    s->a[s->offset[i] + n - s->first[i]] += coupling(c, o, &c->soft_rows[s->order[n]], b);
+            }
+        }
+        s->a[s->offset[i] + i - s->first[i]] *= 1 + TB__STACK_COMPLIANCE;
+    }
+}
+
+/* The band of the solved rows factored (L L^T), held rows made the
+   identity. 0 if a pivot is not positive. */
+static int factor(struct tb__stacks *s, size_t k)
+{
+    const size_t from = s->island_start[k], to = s->island_start[k + 1];
+    size_t i, j, q;
+    for (i = from; i < to; ++i) {
+        double *li = s->l + s->offset[i] - s->first[i];
+        const double *ai = s->a + s->offset[i] - s->first[i];
+        double d;
+        for (j = s->first[i]; j < i; ++j) {
+            const double *lj = s->l + s->offset[j] - s->first[j];
+            double sum = s->solved[i] && s->solved[j] ? ai[j] : 0;
+            for (q = s->first[i] > s->first[j] ? s->first[i] : s->first[j]; q < j; ++q)
+                sum -= li[q] * lj[q];
+            li[j] = sum / lj[j];
+        }
+        d = s->solved[i] ? ai[i] : 1;
+        for (q = s->first[i]; q < i; ++q)
+            d -= li[q] * li[q];
+        if (!(d > 0))
+            return 0;
+        li[i] = sqrt(d);
+    }
+    return 1;
+}
+
+/* x = (L L^T)^-1 x over island k */
+static void substitute(struct tb__stacks *s, size_t k)
+{
+    const size_t from = s->island_start[k], to = s->island_start[k + 1];
+    size_t i, q;
+    for (i = from; i < to; ++i) {
+        const double *li = s->l + s->offset[i] - s->first[i];
+        double sum = s->x[i];
+        for (q = s->first[i]; q < i; ++q)
+            sum -= li[q] * s->x[q];
+        s->x[i] = sum / li[i];
+    }
+    for (i = to; i-- > from;) {
+        const double *li = s->l + s->offset[i] - s->first[i];
+        s->x[i] /= li[i];
+        for (q = s->first[i]; q < i; ++q)
+            s->x[q] -= li[q] * s->x[i];
+    }
+}
+
+/* Island k's rows placed from position *placed: body by body along the
+   walk queue[from .. to), each row after the first of its bodies; its band
+   starts at the first row of either body. 0 (and nothing placed) if the
+   band is too wide to pay for. */
+static int place(tb__contacts *c, struct tb__stacks *s, size_t from, size_t to, size_t *placed, size_t *env,
+                 double sink)
+{
+    const size_t start = *placed;
+    size_t i, k, n = start, cost = 0, width = *env;
+    double deepest = 0;
+    for (i = from; i < to; ++i)
+        s->body_order[s->queue[i]] = (int32_t)(i - from);
+    for (i = from; i < to; ++i) {
+        const int32_t b = s->queue[i];
+        for (k = s->body_start[b]; k < s->body_start[b + 1]; ++k) {
+            const size_t r = s->body_rows[k];
+            const int32_t o = other(&c->soft_rows[r], b);
+            if (o < 0 || s->body_order[o] < s->body_order[b]) {
+                const tb__soft_row *row = &c->soft_rows[r];
+                s->order[n++] = r;
+                deepest = fmax(deepest, row->mass > 0 ? row->impulse / row->mass : 0);
+            }
+        }
+    }
+    /* the first position of each body, then each row's band */
+    for (i = from; i < to; ++i)
+        s->body_order[s->queue[i]] = -1;
+    for (k = start; k < n; ++k) {
+        const tb__soft_row *o = &c->soft_rows[s->order[k]];
+        size_t f = k;
+        if (o->a >= 0) {
+            if (s->body_order[o->a] < 0)
+                s->body_order[o->a] = (int32_t)(k - start);
+            f = start + (size_t)s->body_order[o->a];
+        }
+        if (o->b >= 0) {
+            if (s->body_order[o->b] < 0)
+                s->body_order[o->b] = (int32_t)(k - start);
+            if (start + (size_t)s->body_order[o->b] < f)
+                f = start + (size_t)s->body_order[o->b];
+        }
+        s->first[k] = f;
+        s->offset[k] = width;
+        width += k - f + 1;
+        cost += (k - f) * (k - f);
+    }
+    if (deepest * sink <= TB__STACK_SINK * c->settings.slop ||
+        cost > (size_t)TB__STACK_WIDTH * TB__STACK_WIDTH * (n - start)) {
+        for (k = start; k < n; ++k)
+            s->position[s->order[k]] = TB__NONE;
+        return 0;
+    }
+    for (k = start; k < n; ++k)
+        s->position[s->order[k]] = k;
+    *placed = n;
+    *env = width;
+    return 1;
+}
+
+tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c, double hs, double omega)
+{
+    /* a row's warm start i over hs is the load it carries, held by a soft
+       row at an overlap of i / (hs m_eff omega^2): i / m_eff times this */
+    const double sink = 1 / (hs * omega * omega);
+    struct tb__stacks *s = c->stacks;
+    const size_t rows = c->soft_row_count, bodies = c->body_count;
+    size_t i, k, count = 0, placed = 0, env = 0;
+    tb_status st;
+    if (!s) {
+        if (!(s = tb__alloc(w, NULL, 0, sizeof *s)))
+            return tb__fail(w, TB_ERR_MEMORY, "out of memory for the stack solver");
+        memset(s, 0, sizeof *s);
+        c->stacks = s;
+    }
+    s->island_count = 0;
+    if (rows == 0 || bodies == 0)
+        return TB_OK;
+    if ((st = reserve(w, s, rows, bodies, 0)) != TB_OK)
+        return st;
+    /* the rows of each body */
+    memset(s->body_start, 0, (bodies + 1) * sizeof *s->body_start);
+    for (i = 0; i < rows; ++i) {
+        const tb__soft_row *o = &c->soft_rows[i];
+        s->position[i] = TB__NONE;
+        if (o->a >= 0)
+            ++s->body_start[o->a + 1];
+        if (o->b >= 0)
+            ++s->body_start[o->b + 1];
+    }
+    for (i = 0; i < bodies; ++i)
+        s->body_start[i + 1] += s->body_start[i];
+    for (i = 0; i < bodies; ++i)
+        s->body_order[i] = (int32_t)s->body_start[i];
+    for (i = 0; i < rows; ++i) {
+        const tb__soft_row *o = &c->soft_rows[i];
+        if (o->a >= 0)
+            s->body_rows[s->body_order[o->a]++] = i;
+        if (o->b >= 0)
+            s->body_rows[s->body_order[o->b]++] = i;
+    }
+    /* islands: a walk from any body, then from the last it reached (an
+       end of the island) for the order */
+    for (i = 0; i < bodies; ++i)
+        s->body_order[i] = -2;
+    for (i = 0; i < bodies; ++i) {
+        size_t from = count, end;
+        int32_t far;
+        if (s->body_order[i] != -2 || s->body_start[i] == s->body_start[i + 1])
+            continue;
+        far = walk(c, s, (int32_t)i, -3, &count);
+        count = from;
+        walk(c, s, far, -4, &count);
+        end = count;
+        s->island_start[s->island_count] = placed;
+        if (place(c, s, from, end, &placed, &env, sink))
+            ++s->island_count;
+        for (k = from; k < end; ++k)
+            s->body_order[s->queue[k]] = -5; /* done */
+        count = from;
+    }
+    s->island_start[s->island_count] = placed;
+    if ((st = reserve(w, s, rows, bodies, env)) != TB_OK) {
+        s->island_count = 0;
+        return st;
+    }
+    for (k = 0; k < s->island_count; ++k)
+        assemble(c, s, k);
+    for (i = 0; i < c->soft_patch_count; ++i) {
+        tb__soft_patch *p = &c->soft_patches[i];
+        p->stacked = s->position[p->first] != TB__NONE;
+    }
+    return TB_OK;
+}
+
+/* x += (J M^-1 J^T) times the solved rows' impulses, over island k's
+   solved rows */
+static void add_loads(const tb__contacts *c, struct tb__stacks *s, size_t k)
+{
+    const size_t from = s->island_start[k], to = s->island_start[k + 1];
+    size_t i, q;
+    for (i = from; i < to; ++i) {
+        const double *ai = s->a + s->offset[i] - s->first[i];
+        const double li = c->soft_rows[s->order[i]].impulse;
+        if (!s->solved[i])
+            continue;
+        for (q = s->first[i]; q < i; ++q)
+            if (s->solved[q]) {
+                s->x[i] += ai[q] * c->soft_rows[s->order[q]].impulse;
+                s->x[q] += ai[q] * li;
+            }
+        s->x[i] += ai[i] * li;
+    }
+}
+
+/* Two unit tangents of n */
+static void tangents(const double n[3], double t1[3], double t2[3])
+{
+    const double a[3] = { fabs(n[0]) < 0.6 ? 1 : 0, fabs(n[0]) < 0.6 ? 0 : 1, 0 };
+    double len;
+    int k;
+    tb__cross(n, a, t1);
+    len = sqrt(tb__dot3(t1, t1));
+    for (k = 0; k < 3; ++k)
+        t1[k] /= len;
+    tb__cross(n, t1, t2);
+}
+
+/* The velocities the solved rows of positions [from, to), one patch,
+   aim at (in x), levelled: the plane over the points' places that best
+   fits them (least squares), so that what the rows ask is a motion the
+   two bodies can make. Asked point by point, a box's four corners on a
+   face ask three motions four things, and solved together the rows would
+   push against each other with the difference over their compliance. */
+static void level(const tb__contacts *c, struct tb__stacks *s, size_t from, size_t to)
+{
+    double t1[3], t2[3], u[2] = { 0, 0 }, mean = 0, cov[3] = { 0, 0, 0 }, cross[2] = { 0, 0 }, g[2] = { 0, 0 };
+    double count = 0, det;
+    size_t i;
+    tangents(c->soft_rows[s->order[from]].normal, t1, t2);
+    for (i = from; i < to; ++i) {
+        const tb__soft_row *o = &c->soft_rows[s->order[i]];
+        const double *r = o->a >= 0 ? o->ra : o->rb;
+        if (!s->solved[i])
+            continue;
+        u[0] += tb__dot3(r, t1), u[1] += tb__dot3(r, t2), mean += s->x[i], count += 1;
+    }
+    if (count < 2)
+        return;
+    u[0] /= count, u[1] /= count, mean /= count;
+    for (i = from; i < to; ++i) {
+        const tb__soft_row *o = &c->soft_rows[s->order[i]];
+        const double *r = o->a >= 0 ? o->ra : o->rb;
+        const double d0 = tb__dot3(r, t1) - u[0], d1 = tb__dot3(r, t2) - u[1], e = s->x[i] - mean;
+        if (!s->solved[i])
+            continue;
+        cov[0] += d0 * d0, cov[1] += d0 * d1, cov[2] += d1 * d1;
+        cross[0] += d0 * e, cross[1] += d1 * e;
+    }
+    det = cov[0] * cov[2] - cov[1] * cov[1];
+    if (det > 1e-9 * (cov[0] + cov[2]) * (cov[0] + cov[2])) {
+        g[0] = (cov[2] * cross[0] - cov[1] * cross[1]) / det;
+        g[1] = (cov[0] * cross[1] - cov[1] * cross[0]) / det;
+    } else if (cov[0] + cov[2] > 0) {
+        /* the points on a line: a slope along it */
+        const double along = (cross[0] * cov[0] + cross[1] * cov[1]) != 0 || cov[0] >= cov[2] ? 0 : 1;
+        const double dir[2] = { along ? cov[1] : cov[0], along ? cov[2] : cov[1] };
+        const double dd = dir[0] * dir[0] + dir[1] * dir[1];
+        if (dd > 0) {
+            const double slope = (dir[0] * cross[0] + dir[1] * cross[1]) /
+                                 (dir[0] * (cov[0] * dir[0] + cov[1] * dir[1]) + dir[1] * (cov[1] * dir[0] + cov[2] * dir[1]));
+            g[0] = slope * dir[0], g[1] = slope * dir[1];
+        }
+    }
+    for (i = from; i < to; ++i) {
+        const tb__soft_row *o = &c->soft_rows[s->order[i]];
+        const double *r = o->a >= 0 ? o->ra : o->rb;
+        if (s->solved[i])
+            s->x[i] = mean + g[0] * (tb__dot3(r, t1) - u[0]) + g[1] * (tb__dot3(r, t2) - u[1]);
+    }
+}
+
+/* Island k's normal rows, solved together and rigid: a touching point
+   aims (with bias) at pushing its overlap out at the soft rows' rate, at
+   most max_push, or (without: the relax) at no approach; a point still
+   apart closes at most its gap (with bias) or is held (without). */
+static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double hs, int bias)
+{
+    const size_t from = s->island_start[k], to = s->island_start[k + 1];
+    /* a gap of rounding's size touches: held apart or not by rounding,
+       a face's corners would rock the body about the others */
+    const double tiny = 1e-12, touch = 1e-3 * c->settings.slop;
+    size_t i, round;
+    int changed = 1;
+    for (i = from; i < to; ++i) {
+        tb__soft_row *o = &c->soft_rows[s->order[i]];
+        const double sep = tb__soft_separation(c, o);
+        s->vn0[i] = tb__soft_rate(c, o);
+        s->solved[i] = sep <= touch || (bias && s->vn0[i] * hs < -sep);
+        if (bias && !s->solved[i] && o->impulse > 0) {
+            /* apart and not closing: the warm start lets go */
+            tb__soft_push(c, o, -o->impulse);
+            o->impulse = 0;
+        }
+    }
+    for (round = 0; round < TB__STACK_ROUNDS && changed; ++round) {
+        size_t patch;
+        changed = 0;
+        if (!factor(s, k))
+            return;
+        for (i = from; i < to; ++i) {
+            const tb__soft_row *o = &c->soft_rows[s->order[i]];
+            double sep;
+            if (!s->solved[i]) {
+                s->x[i] = 0;
+                continue;
+            }
+            sep = tb__soft_separation(c, o);
+            s->x[i] = sep > 0 && bias ? -sep / hs : 0;
+        }
+        for (patch = from, i = from + 1; i <= to; ++i) {
+            const tb__soft_row *o = &c->soft_rows[s->order[patch]];
+            const tb__soft_row *p = i < to ? &c->soft_rows[s->order[i]] : NULL;
+            if (p && p->a == o->a && p->b == o->b && memcmp(p->normal, o->normal, sizeof p->normal) == 0)
+                continue;
+            level(c, s, patch, i);
+            patch = i;
+        }
+        for (i = from; i < to; ++i)
+            if (s->solved[i])
+                s->x[i] -= tb__soft_rate(c, &c->soft_rows[s->order[i]]);
+        /* the whole impulse, not a change: the rows' share of a load
+           is then the least one (the compliance's), and stays the same
+           from substep to substep */
+        add_loads(c, s, k);
+        substitute(s, k);
+        /* a point solved to pull lets go */
+        for (i = from; i < to; ++i) {
+            tb__soft_row *o = &c->soft_rows[s->order[i]];
+            if (s->solved[i] && s->x[i] < -tiny * (o->mass + 1)) {
+                s->solved[i] = 0;
+                changed = 1;
+                tb__soft_push(c, o, -o->impulse);
+                o->impulse = 0;
+            }
+        }
+        if (changed)
+            continue;
+        for (i = from; i < to; ++i) {
+            tb__soft_row *o = &c->soft_rows[s->order[i]];
+            const double total = fmax(s->x[i], 0);
+            if (!s->solved[i])
+                continue;
+            tb__soft_push(c, o, total - o->impulse);
+            o->impulse = total;
+        }
+        /* a point let go that now closes more than its gap is taken in */
+        for (i = from; i < to; ++i) {
+            const tb__soft_row *o = &c->soft_rows[s->order[i]];
+            double sep, vn;
+            if (s->solved[i])
+                continue;
+            sep = tb__soft_separation(c, o);
+            vn = tb__soft_rate(c, o);
+            if (sep <= touch ? vn < -tiny : bias && vn * hs < -sep * (1 + 1e-9)) {
+                s->solved[i] = 1;
+                changed = 1;
+            }
+        }
+    }
+    for (i = from; i < to; ++i) {
+        tb__soft_row *o = &c->soft_rows[s->order[i]];
+        tb__soft_note(c, o, s->vn0[i], tb__soft_separation(c, o), hs);
+    }
+}
+
+void tb__stacks_solve(tb__contacts *c, double hs, int bias)
+{
+    struct tb__stacks *s = c->stacks;
+    size_t k;
+    if (!s)
+        return;
+    for (k = 0; k < s->island_count; ++k)
+        solve_island(c, s, k, hs, bias);
+}
+
+/* The push of every stacked island's overlaps, as velocities that move
+   positions over the drift and are then taken back (sign +1, then -1):
+   impulses that bring each overlapping point out at the soft rows' rate
+   (bias_rate times the overlap beyond the slop, at most max_push; a
+   resting stack's overlaps, of its rows' compliance, are left alone),
+   levelled per patch,
+   solved together with the rows the last solve held. Pushed as velocities
+   within the solve, the rows' friction would meet them and rock a stack
+   it stands on. */
+void tb__stacks_push(tb__contacts *c, double bias_rate, int sign)
+{
+    struct tb__stacks *s = c->stacks;
+    const double max_push = c->settings.max_push, slop = 0.05 * c->settings.slop;
+    size_t k, i, patch;
+    if (!s)
+        return;
+    for (k = 0; k < s->island_count; ++k) {
+        const size_t from = s->island_start[k], to = s->island_start[k + 1];
+        if (sign < 0) {
+            for (i = from; i < to; ++i)
+                if (s->push[i] != 0)
+                    tb__soft_push(c, &c->soft_rows[s->order[i]], -s->push[i]);
+            continue;
+        }
+        for (i = from; i < to; ++i) {
+            const double sep = tb__soft_separation(c, &c->soft_rows[s->order[i]]);
+            s->x[i] = s->solved[i] && sep < -slop ? -fmax(bias_rate * (sep + slop), -max_push) : 0;
+        }
+        for (patch = from, i = from + 1; i <= to; ++i) {
+            const tb__soft_row *o = &c->soft_rows[s->order[patch]];
+            const tb__soft_row *p = i < to ? &c->soft_rows[s->order[i]] : NULL;
+            if (p && p->a == o->a && p->b == o->b && memcmp(p->normal, o->normal, sizeof p->normal) == 0)
+                continue;
+            level(c, s, patch, i);
+            patch = i;
+        }
+        substitute(s, k);
+        for (i = from; i < to; ++i) {
+            s->push[i] = s->solved[i] ? s->x[i] : 0;
+            if (s->push[i] != 0)
+                tb__soft_push(c, &c->soft_rows[s->order[i]], s->push[i]);
+        }
+    }
+}
+
+void tb__stacks_free(tb_world *w, tb__contacts *c)
+{
+    struct tb__stacks *s = c->stacks;
+    if (!s)
+        return;
+    {
+        void **row_arrays[] = { (void **)&s->island_start, (void **)&s->order, (void **)&s->first,
+                                (void **)&s->offset, (void **)&s->position, (void **)&s->x, (void **)&s->vn0,
+                                (void **)&s->push, (void **)&s->solved };
+        const size_t row_sizes[] = { sizeof(size_t), sizeof(size_t), sizeof(size_t), sizeof(size_t),
+                                     sizeof(size_t), sizeof(double), sizeof(double), sizeof(double), 1 };
+        void **body_arrays[] = { (void **)&s->body_start, (void **)&s->body_order, (void **)&s->queue };
+        const size_t body_sizes[] = { sizeof(size_t), sizeof(int32_t), sizeof(int32_t) };
+        void **env_arrays[] = { (void **)&s->a, (void **)&s->l };
+        const size_t env_sizes[] = { sizeof(double), sizeof(double) };
+        tb__free_arrays(w, row_arrays, row_sizes, 9, s->row_cap);
+        tb__free_arrays(w, body_arrays, body_sizes, 3, s->body_cap);
+        tb__free_arrays(w, env_arrays, env_sizes, 2, s->env_cap);
+    }
+    tb__alloc(w, s->body_rows, s->link_cap * sizeof *s->body_rows, 0);
+    tb__alloc(w, s, sizeof *s, 0);
+    c->stacks = NULL;
+}
