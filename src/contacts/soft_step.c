@@ -11,7 +11,9 @@
    3. meets the substep's impacts (impacts, below): points with
       restitution whose gap closes in the substep, and the touching points
       their blows reach, bounced one after the other;
-   4. solves every patch once (below), the normal rows soft (a
+   4. solves every patch once (below), the touching points of an island
+      narrow enough together and rigid (stack_solve.c, whose overlaps are
+      pushed out around the drift), the other normal rows soft (a
       spring-damper of `hertz` and `damping_ratio` on the overlap, pushing
       at most `max_push`), speculative where the points are still apart;
       a patch whose point closes its gap within the substep is solved
@@ -19,6 +21,8 @@
    5. moves positions by the velocities the solve left (x by v, q by the
       torque-free turn of L: tb__rotation_split2), and a body an impact
       changed back to where the impact's time within the substep puts it;
+      then every row and patch responds through the bodies' inertia at
+      their new orientation (respond);
    6. relaxes: every patch once more, its touching points rigid and
       without the push, so that the push moves positions and leaves no
       speed; points still apart are left to the next substep's solve;
@@ -34,13 +38,13 @@
    at the centre of its points, friction (two rows within the circle mu
    times the points' normal impulses), twist (within mu times the sum of
    each point's impulse times its lever from the centre; a round point's
-   over its overlap's disc) and rolling resistance (about the tangents,
+   over the disc its load presses) and rolling resistance (about the tangents,
    within rho times the normal impulse).
    Every row keeps the arms of the start of the step (the Jacobian is that
-   of the start pose) and moves the bodies through their inertia at the
-   start, the pose its mass was found at; the separation is recomputed
-   every substep from the bodies' displacements and their turns since the
-   start, exactly. */
+   of the start pose) and moves the bodies through their inertia at their
+   orientation now (taken again after each drift: respond); the
+   separation is recomputed every substep from the bodies' displacements
+   and their turns since the start, exactly. */
 #include "contacts/soft_step.h"
 
 #include <math.h>
@@ -320,7 +324,7 @@ static void disc_step(const double mass[3], const double acc[2], double r1, doub
    friction. Whether a point still apart (or just touching) closes its gap
    within the substep: an impact, whose rows a single pass leaves
    coupled. */
-static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft *sf, int bias)
+static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft *sf, int bias, int settling)
 {
     int closing = 0;
     const double *n = c->soft_rows[p->first].normal;
@@ -328,14 +332,23 @@ static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft
     size_t k;
     for (k = 0; k < p->count; ++k) {
         tb__soft_row *o = &c->soft_rows[p->first + k];
-        const double f = (p->stacked ? o->impulse : solve_normal(c, o, hs, sf, bias, &closing, p->stacked)) + o->bounce;
+        const int stacked = p->stacked && tb__soft_separation(c, o) <= TB__TOUCHING * c->settings.slop;
+        const double f = (stacked ? o->impulse : solve_normal(c, o, hs, sf, bias, &closing, p->stacked)) + o->bounce;
         total += f;
         twist_limit += o->lever * f;
     }
     if (p->count == 1 && p->round > 0) {
-        /* one round point: the soft overlap's disc, of radius
-           sqrt(2 r overlap), pressed evenly, its friction at 2/3 of it */
-        const double overlap = fmax(-tb__soft_separation(c, &c->soft_rows[p->first]), 0);
+        /* one round point: the disc a contact of stiffness m omega^2
+           presses under its load, of radius sqrt(2 r d) for the overlap
+           d = load / (m omega^2) that spring would hold, pressed evenly,
+           its friction at 2/3 of it (whether the row is soft or solved
+           rigid with its stack) */
+        const tb__soft_row *o = &c->soft_rows[p->first];
+        /* the load is the substep's: settle's push, which ends the step
+           at rest, adds to the impulse but not to the force that
+           presses the disc (soft_step_spinning_ball_stops_on_its_overlap) */
+        const double load = settling ? o->settled + o->bounce : total;
+        const double overlap = o->mass > 0 ? load / (hs * o->mass * sf->omega * sf->omega) : 0;
         twist_limit = total * (2.0 / 3) * sqrt(2 * p->round * overlap);
     }
     if (p->friction > 0) {
@@ -363,15 +376,17 @@ static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft
    (another point, the friction at the centre) spin the body and drive the
    points met first through the surface, at any speed a spinning body
    brings (soft_step_spinning_plate_stays_on_the_slab). */
-static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias)
+static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias, int stacked_only, int settling)
 {
     size_t i;
     for (i = 0; i < c->soft_patch_count; ++i) {
         tb__soft_patch *p = &c->soft_patches[i];
         int pass;
-        if (solve_patch(c, p, hs, sf, bias))
+        if (stacked_only && !p->stacked)
+            continue;
+        if (solve_patch(c, p, hs, sf, bias, settling))
             for (pass = 1; pass < TB__IMPACT_PASSES; ++pass)
-                solve_patch(c, p, hs, sf, bias);
+                solve_patch(c, p, hs, sf, bias, settling);
     }
 }
 
@@ -745,7 +760,11 @@ static int impacts(tb__contacts *c, double hs)
                 const double kick = kick_rate(c, o), u = vn - 0.5 * kick, a = kick / hs;
                 double speed;
                 tau = impact_time(s, u, a, &speed);
-                if (tau < 0 || tau > hs || speed < threshold)
+                /* a gap that closes at the substep's end, to rounding, is
+                   this substep's: the next would find it touching, and
+                   its row would meet the bodies it touches as one
+                   (newtons_cradle) */
+                if (tau < 0 || tau > hs * (1 + 1e-9) || speed < threshold)
                     continue;
                 target = o->restitution * speed + a * (0.5 * hs - tau);
             } else {
@@ -899,8 +918,8 @@ static void settle(tb__contacts *c, double hs, const soft *sf)
         p->settled_twist = p->twist_impulse;
         memcpy(p->settled_rolling, p->rolling_impulse, sizeof p->settled_rolling);
     }
-    tb__stacks_solve(c, hs, 0);
-    solve_patches(c, hs, sf, 0);
+    tb__stacks_solve(c, hs);
+    solve_patches(c, hs, sf, 0, 0, 1);
     for (i = 0; i < c->soft_row_count; ++i)
         c->soft_rows[i].settled = c->soft_rows[i].impulse - c->soft_rows[i].settled;
     for (i = 0; i < c->soft_patch_count; ++i) {
@@ -914,6 +933,51 @@ static void settle(tb__contacts *c, double hs, const soft *sf)
     }
 }
 
+/* After the drift, every row and patch responds through the bodies'
+   inertia at their new orientation: a thin body's inverse inertia turns
+   with it (a bar's about its axis is thousands of times its others), and
+   a row pushing through the old one would change w by what L's change
+   does not give, which the next drift, taking w from L, turns into energy
+   (smallest_failing_scenes' bar). */
+/* After a substep: a patch whose points bounced keeps, as the next
+   substep's warm start, only the share of its friction, twist and
+   rolling resistance that its rows' pushes back (the bounce's share is a
+   blow, not a force that lasts): warm started whole, a rod's rim
+   friction from a bounce would spin it up again in every substep
+   (smallest_failing_scenes' rod). */
+static void unbounce(tb__contacts *c)
+{
+    size_t i, k;
+    for (i = 0; i < c->soft_patch_count; ++i) {
+        tb__soft_patch *p = &c->soft_patches[i];
+        double pushed = 0, bounced = 0, share;
+        for (k = 0; k < p->count; ++k) {
+            pushed += c->soft_rows[p->first + k].impulse;
+            bounced += c->soft_rows[p->first + k].bounce;
+        }
+        if (!(bounced > 0))
+            continue;
+        share = pushed / (pushed + bounced);
+        p->friction_impulse[0] *= share, p->friction_impulse[1] *= share;
+        p->twist_impulse *= share;
+        p->rolling_impulse[0] *= share, p->rolling_impulse[1] *= share;
+    }
+}
+
+static void respond(tb__contacts *c)
+{
+    size_t i;
+    for (i = 0; i < c->body_count; ++i) {
+        tb__soft_body *s = &c->soft_bodies[i];
+        tb__mul(s->inv_world, s->L, s->w); /* the push taken back through the old inertia */
+    }
+    for (i = 0; i < c->soft_row_count; ++i)
+        row_response(c, &c->soft_rows[i]);
+    for (i = 0; i < c->soft_patch_count; ++i)
+        patch_response(c, &c->soft_patches[i]);
+    tb__stacks_assemble(c);
+}
+
 tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
 {
     const int n = c->settings.substeps;
@@ -925,22 +989,26 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
                           sizeof *c->soft_bodies)) != TB_OK)
         return st;
     load(w, c, n);
-    if ((st = set_up_rows(w, c, h, n)) != TB_OK || (st = tb__stacks_set_up(w, c, hs, sf.omega)) != TB_OK)
+    if ((st = set_up_rows(w, c, h, n)) != TB_OK || (st = tb__stacks_set_up(w, c)) != TB_OK)
         return st;
     for (i = 0; i < n; ++i) {
         half_kick(c);
         warm_start(c);
         struck = impacts(c, hs);
-        tb__stacks_solve(c, hs, 1);
-        solve_patches(c, hs, &sf, 1);
-        tb__stacks_solve(c, hs, 1);
+        tb__stacks_solve(c, hs);
+        solve_patches(c, hs, &sf, 1, 0, 0);
+        if (tb__stacks_solve(c, hs))
+            solve_patches(c, hs, &sf, 1, 1, 0);
         tb__stacks_push(c, sf.bias_rate, 1);
         drift(c, hs);
         tb__stacks_push(c, sf.bias_rate, -1);
         if (struck)
             impacts_moved(c);
-        tb__stacks_solve(c, hs, 0);
-        solve_patches(c, hs, &sf, 0);
+        respond(c);
+        tb__stacks_solve(c, hs);
+        solve_patches(c, hs, &sf, 0, 0, 0);
+        if (struck)
+            unbounce(c);
         half_kick(c);
     }
     settle(c, hs, &sf);

@@ -76,10 +76,22 @@ void tb__soft_push(tb__contacts *c, const tb__soft_row *o, double lambda);
    and its largest impulse */
 void tb__soft_note(tb__contacts *c, tb__soft_row *o, double vn, double s, double hs);
 
-/* stack_solve.c: the normal rows of islands whose band is narrow enough,
-   solved together (their patches marked stacked) */
-tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c, double hs, double omega);
-void tb__stacks_solve(tb__contacts *c, double hs, int bias);
+/* A point within this share of the slop of touching touches, in a
+   stacked patch: its row is solved with its island's (stack_solve.c), a
+   point further apart by the patch's own speculative row. Held apart or
+   not by rounding, a face's corners would rock a body about the others;
+   solved with the island, a gap closing within the substep would meet
+   a whole touching row of bodies as one (newtons_cradle). */
+#define TB__TOUCHING 1e-3
+
+/* stack_solve.c: the touching normal rows of islands whose band is
+   narrow enough, solved together (their patches marked stacked), and the
+   push of their overlaps */
+tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c);
+/* whether there were any */
+int tb__stacks_solve(tb__contacts *c, double hs);
+/* The bands again, from the rows' responses now */
+void tb__stacks_assemble(tb__contacts *c);
 void tb__stacks_push(tb__contacts *c, double bias_rate, int sign);
 void tb__stacks_free(tb_world *w, tb__contacts *c);
 

@@ -1,30 +1,29 @@
-/* stack_solve.c: the normal rows of a loaded island solved together,
+/* stack_solve.c: the touching normal rows of an island solved together,
    rigid and exactly, in the soft step's solves (docs/contacts.md,
-   "Stacks solved together").
+   "Islands solved together").
    A soft row holds a load F at an overlap of F over its own effective
    mass times omega^2: a light body under a heavy one sinks by the mass
-   ratio, and a tall stack's interfaces lean under the moments its offsets
-   put on them until the lean tips it (a soft interface resists a tilt
-   only by its springs). Rows solved one at a time cannot be stiffer than
-   the substep follows. Solved together, by a factorisation of
-   J M^-1 J^T (plus a small compliance) over the touching rows of an
-   island, they meet every point's target at once and carry any load
-   without a sink: a tilt must open a gap. Which points push is found by
-   active sets: a point solved to pull lets go, a point let go that
-   approaches (or closes more than its gap) is taken in, and the rows are
-   solved again.
-   - Which islands: those with a row whose warm start (the load it
-     carried last step) a soft row would hold at an overlap beyond
-     TB__STACK_SINK of the slop, and whose band is narrow enough
-     (TB__STACK_WIDTH): a tower, a light plank under a heavy beam. Heaps
-     and walls, whose band grows with their size, stay soft.
-   - The rows aim at no approach (or at closing at most their gap): what
-     the velocities ask is always a motion the bodies can make, so the
-     compliance never meets a contradiction. Overlap beyond a twentieth of
-     the slop is pushed out apart, as velocities that move positions over
-     the drift and are then taken back (tb__stacks_push), levelled per
-     patch: pushing the overlap of the rows' own compliance, or pushing it
-     within the solve where friction meets it, rocks a stack
+   ratio, and a tall stack's interfaces lean under its offsets' moments
+   until the lean tips it (a soft interface resists a tilt only by its
+   springs). Rows solved one at a time cannot be stiffer than the substep
+   follows. Solved together, by a factorisation of J M^-1 J^T (plus a
+   small compliance) over the touching rows of an island, they carry any
+   load without a sink, and a tilt must open a gap. Which points push is
+   found by active sets: a point solved to pull lets go, a point let go
+   that approaches is taken in, and the rows are solved again.
+   - Which islands: every island of bodies joined by the step's patches
+     whose band is narrow enough (TB__STACK_WIDTH): a body on the ground,
+     a tower, a light plank under a heavy beam. Heaps and walls, whose
+     band grows with their size, stay soft.
+   - Which rows: the points within TB__TOUCHING of the slop of touching,
+     aiming at no approach, a motion the bodies can always make, so the
+     compliance never meets a contradiction. A gap still open is its
+     patch's speculative row's (soft_step.c); solved with the island, a
+     gap closing within the substep would meet a whole touching row of
+     bodies as one (newtons_cradle). Overlap beyond a twentieth of the
+     slop is pushed out apart from the velocities (tb__stacks_push),
+     levelled per patch: pushing the overlap of the rows' own compliance,
+     or pushing within the solve where friction meets it, rocks a stack
      (offset_tower_stands).
    The rows are ordered island by island along a breadth-first walk of
    its bodies from one end (a stack: bottom to top), each row after the
@@ -36,9 +35,6 @@
 #include <string.h>
 
 #define TB__STACK_WIDTH 32
-/* an island is solved together where a soft row would hold the load one
-   of its rows carries at an overlap of more than this share of the slop */
-#define TB__STACK_SINK 0.2
 /* active-set rounds of one solve: each refactors the band */
 #define TB__STACK_ROUNDS 6
 /* the rows' compliance, relative to their own inverse mass: it shares a
@@ -164,6 +160,14 @@ static void assemble(tb__contacts *c, struct tb__stacks *s, size_t k)
     }
 }
 
+void tb__stacks_assemble(tb__contacts *c)
+{
+    size_t k;
+    if (c->stacks)
+        for (k = 0; k < c->stacks->island_count; ++k)
+            assemble(c, c->stacks, k);
+}
+
 /* The band of the solved rows factored (L L^T), held rows made the
    identity. 0 if a pivot is not positive. */
 static int factor(struct tb__stacks *s, size_t k)
@@ -215,12 +219,10 @@ static void substitute(struct tb__stacks *s, size_t k)
    walk queue[from .. to), each row after the first of its bodies; its band
    starts at the first row of either body. 0 (and nothing placed) if the
    band is too wide to pay for. */
-static int place(tb__contacts *c, struct tb__stacks *s, size_t from, size_t to, size_t *placed, size_t *env,
-                 double sink)
+static int place(tb__contacts *c, struct tb__stacks *s, size_t from, size_t to, size_t *placed, size_t *env)
 {
     const size_t start = *placed;
     size_t i, k, n = start, cost = 0, width = *env;
-    double deepest = 0;
     for (i = from; i < to; ++i)
         s->body_order[s->queue[i]] = (int32_t)(i - from);
     for (i = from; i < to; ++i) {
@@ -228,11 +230,8 @@ static int place(tb__contacts *c, struct tb__stacks *s, size_t from, size_t to, 
         for (k = s->body_start[b]; k < s->body_start[b + 1]; ++k) {
             const size_t r = s->body_rows[k];
             const int32_t o = other(&c->soft_rows[r], b);
-            if (o < 0 || s->body_order[o] < s->body_order[b]) {
-                const tb__soft_row *row = &c->soft_rows[r];
+            if (o < 0 || s->body_order[o] < s->body_order[b])
                 s->order[n++] = r;
-                deepest = fmax(deepest, row->mass > 0 ? row->impulse / row->mass : 0);
-            }
         }
     }
     /* the first position of each body, then each row's band */
@@ -257,8 +256,7 @@ static int place(tb__contacts *c, struct tb__stacks *s, size_t from, size_t to, 
         width += k - f + 1;
         cost += (k - f) * (k - f);
     }
-    if (deepest * sink <= TB__STACK_SINK * c->settings.slop ||
-        cost > (size_t)TB__STACK_WIDTH * TB__STACK_WIDTH * (n - start)) {
+    if (cost > (size_t)TB__STACK_WIDTH * TB__STACK_WIDTH * (n - start)) {
         for (k = start; k < n; ++k)
             s->position[s->order[k]] = TB__NONE;
         return 0;
@@ -270,11 +268,8 @@ static int place(tb__contacts *c, struct tb__stacks *s, size_t from, size_t to, 
     return 1;
 }
 
-tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c, double hs, double omega)
+tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c)
 {
-    /* a row's warm start i over hs is the load it carries, held by a soft
-       row at an overlap of i / (hs m_eff omega^2): i / m_eff times this */
-    const double sink = 1 / (hs * omega * omega);
     struct tb__stacks *s = c->stacks;
     const size_t rows = c->soft_row_count, bodies = c->body_count;
     size_t i, k, count = 0, placed = 0, env = 0;
@@ -325,7 +320,7 @@ tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c, double hs, double omeg
         walk(c, s, far, -4, &count);
         end = count;
         s->island_start[s->island_count] = placed;
-        if (place(c, s, from, end, &placed, &env, sink))
+        if (place(c, s, from, end, &placed, &env))
             ++s->island_count;
         for (k = from; k < end; ++k)
             s->body_order[s->queue[k]] = -5; /* done */
@@ -432,55 +427,28 @@ static void level(const tb__contacts *c, struct tb__stacks *s, size_t from, size
     }
 }
 
-/* Island k's normal rows, solved together and rigid: a touching point
-   aims (with bias) at pushing its overlap out at the soft rows' rate, at
-   most max_push, or (without: the relax) at no approach; a point still
-   apart closes at most its gap (with bias) or is held (without). */
-static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double hs, int bias)
+/* Island k's touching normal rows, solved together and rigid, aiming at
+   no approach: a motion the bodies can always make (the push of overlaps
+   is tb__stacks_push's; a gap still open is its patch's speculative
+   row's). */
+static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double hs)
 {
     const size_t from = s->island_start[k], to = s->island_start[k + 1];
-    /* a gap of rounding's size touches: held apart or not by rounding,
-       a face's corners would rock the body about the others */
-    const double tiny = 1e-12, touch = 1e-3 * c->settings.slop;
+    const double tiny = 1e-12, touch = TB__TOUCHING * c->settings.slop;
     size_t i, round;
     int changed = 1;
     for (i = from; i < to; ++i) {
         tb__soft_row *o = &c->soft_rows[s->order[i]];
         const double sep = tb__soft_separation(c, o);
         s->vn0[i] = tb__soft_rate(c, o);
-        s->solved[i] = sep <= touch || (bias && s->vn0[i] * hs < -sep);
-        if (bias && !s->solved[i] && o->impulse > 0) {
-            /* apart and not closing: the warm start lets go */
-            tb__soft_push(c, o, -o->impulse);
-            o->impulse = 0;
-        }
+        s->solved[i] = sep <= touch;
     }
     for (round = 0; round < TB__STACK_ROUNDS && changed; ++round) {
-        size_t patch;
         changed = 0;
         if (!factor(s, k))
             return;
-        for (i = from; i < to; ++i) {
-            const tb__soft_row *o = &c->soft_rows[s->order[i]];
-            double sep;
-            if (!s->solved[i]) {
-                s->x[i] = 0;
-                continue;
-            }
-            sep = tb__soft_separation(c, o);
-            s->x[i] = sep > 0 && bias ? -sep / hs : 0;
-        }
-        for (patch = from, i = from + 1; i <= to; ++i) {
-            const tb__soft_row *o = &c->soft_rows[s->order[patch]];
-            const tb__soft_row *p = i < to ? &c->soft_rows[s->order[i]] : NULL;
-            if (p && p->a == o->a && p->b == o->b && memcmp(p->normal, o->normal, sizeof p->normal) == 0)
-                continue;
-            level(c, s, patch, i);
-            patch = i;
-        }
         for (i = from; i < to; ++i)
-            if (s->solved[i])
-                s->x[i] -= tb__soft_rate(c, &c->soft_rows[s->order[i]]);
+            s->x[i] = s->solved[i] ? -tb__soft_rate(c, &c->soft_rows[s->order[i]]) : 0;
         /* the whole impulse, not a change: the rows' share of a load
            is then the least one (the compliance's), and stays the same
            from substep to substep */
@@ -506,7 +474,7 @@ static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double
             tb__soft_push(c, o, total - o->impulse);
             o->impulse = total;
         }
-        /* a point let go that now closes more than its gap is taken in */
+        /* a touching point let go that now approaches is taken in */
         for (i = from; i < to; ++i) {
             const tb__soft_row *o = &c->soft_rows[s->order[i]];
             double sep, vn;
@@ -514,26 +482,28 @@ static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double
                 continue;
             sep = tb__soft_separation(c, o);
             vn = tb__soft_rate(c, o);
-            if (sep <= touch ? vn < -tiny : bias && vn * hs < -sep * (1 + 1e-9)) {
+            if (sep <= touch && vn < -tiny) {
                 s->solved[i] = 1;
                 changed = 1;
             }
         }
     }
-    for (i = from; i < to; ++i) {
-        tb__soft_row *o = &c->soft_rows[s->order[i]];
-        tb__soft_note(c, o, s->vn0[i], tb__soft_separation(c, o), hs);
-    }
+    for (i = from; i < to; ++i)
+        if (s->solved[i]) {
+            tb__soft_row *o = &c->soft_rows[s->order[i]];
+            tb__soft_note(c, o, s->vn0[i], tb__soft_separation(c, o), hs);
+        }
 }
 
-void tb__stacks_solve(tb__contacts *c, double hs, int bias)
+int tb__stacks_solve(tb__contacts *c, double hs)
 {
     struct tb__stacks *s = c->stacks;
     size_t k;
     if (!s)
-        return;
+        return 0;
     for (k = 0; k < s->island_count; ++k)
-        solve_island(c, s, k, hs, bias);
+        solve_island(c, s, k, hs);
+    return s->island_count > 0;
 }
 
 /* The push of every stacked island's overlaps, as velocities that move

@@ -21,6 +21,8 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <stdlib.h>
+#include <stdio.h>
 
 #define HZ 60.0
 #define STEPS 300 /* 5 s: the throw, the landing and most of the settling */
@@ -390,6 +392,7 @@ static int run_heap(const heap_spec *spec, worst *out, char *failure, size_t siz
             continue;
         if (partner >= 0 && kept(spec, partner))
             overlaps += overlap;
+        if (getenv("TB_DUMP")) fprintf(stderr, "body type %d r %.17g half %.17g %.17g %.17g mass %.17g I %.17g %.17g %.17g pos %.17g %.17g %.17g q %.17g %.17g %.17g %.17g v %.17g %.17g %.17g w %.17g %.17g %.17g mu %.17g e %.17g ground mu %.17g e %.17g\n", (int)s.type, s.radius, s.half_extents[0], s.half_extents[1], s.half_extents[2], d.mass.mass, d.mass.inertia[0], d.mass.inertia[1], d.mass.inertia[2], d.position[0], d.position[1], d.position[2], d.orientation[0], d.orientation[1], d.orientation[2], d.orientation[3], d.velocity[0], d.velocity[1], d.velocity[2], d.angular_velocity[0], d.angular_velocity[1], d.angular_velocity[2], s.friction, s.restitution, ground_friction, ground_restitution);
         assert_int_equal(tb_world_add_body(w, &d, &b->id), TB_OK);
         s.body = b->id;
         assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
