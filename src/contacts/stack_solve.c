@@ -20,11 +20,10 @@
      compliance never meets a contradiction. A gap still open is its
      patch's speculative row's (soft_step.c); solved with the island, a
      gap closing within the substep would meet a whole touching row of
-     bodies as one (newtons_cradle). Overlap beyond a twentieth of the
+     bodies as one (newtons_cradle). Overlap beyond TB__TOUCHING of the
      slop is pushed out apart from the velocities (tb__stacks_push),
-     levelled per patch: pushing the overlap of the rows' own compliance,
-     or pushing within the solve where friction meets it, rocks a stack
-     (offset_tower_stands).
+     levelled per patch: pushing within the solve, where friction meets
+     it, rocks a stack (offset_tower_stands).
    The rows are ordered island by island along a breadth-first walk of
    its bodies from one end (a stack: bottom to top), each row after the
    first of its two bodies, so the matrix is a band as wide as the rows
@@ -509,8 +508,7 @@ int tb__stacks_solve(tb__contacts *c, double hs)
 /* The push of every stacked island's overlaps, as velocities that move
    positions over the drift and are then taken back (sign +1, then -1):
    impulses that bring each overlapping point out at the soft rows' rate
-   (bias_rate times the overlap beyond the slop, at most max_push; a
-   resting stack's overlaps, of its rows' compliance, are left alone),
+   (bias_rate times the overlap beyond a touch, at most max_push),
    levelled per patch,
    solved together with the rows the last solve held. Pushed as velocities
    within the solve, the rows' friction would meet them and rock a stack
@@ -518,7 +516,7 @@ int tb__stacks_solve(tb__contacts *c, double hs)
 void tb__stacks_push(tb__contacts *c, double bias_rate, int sign)
 {
     struct tb__stacks *s = c->stacks;
-    const double max_push = c->settings.max_push, slop = 0.05 * c->settings.slop;
+    const double max_push = c->settings.max_push, slop = TB__TOUCHING * c->settings.slop;
     size_t k, i, patch;
     if (!s)
         return;
