@@ -276,9 +276,14 @@ typedef struct pyramid_run {
 /* Sleep on (the default) or off (every body solved every step); the
    velocity pass's most sweeps and early stop (tolerance < 0: the
    default's). */
+/* --substeps=N: every scene's contacts by the soft-step solver with N
+   substeps (0: the default solver) */
+static int substeps = 0;
+
 static void set_sleep(tb_world *w, int velocity_iterations, double tolerance, int sleep)
 {
     tb_contact_settings cs = tb_default_contact_settings();
+    cs.substeps = substeps;
     cs.velocity_iterations = velocity_iterations;
     if (tolerance >= 0)
         cs.velocity_tolerance = tolerance;
@@ -487,6 +492,10 @@ int main(int argc, char **argv)
     double t_ms, t1_ms, t2_ms, o_ms, ratio;
     int r, below = 0;
 
+    if (argc >= 2 && !strncmp(argv[argc - 1], "--substeps=", 11)) {
+        substeps = atoi(argv[argc - 1] + 11);
+        --argc;
+    }
     if (argc == 3 && !strcmp(argv[1], "--scaling")) {
         free(shapes);
         return scaling(argv[2]);
@@ -497,7 +506,7 @@ int main(int argc, char **argv)
         return 0;
     }
     if (argc != 1) {
-        fprintf(stderr, "usage: " BENCH_NAME " [--scaling FOLDER | --sleep]\n");
+        fprintf(stderr, "usage: " BENCH_NAME " [--scaling FOLDER | --sleep] [--substeps=N]\n");
         free(shapes);
         return 2;
     }
@@ -506,6 +515,8 @@ int main(int argc, char **argv)
            BENCH_RUNS);
     bench_print_build();
     bench_print_asserts();
+    if (substeps > 0)
+        printf("soft-step solver: %d substeps\n", substeps);
     printf("\n");
     fflush(stdout);
 
