@@ -454,6 +454,35 @@ static void overrides_and_help(void **state)
     assert_non_null(strstr(out_text, "--max-memory"));
 }
 
+/* The README: "On a terminal a run longer than a second shows a progress
+   line on stderr", and never into a pipe or a file. A scene whose force
+   callback spends 3 ms of processor time an evaluation runs 400 steps of
+   symplectic Euler (one evaluation each): 1.2 s. Under `script`, which
+   gives it a terminal, the line shows; with stderr in a file it does
+   not. */
+static void progress_shows_on_a_terminal_only(void **state)
+{
+    char cmd[2048], path[1100], text[8192];
+    int rc;
+    (void)state;
+    write_file("slow.lua", "local tumble = require 'tumble'\n"
+                           "local w = tumble.world{ gravity = {0, 0, -9.81}, integrator = 'symplectic_euler' }\n"
+                           "w:particle{ pos = {0, 0, 0} }\n"
+                           "w:force(function() local t0 = os.clock() while os.clock() - t0 < 0.003 do end end)\n"
+                           "return { world = w, duration = 4, record_every = 1 }\n");
+    snprintf(cmd, sizeof cmd, "cd '%s' && script -qec \"'%s' run slow.lua --dt 0.01 --out slow.csv\" /dev/null "
+             "> tty.txt 2>&1", work_dir(), TUMBLE_EXE);
+    rc = system(cmd);
+    assert_true(WIFEXITED(rc) && WEXITSTATUS(rc) == 0);
+    work_path(path, sizeof path, "tty.txt");
+    slurp(path, text, sizeof text);
+    assert_non_null(strstr(text, "tumble: t = "));
+    assert_non_null(strstr(text, " steps/s, about "));
+    assert_int_equal(tumble("run slow.lua --dt 0.01 --out slow.csv"), 0);
+    assert_null(strstr(err_text, "tumble: t = "));
+    assert_null(strstr(out_text, "tumble: t = "));
+}
+
 /* The number after `label` in the summary. */
 static double summary_number(const char *label)
 {
@@ -589,6 +618,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(failure_mid_run_leaves_no_file),
     cmocka_unit_test(bad_arguments_are_refused),
     cmocka_unit_test(overrides_and_help),
+    cmocka_unit_test(progress_shows_on_a_terminal_only),
     cmocka_unit_test(check_estimates_the_error),
 };
 TB_TEST_MAIN(tests)
