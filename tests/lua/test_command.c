@@ -339,7 +339,7 @@ static void plot_is_drawn_with_gnuplot(void **state)
 static void reference_scenes_run(void **state)
 {
     static const char *const names[] = { "oscillator", "damped", "kepler", "vortex", "projectile",
-                                         "chain", "cloth", "flip", "top" };
+                                         "chain", "damped_chain", "cloth", "flip", "top" };
     size_t k;
     (void)state;
     for (k = 0; k < sizeof names / sizeof names[0]; ++k) {
