@@ -2,6 +2,7 @@
    stability function, on problems whose exact solution is known. */
 #include "test_main.h"
 #include "tumble.h"
+#include "particle_worlds.h"
 
 #include <math.h>
 #include <string.h>
@@ -289,21 +290,6 @@ static void dopri5_error_follows_tolerance(void **state)
 }
 
 /* ---- the tolerance against the global error --------------------------------- */
-
-/* Gravity of GM = 1 m^3/s^2 at the origin, as a callback. */
-static tb_status central_gravity(const tb_force_args *a, void *user)
-{
-    size_t i;
-    int k;
-    (void)user;
-    for (i = 0; i < a->count; ++i) {
-        const double *x = a->positions + 3 * i;
-        const double r2 = x[0] * x[0] + x[1] * x[1] + x[2] * x[2], r3 = r2 * sqrt(r2);
-        for (k = 0; k < 3; ++k)
-            a->forces[3 * i + k] -= a->masses[i] * x[k] / r3;
-    }
-    return TB_OK;
-}
 
 /* Kepler orbit, a = 1 m, eccentricity 0.5, from periapsis (0.5 m, at
    sqrt 3 m/s); after 10 periods (T = 20 pi s) it is back at the start. The

@@ -15,23 +15,12 @@
    and asserted within 0.2 of the method's order. */
 #include "test_main.h"
 #include "tumble.h"
+#include "particle_worlds.h"
 
 #include <math.h>
 #include <string.h>
 
 static const double PI = 3.14159265358979323846, G = 9.81;
-
-static tb_world *world_of(const char *integrator, double gz, double linear, double quadratic)
-{
-    tb_world_def def = tb_default_world_def();
-    tb_world *w;
-    def.integrator = integrator;
-    def.gravity[2] = gz;
-    def.linear_drag = linear;
-    def.quadratic_drag = quadratic;
-    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
-    return w;
-}
 
 static tb_particle_id add_particle(tb_world *w, double x, double z, double vx, double vz, double mass)
 {
@@ -69,21 +58,6 @@ static void assert_at_least_order(const char *what, const char *method, double c
 
 /* ---- Kepler orbit ------------------------------------------------------------ */
 
-/* Gravity of GM = 1 m^3/s^2 towards the origin, as a callback. */
-static tb_status central_gravity(const tb_force_args *a, void *user)
-{
-    size_t i;
-    int k;
-    (void)user;
-    for (i = 0; i < a->count; ++i) {
-        const double *x = a->positions + 3 * i;
-        const double r2 = x[0] * x[0] + x[1] * x[1] + x[2] * x[2], r3 = r2 * sqrt(r2);
-        for (k = 0; k < 3; ++k)
-            a->forces[3 * i + k] -= a->masses[i] * x[k] / r3;
-    }
-    return TB_OK;
-}
-
 typedef struct orbit {
     double dl, de, da; /* |L - L0| / L0 at the end, worst |E / E0 - 1| over the
                           last period, |A - A0| / GM at the end */
@@ -96,7 +70,7 @@ typedef struct orbit {
    GM, pointing at periapsis. */
 static orbit kepler(const char *integrator, long n)
 {
-    tb_world *w = world_of(integrator, 0, 0, 0);
+    tb_world *w = world_with(integrator, 0, 0, 0);
     tb_particle_def p = tb_default_particle_def();
     tb_particle_id id;
     double x[3], v[3], r, l, ax, ay;
@@ -179,7 +153,7 @@ static double drag_error(const char *integrator, int thrown, long n)
 {
     const double m = 1, c = 0.1, vt = sqrt(m * G / c), v0 = thrown ? 15 : 0, T = thrown ? 0.8 : 3;
     const double p0 = atan(v0 / vt);
-    tb_world *w = world_of(integrator, -G, 0, c);
+    tb_world *w = world_with(integrator, -G, 0, c);
     tb_particle_id id = add_particle(w, 0, 0, 0, v0, m);
     double x[3], z;
     long i;
@@ -301,7 +275,7 @@ static tb_world *chain(const char *integrator, double span, tb_particle_id ids[B
 {
     const int springs = span > 0 ? BEADS + 1 : BEADS;
     const double length = 0.05 * springs, drop = span > 0 ? sqrt(length * length - span * span) / 2 : 0;
-    tb_world *w = world_of(integrator, -G, 0.1, 0);
+    tb_world *w = world_with(integrator, -G, 0.1, 0);
     int i;
     for (i = 0; i < BEADS; ++i) {
         const double s = 0.05 * (i + 1); /* arc length from the first anchor */
@@ -457,7 +431,7 @@ enum { SIDE = 8 };
    into its hanging shape. */
 static tb_world *cloth(const char *integrator, tb_particle_id grid[SIDE][SIDE], double mass[SIDE][SIDE])
 {
-    tb_world *w = world_of(integrator, -G, 0.02, 0);
+    tb_world *w = world_with(integrator, -G, 0.02, 0);
     int r, c, j;
     for (r = 0; r < SIDE; ++r)
         for (c = 0; c < SIDE; ++c) {
