@@ -136,7 +136,9 @@ TB_API tb_status tb_world_set_integrator(tb_world *world, const char *name);
    T seconds ends about tolerance x T off, times what the problem itself
    does to errors (docs/integrators.md): from 0.05 to 5 times on an orbit
    and a tumbling body (test_integrators.dopri5_global_error_follows_tolerance),
-   0.01 on a smooth field (test_truths.time_dependent_field_follows_its_closed_form);
+   0.003 to 0.02 on a smooth field and a charge in crossed fields
+   (test_truths.time_dependent_field_follows_its_closed_form,
+   charge_drifts_in_crossed_fields);
    from 1e-100 to 1e100. */
 TB_API tb_status tb_world_set_tolerance(tb_world *world, double tolerance);
 TB_API double tb_world_tolerance(const tb_world *world);
