@@ -66,7 +66,7 @@ typedef struct orbit {
 } orbit;
 
 /* The orbit of a = 1 m, e = 0.5 from periapsis (0.5 m at sqrt 3 m/s in the
-   plane z = 0), 10 periods (20 pi s) in n steps per period. Its invariants
+   plane z = 0), 5 periods (10 pi s) in n steps per period. Its invariants
    per unit mass: L = x x v = sqrt 3 / 2 along z, E = v^2 / 2 - GM / r =
    -1/2, and the Laplace-Runge-Lenz vector A = v x L - GM x / r = (e, 0, 0)
    GM, pointing at periapsis. */
@@ -82,9 +82,9 @@ static orbit kepler(const char *integrator, long n)
     p.velocity[1] = sqrt(3.0);
     assert_int_equal(tb_world_add_particle(w, &p, &id), TB_OK);
     assert_int_equal(tb_world_add_force(w, central_gravity, NULL, NULL), TB_OK);
-    for (i = 0; i < 10 * n; ++i) {
+    for (i = 0; i < 5 * n; ++i) {
         assert_int_equal(tb_world_step(w, 2 * PI / (double)n), TB_OK);
-        if (i >= 9 * n) {
+        if (i >= 4 * n) {
             tb_particle_position(w, id, x);
             tb_particle_velocity(w, id, v);
             r = hypot(x[0], x[1]);
@@ -106,8 +106,8 @@ static orbit kepler(const char *integrator, long n)
    keep x x v exactly: a kick changes v along x (x x f = 0), a drift changes
    x along v. So symplectic Euler, Verlet and implicit Euler (whose solve
    has no Jacobian here: a callback's force enters f0 only, which makes it
-   symplectic Euler) end 10 periods with L to rounding (bound 1e-12
-   relative over up to 6.4e4 steps of rounding near 1e-16 each; measured
+   symplectic Euler) end 5 periods with L to rounding (bound 1e-12
+   relative over up to 3.2e4 steps of rounding near 1e-16 each; measured
    up to 1.7e-14). RK4's L drifts, at least as h^4 (measured h^5 at whole
    periods).
    Energy: the symplectic methods keep it within a band of their order,
@@ -443,7 +443,7 @@ static void hanging_chain_settles_on_its_closed_form(void **state)
    final positions and Hooke's law; tensions are near 0.1 N, and a force
    from positions near 1 m through k <= 3000 N/m is known to about 1e-12 N:
    bound 1e-10 N. Each method at 0.9 of its limit, implicit Euler at 10 times
-   Verlet's; 20 s (drag shrinks the motion by e^-58). The three methods'
+   Verlet's; 15 s (drag shrinks the motion by e^-44). The three methods'
    shapes agree to 1e-10 m. */
 static void sagging_chain_balances_its_tensions(void **state)
 {
@@ -458,7 +458,7 @@ static void sagging_chain_balances_its_tensions(void **state)
         tb_world *w = chain(methods[m], span, ids);
         double x[3 * (BEADS + 2)], hmin = INFINITY, hmax = -INFINITY, vworst = 0, apart = 0, tz[BEADS + 1];
         int j;
-        settle(w, h, 20);
+        settle(w, h, 15);
         memset(x, 0, sizeof x);
         x[3 * (BEADS + 1)] = span; /* the anchors at both ends */
         for (j = 0; j < BEADS; ++j)
@@ -534,9 +534,9 @@ static tb_world *cloth(const char *integrator, tb_particle_id grid[SIDE][SIDE], 
    spring forces (Hooke's law on the final positions, computed here from
    tb_spring_definition) plus m g is zero. Forces near 0.05 N from positions
    near 1 m through k <= 90 N/m are known to about 1e-14 N: bound 1e-11 N.
-   Verlet at 0.9 of its damped limit and implicit Euler at 10 times it; 40
+   Verlet at 0.9 of its damped limit and implicit Euler at 10 times it; 25
    s, in which drag's slowest decay, c / (2 m) >= 1.56 1/s, shrinks the
-   motion by e^-62. */
+   motion by e^-39. */
 static void hanging_cloth_balances_every_node(void **state)
 {
     const char *methods[] = { "verlet", "implicit_euler" };
@@ -552,7 +552,7 @@ static void hanging_cloth_balances_every_node(void **state)
         assert_int_equal(tb_world_advise(w, 1e-3, &advice), TB_OK);
         h = m == 0 ? 0.9 * advice.limit : 10 * advice.limit;
         assert_int_equal(tb_world_set_integrator(w, methods[m]), TB_OK);
-        settle(w, h, 40);
+        settle(w, h, 25);
         memset(force, 0, sizeof force);
         for (s = 0; s < tb_world_spring_count(w); ++s) {
             tb_spring_def d;
