@@ -428,8 +428,8 @@ static void hanging_chain_settles_on_its_closed_form(void **state)
             assert_true(x[0] == 0 && x[1] == 0);
             worst = fmax(worst, fabs(x[2] - zeq[j]));
         }
-        print_message("hanging chain %-17s h %.4g ms: largest distance from the closed form %.3e m (last bead %.6f m)\n",
-                      methods[m], 1e3 * h, worst, zeq[BEADS - 1]);
+        print_message("hanging chain %-17s h %.4g ms: largest distance from the closed form %.3e m "
+                      "(last bead %.6f m)\n", methods[m], 1e3 * h, worst, zeq[BEADS - 1]);
         assert_below(worst, 1e-12);
         tb_world_destroy(w);
     }
@@ -534,9 +534,13 @@ static tb_world *cloth(const char *integrator, tb_particle_id grid[SIDE][SIDE], 
    spring forces (Hooke's law on the final positions, computed here from
    tb_spring_definition) plus m g is zero. Forces near 0.05 N from positions
    near 1 m through k <= 90 N/m are known to about 1e-14 N: bound 1e-11 N.
-   Verlet at 0.9 of its damped limit and implicit Euler at 10 times it; 25
-   s, in which drag's slowest decay, c / (2 m) >= 1.56 1/s, shrinks the
-   motion by e^-39. */
+   Verlet at 0.9 of its damped limit for 25 s, in which drag's slowest
+   decay, c / (2 m) >= 1.56 1/s, shrinks the motion by e^-39; implicit
+   Euler at 30 times that limit, where its conjugate gradients need more
+   iterations than the 192 unknowns (a cap of 200 refused the fifth step),
+   for 50 s: at steps that long backward Euler damps the slow swing less
+   per second than the drag does (measured: max |v| 7e-10 m/s after 25 s,
+   4e-16 after 50). */
 static void hanging_cloth_balances_every_node(void **state)
 {
     const char *methods[] = { "verlet", "implicit_euler" };
@@ -550,9 +554,9 @@ static void hanging_cloth_balances_every_node(void **state)
         size_t s;
         int r, c, k;
         assert_int_equal(tb_world_advise(w, 1e-3, &advice), TB_OK);
-        h = m == 0 ? 0.9 * advice.limit : 10 * advice.limit;
+        h = m == 0 ? 0.9 * advice.limit : 30 * advice.limit;
         assert_int_equal(tb_world_set_integrator(w, methods[m]), TB_OK);
-        settle(w, h, 25);
+        settle(w, h, m == 0 ? 25 : 50);
         memset(force, 0, sizeof force);
         for (s = 0; s < tb_world_spring_count(w); ++s) {
             tb_spring_def d;
