@@ -159,9 +159,7 @@ static double drag_error(const char *integrator, int thrown, long n)
     tb_world *w = world_with(integrator, -G, 0, c);
     tb_particle_id id = add_particle(w, 0, 0, 0, v0, m);
     double x[3], z;
-    long i;
-    for (i = 0; i < n; ++i)
-        assert_int_equal(tb_world_step(w, T / (double)n), TB_OK);
+    step_through(w, T, n);
     tb_particle_position(w, id, x);
     tb_world_destroy(w);
     z = thrown ? vt * vt / G * log(cos(p0 - G * T / vt) / cos(p0)) : -vt * vt / G * log(cosh(G * T / vt));
@@ -213,13 +211,11 @@ static double drift_error(const char *integrator, double tol, long n)
     tb_particle_def p = tb_default_particle_def();
     tb_particle_id id;
     double x[3];
-    long i;
     p.velocity[0] = 1, p.velocity[1] = -0.5, p.velocity[2] = 0.2;
     assert_int_equal(tb_world_set_tolerance(w, tol), TB_OK);
     assert_int_equal(tb_world_add_particle(w, &p, &id), TB_OK);
     assert_int_equal(tb_world_add_force(w, lorentz, NULL, NULL), TB_OK);
-    for (i = 0; i < n; ++i)
-        assert_int_equal(tb_world_step(w, T / (double)n), TB_OK);
+    step_through(w, T, n);
     tb_particle_position(w, id, x);
     tb_world_destroy(w);
     return sqrt(pow(x[0] - sin(T), 2) + pow(x[1] - (-0.5 * T + cos(T) - 1), 2) + pow(x[2] - 0.2 * T, 2));
@@ -281,15 +277,13 @@ static double swirl_error(const char *integrator, double tol, long n, const char
     tb_tracer_id id;
     tb_world *w;
     double x[3];
-    long i;
     def.integrator = integrator;
     def.tolerance = tol;
     assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
     assert_int_equal(tb_world_add_field(w, beating_swirl, NULL, NULL), TB_OK);
     t.position[0] = 1;
     assert_int_equal(tb_world_add_tracer(w, &t, &id), TB_OK);
-    for (i = 0; i < n; ++i)
-        assert_int_equal(tb_world_step(w, T / (double)n), TB_OK);
+    step_through(w, T, n);
     tb_tracer_position(w, id, x);
     if (chosen)
         *chosen = tb_world_auto_choice(w, NULL);

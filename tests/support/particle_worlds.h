@@ -1,6 +1,7 @@
 /* particle_worlds.h: what the particle tests share (test_forces,
    test_integrators, test_truths): a world with gravity along z and drag,
-   and the gravity of a central mass as a force callback. Include after
+   steps covering a time, and the gravity of a central mass as a force
+   callback. Include after
    test_main.h and tumble.h. Static inline, so a test that uses only one of
    them compiles without a warning. */
 #ifndef TB_PARTICLE_WORLDS_H
@@ -20,6 +21,14 @@ static inline tb_world *world_with(const char *integrator, double gz, double lin
     def.quadratic_drag = quadratic;
     assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
     return w;
+}
+
+/* n equal steps covering T seconds. */
+static inline void step_through(tb_world *w, double T, long n)
+{
+    long i;
+    for (i = 0; i < n; ++i)
+        assert_int_equal(tb_world_step(w, T / (double)n), TB_OK);
 }
 
 /* Gravity of GM = 1 m^3/s^2 towards the origin on every particle:
