@@ -13,7 +13,13 @@
 # non-finite, or a refused step) are crosses above the error-1 line, at
 # their cost, so where a method breaks down stays visible. The legend gives
 # each fixed-step method's fitted order (slope of log error against log h
-# over its stable asymptotic points, computed by the benchmark). Everything
+# over its stable asymptotic points, computed by the benchmark). The
+# adaptive points at tolerances 1e-3, 1e-6, 1e-9 and 1e-12 carry their
+# tolerance (dopri5's on the left, auto's on the right), so each run's
+# global error reads against what was asked. On a
+# scene that marks stability limits (the damped chain), a dotted vertical
+# line in each method's colour stands at the cost of a run at the advisor's
+# limit h_max: left of it the method's runs fail. Everything
 # is kept here, not in the C program, so the charts can be restyled without
 # running the benchmark again.
 
@@ -61,6 +67,9 @@ set xlabel 'cost: wall time per simulated second (s/s, median of repeats)'
 # skips without joining across.
 stable_cost(s, m) = strcol(1) eq s && strcol(2) eq m && $7 == 1 ? $5 : NaN
 failed_cost(s, m) = strcol(1) eq s && strcol(2) eq m && $7 == 0 ? $5 : NaN
+# Tolerances 10^-3k (column 8; 0 for fixed steps) get a label.
+tol_marked(t) = t > 0 && abs(log10(t) - floor(log10(t) + 0.5)) < 0.05 && int(floor(-log10(t) + 0.5)) % 3 == 0
+tol_y(s, m) = strcol(1) eq s && strcol(2) eq m && $7 == 1 && tol_marked($8) ? $4 : NaN
 
 # ------------------------------------------------------------ per scene --
 set terminal pngcairo size 1050,600 font 'DejaVu Sans,10' noenhanced
@@ -73,19 +82,33 @@ do for [s in scenes] {
     set output sprintf('%s/workprecision_%s.png', out, s)
     set title value('title_'.s) noenhanced
     set ylabel value('ylabel_'.s) noenhanced
+    limits = exists('limited_'.s) ? value('limited_'.s) : ''
+    j = 0
+    do for [m in limits] {
+        j = j + 1
+        set arrow 10 + j from first value('limit_'.s.'_'.m), graph 0 to first value('limit_'.s.'_'.m), graph 1 \
+            nohead dt 3 lw 2 lc rgb colour(m) back
+    }
     plot for [m in value('methods_'.s)] csv skip 1 using (stable_cost(s, m)):4 with linespoints \
              lc rgb colour(m) dt dash(m) pt shape(m) ps 1.1 lw 2 title value('key_'.s.'_'.m) noenhanced, \
          for [m in value('methods_'.s)] csv skip 1 using (failed_cost(s, m)):(failed_y(m)) with points \
              lc rgb colour(m) pt 2 ps 1.4 lw 2 notitle, \
-         NaN with points lc rgb '#444444' pt 2 ps 1.4 lw 2 title 'failed: error > 1, non-finite or refused'
+         csv skip 1 using (stable_cost(s, 'dopri5')):(tol_y(s, 'dopri5')):(sprintf('%.0e', $8)) \
+             with labels right offset char -0.8, char 0 font ',7' tc rgb colour('dopri5') notitle, \
+         csv skip 1 using (stable_cost(s, 'auto')):(tol_y(s, 'auto')):(sprintf('%.0e', $8)) \
+             with labels left offset char 0.8, char 0 font ',7' tc rgb colour('auto') notitle, \
+         NaN with points lc rgb '#444444' pt 2 ps 1.4 lw 2 title 'failed: error > 1, non-finite or refused', \
+         NaN with lines dt 3 lw 2 lc rgb '#444444' \
+             title (strlen(limits) ? 'dotted: a run at the stability limit (advisor)' : '')
+    do for [k = 1:j] { unset arrow 10 + k }
 }
 unset output
 
 # -------------------------------------------------------------- overview --
-# A 3 x 3 grid of the scenes with one shared legend strip at the bottom.
+# A 4 x 3 grid of the scenes with one shared legend strip at the bottom.
 # gd's png terminal, not cairo: its palette PNG is a quarter of the size
 # (about 45 KB against 190 KB), which matters for a chart in the README.
-set terminal png size 1350,1080 font 'DejaVu Sans,8' noenhanced
+set terminal png size 1700,1080 font 'DejaVu Sans,8' noenhanced
 set termoption enhanced
 set output out.'/workprecision.png'
 unset key
@@ -96,7 +119,7 @@ unset label 1
 set multiplot title "tumble work-precision: error at the final time against cost\n" . \
     "error: position error per length scale, or orientation in rad; failed: error > 1, non-finite or a refused step" \
     noenhanced
-cols = 3
+cols = 4
 panel_w = 1.0 / cols
 panel_h = 0.86 / 3
 i = 0

@@ -9,26 +9,37 @@
    chosen by name. Objects are addressed by generation-checked value ids.
    Units are SI, axes right-handed, gravity a world setting.
 
-   Rules that hold for every function below:
+   Rules that hold for every function below (the test that checks each
+   claim in this header is named beside it, executable.case, a ctest
+   entry):
    - a function that can fail returns a tb_status; on failure the world is
-     unchanged and tb_world_message() holds a one-line reason;
+     unchanged and tb_world_message() holds a one-line reason
+     (test_inputs.overflowing_inputs_are_refused_or_stay_finite, under
+     every integrator);
    - NaN or Inf, non-positive masses or steps, negative stiffness, unknown
      names and stale ids (removed, or made by another world) are refused,
      never crash, abort or exit; so is any number outside the input rule
      (TB_LIMIT in tumble/base.h: at most 1e100 in magnitude, masses, moments,
      sizes and steps at least 1e-100, and what tumble derives from them at
-     once, such as momentum and energy, at most 1e100);
+     once, such as momentum and energy, at most 1e100;
+     test_world.bad_particles_are_refused, bad_springs_are_refused,
+     bad_steps_and_settings_are_refused, test_bodies.bad_bodies_are_refused);
    - a NULL pointer is refused (TB_ERR_ARGUMENT) unless a function says it
      may be NULL; a NULL world too: status functions return
      TB_ERR_ARGUMENT, the others 0, NULL, a null id or zeros (void
-     functions write nothing), and tb_world_message(NULL) says why;
+     functions write nothing), and tb_world_message(NULL) says why
+     (test_inputs.null_pointers_are_refused); stale ids too
+     (test_world.ids_survive_swap_remove_and_go_stale,
+     ids_of_another_world_are_stale);
    - pointers to state arrays stay valid until the next step or structural
      change (adding or removing an object) of that world;
    - structural changes, setters and nested steps are refused (TB_ERR_BUSY)
      while the world is stepping, that is, from inside a force or field
-     callback (callbacks only add to the forces or velocities they are given);
+     callback (callbacks only add to the forces or velocities they are given;
+     test_world.structural_changes_are_refused_while_stepping);
    - worlds share nothing: several may live in one process and each may be
-     stepped on its own thread. */
+     stepped on its own thread (test_world.worlds_are_independent,
+     test_world_threads.worlds_on_threads_keep_their_ids). */
 #ifndef TUMBLE_H
 #define TUMBLE_H
 
@@ -42,7 +53,8 @@ extern "C" {
 
 /* ---------------------------------------------------------------- world -- */
 
-/* The defaults documented in tb_world_def. */
+/* The defaults documented in tb_world_def
+   (test_world.defaults_are_documented_values). */
 TB_API tb_world_def tb_default_world_def(void);
 
 /* Create a world. On failure *world is NULL and, when message is not NULL,
@@ -64,7 +76,9 @@ TB_API double tb_world_time(const tb_world *world);
 TB_API tb_status tb_world_set_gravity(tb_world *world, const double gravity[3]);
 TB_API void tb_world_gravity(const tb_world *world, double gravity[3]);
 
-/* Drag on every particle: f = -(linear + quadratic |v|) v. Both >= 0. */
+/* Drag on every particle: f = -(linear + quadratic |v|) v. Both >= 0
+   (test_forces.projectile_rk4_matches_closed_form,
+   test_truths.quadratic_drag_throw_and_fall_at_each_order). */
 TB_API tb_status tb_world_set_drag(tb_world *world, double linear, double quadratic);
 
 /* ----------------------------------------------------------- stepping -- */
@@ -95,10 +109,22 @@ TB_API tb_status tb_world_set_drag(tb_world *world, double linear, double quadra
                                                      substeps that meet the
                                                      tolerance; "dopri5" when the
                                                      world has callbacks
+   Orders: test_integrators.euler_is_first_order and the cases beside it
+   (to dopri5_is_fifth_order; verlet_exact's 4th order rotation:
+   test_rotation.orders_are_as_claimed); evaluations:
+   test_integrators.each_method_makes_its_force_evaluations; limits:
+   test_stability.damped_limits_match_simulation (dopri5's undamped limit
+   is bracketed between 0.95 and 1.5 there) and the boundary cases beside
+   it; implicit Euler: test_stability.implicit_euler_survives_100x_the_limit,
+   implicit_euler_slows_oscillations; auto's choices:
+   test_integrators.auto_picks_from_what_the_scene_contains; the cost of
+   verlet_exact per anisotropic body is bench_bodies' (docs/benchmarks.md).
    The split methods (symplectic_euler, verlet, verlet_exact, implicit_euler)
    kick a velocity, which tracers lack: a world holding tracers refuses them,
-   and a world using them refuses tracers. Force callbacks run once per force
-   evaluation. */
+   and a world using them refuses tracers
+   (test_world.tracers_and_split_methods_exclude_each_other). Force
+   callbacks run once per force evaluation
+   (test_integrators.each_method_makes_its_force_evaluations). */
 TB_API int tb_integrator_count(void);
 TB_API const char *tb_integrator_name(int index);   /* NULL past the end */
 TB_API int tb_integrator_order(int index);           /* 0 past the end */
@@ -108,24 +134,33 @@ TB_API tb_status tb_world_set_integrator(tb_world *world, const char *name);
    ("dopri5", "auto"), relative to 1 + |y| per state component: a substep
    of s seconds may add an estimated error of tolerance x s, so a run of
    T seconds ends about tolerance x T off, times what the problem itself
-   does to errors (docs/integrators.md); from 1e-100 to 1e100. */
+   does to errors (docs/integrators.md): from 0.05 to 5 times on an orbit
+   and a tumbling body (test_integrators.dopri5_global_error_follows_tolerance),
+   0.003 to 0.02 on a smooth field and a charge in crossed fields
+   (test_truths.time_dependent_field_follows_its_closed_form,
+   charge_drifts_in_crossed_fields);
+   from 1e-100 to 1e100. */
 TB_API tb_status tb_world_set_tolerance(tb_world *world, double tolerance);
 TB_API double tb_world_tolerance(const tb_world *world);
 TB_API const char *tb_world_integrator(const tb_world *world);
 
 /* What "auto" chose for its last step: the method's name (NULL before the
    first step) and the substeps per step. The choice is made again when the
-   step, the tolerance or the set of objects changes. */
+   step, the tolerance or the set of objects changes
+   (test_integrators.auto_picks_from_what_the_scene_contains,
+   auto_meets_its_tolerance_per_step). */
 TB_API const char *tb_world_auto_choice(const tb_world *world, long *substeps);
 
 /* The work of the steps taken so far: steps, substeps, substeps rejected
    by "dopri5", force evaluations, and the energy the contacts and drag
-   and damping changed (tb_work); zeros for NULL. */
+   and damping changed (tb_work); zeros for NULL
+   (test_integrators.each_method_makes_its_force_evaluations,
+   energy_accounting_adds_up). */
 TB_API tb_work tb_world_work(const tb_world *world);
 
 /* Advance by h seconds (finite, from 1e-100 to 1e100). If a callback
    fails, the step is abandoned and the state is bit-identical to what it
-   was before. */
+   was before (test_world.failing_callback_leaves_state_bit_identical). */
 TB_API tb_status tb_world_step(tb_world *world, double h);
 
 /* The blow-up guard. energy_growth 0 (the default) turns it off, since it
@@ -141,7 +176,10 @@ TB_API tb_status tb_world_step(tb_world *world, double h);
    and sleep included (as tb_world_restore puts it back), and steps again
    (with a smaller step, or once the cause is fixed). With the guard on, a
    step copies what it can change first (about the cost of a snapshot,
-   without the constants). */
+   without the constants: bench_snapshot). Tests:
+   test_stability.guard_stops_a_blow_up_and_names_its_cause,
+   guard_stops_a_runaway_and_the_world_steps_on, guard_names_the_damped_limit,
+   guard_lets_stable_runs_through, test_snapshot.refused_step_leaves_no_trace. */
 TB_API tb_status tb_world_set_guard(tb_world *world, double energy_growth);
 TB_API double tb_world_guard(const tb_world *world);
 
@@ -157,7 +195,9 @@ TB_API double tb_world_guard(const tb_world *world);
    world is stepping (TB_ERR_BUSY); a snapshot of another world is refused
    (TB_ERR_ARGUMENT); out of memory (TB_ERR_MEMORY), the world is
    unchanged. The world's message, guard snapshot and integrator scratch
-   are its own and stay. */
+   are its own and stay (test_snapshot.restore_continues_bit_identically,
+   restore_brings_back_ids, foreign_and_busy_restores_are_refused,
+   failed_allocations_leave_the_world_unchanged). */
 TB_API tb_status tb_world_snapshot(tb_world *world, tb_snapshot **snapshot);
 /* Take a snapshot of this world again into an existing one, reusing its
    memory where the world's arrays still fit (a rollback host keeping a
@@ -196,14 +236,16 @@ TB_API size_t tb_world_tracer_count(const tb_world *world);
 TB_API const double *tb_world_tracer_positions(const tb_world *world);
 TB_API tb_tracer_id tb_world_tracer_at(const tb_world *world, size_t slot);
 /* The field velocity (m/s) at each tracer now, 3 * count values (not
-   NULL). Calls the field callbacks, so it can fail like a step. */
+   NULL). Calls the field callbacks, so it can fail like a step
+   (test_forces.fields_add_up). */
 TB_API tb_status tb_world_tracer_velocities(tb_world *world, double *velocities);
 
 /* ---------------------------------------------------------------- fields -- */
 
 /* v = u everywhere (m/s). */
 TB_API tb_status tb_world_add_uniform_field(tb_world *world, const double velocity[3], tb_field_id *id);
-/* Rigid rotation: v = omega x (x - centre); omega in rad/s. */
+/* Rigid rotation: v = omega x (x - centre); omega in rad/s
+   (test_integrators.vortex_radius_follows_stability_functions). */
 TB_API tb_status tb_world_add_vortex_field(tb_world *world, const double omega[3],
                                            const double centre[3], tb_field_id *id);
 /* A field computed by fn (see tb_field_args), called with whole arrays. */
@@ -212,11 +254,12 @@ TB_API tb_status tb_world_remove_field(tb_world *world, tb_field_id id);
 
 /* ------------------------------------------------------------ particles -- */
 /* Point masses: dv/dt = f / m. A pinned particle has infinite inertia: it
-   takes no force, keeps its velocity, and counts as mass 0 in diagnostics. */
+   takes no force, keeps its velocity, and counts as mass 0 in diagnostics
+   (test_forces.pinned_particles_do_not_move). */
 
 TB_API tb_particle_def tb_default_particle_def(void);
 /* Adding a particle may move the state arrays. Removing one also removes
-   the springs attached to it. */
+   the springs attached to it (test_world.removing_a_particle_removes_its_springs). */
 TB_API tb_status tb_world_add_particle(tb_world *world, const tb_particle_def *def, tb_particle_id *id);
 TB_API tb_status tb_world_remove_particle(tb_world *world, tb_particle_id id);
 TB_API tb_status tb_particle_position(const tb_world *world, tb_particle_id id, double position[3]);
@@ -236,7 +279,9 @@ TB_API tb_particle_id tb_world_particle_at(const tb_world *world, size_t slot);
 /* -------------------------------------------------------------- springs -- */
 /* Hooke springs with damping along their axis:
      f_a = -(k (|d| - rest) + c (v_a - v_b) . n) n,  d = x_a - x_b, n = d / |d|,
-   and f_b = -f_a. With a null `b` the spring ties `a` to the fixed `anchor`. */
+   and f_b = -f_a. With a null `b` the spring ties `a` to the fixed `anchor`
+   (test_forces.damped_spring_matches_closed_form,
+   two_body_spring_conserves_momentum, two_body_spring_oscillates_at_reduced_mass_frequency). */
 
 TB_API tb_spring_def tb_default_spring_def(void);
 TB_API tb_status tb_world_add_spring(tb_world *world, const tb_spring_def *def, tb_spring_id *id);
@@ -249,7 +294,8 @@ TB_API tb_spring_id tb_world_spring_at(const tb_world *world, size_t slot);
 /* What a spring is, as the world holds it: its ends (b null and the
    anchor for an anchored spring), stiffness, damping and rest length (the
    distance at creation when it was added with a negative one), so that a
-   host can draw it. TB_ERR_STALE_ID for a removed or foreign id. */
+   host can draw it. TB_ERR_STALE_ID for a removed or foreign id
+   (test_forces.springs_read_back). */
 TB_API tb_status tb_spring_definition(const tb_world *world, tb_spring_id id, tb_spring_def *def);
 
 /* --------------------------------------------------------- mass properties -- */
@@ -260,7 +306,8 @@ TB_API tb_status tb_spring_definition(const tb_world *world, tb_spring_id id, tb
    reason into `message` when it is not NULL (TB_MESSAGE_SIZE bytes), and
    leave *mass untouched. A result no body could take is refused: a mass
    or a principal moment outside [1e-100, 1e100], a centre past 1e100
-   (the input rule, TB_LIMIT). */
+   (the input rule, TB_LIMIT). Tests: test_mass, against closed forms
+   and ODE's dMass functions (test_mass.primitives_match_ode). */
 
 /* Solid sphere of radius r (m). */
 TB_API tb_status tb_mass_sphere(double rho, double radius, tb_mass *mass, char *message);
@@ -299,7 +346,8 @@ TB_API tb_status tb_mass_set_total(tb_mass *mass, double total_mass, char *messa
      v = P / M,  w = R diag(1/I) R^T L,  dx/dt = v,  dq/dt = (0, w) q / 2,
      dP/dt = f,  dL/dt = tau.
    Keeping L (not w) as state means a torque-free body keeps L exactly and
-   every rotation error lives in the orientation. Positions and orientations
+   every rotation error lives in the orientation (L to rounding:
+   test_bodies.torque_free_body_keeps_momenta). Positions and orientations
    read back are those of the centre of mass and the principal axes. */
 
 TB_API tb_body_def tb_default_body_def(void);
@@ -309,7 +357,7 @@ TB_API tb_body_def tb_default_body_def(void);
    rest past 1e100, and so momentum P = m v and L = I w and the energies
    m v^2 / 2 and w.I.w / 2), a quaternion whose norm is not 1 within 1e-6
    (it is then normalised exactly), moments that break the triangle
-   inequality, negative damping. */
+   inequality, negative damping (test_bodies.bad_bodies_are_refused). */
 TB_API tb_status tb_world_add_body(tb_world *world, const tb_body_def *def, tb_body_id *id);
 /* Removing a body removes its shapes. */
 TB_API tb_status tb_world_remove_body(tb_world *world, tb_body_id id);
@@ -334,7 +382,10 @@ TB_API tb_status tb_body_set_angular_velocity(tb_world *world, tb_body_id id, co
    force f (N) at a world point p (m) also adds the torque (p - x) x f; at a
    point given in the body's principal frame, p = x + R p_body. A torque is
    in N m, world frame. A force whose torque, or whose sum with what the
-   body already holds, passes 1e100 is refused (the input rule). */
+   body already holds, passes 1e100 is refused (the input rule).
+   Tests: test_bodies.off_centre_push_adds_torque (dP = h f, dL = h r x f
+   under every method, at world and body points), constant_torque_spins_up
+   (cleared after the step). */
 TB_API tb_status tb_body_apply_force(tb_world *world, tb_body_id id, const double force[3], const double point[3]);
 TB_API tb_status tb_body_apply_force_at_body_point(tb_world *world, tb_body_id id, const double force[3],
                                                    const double body_point[3]);
@@ -350,7 +401,8 @@ TB_API tb_body_id tb_world_body_at(const tb_world *world, size_t slot);
 /* ---------------------------------------------------------- user forces -- */
 
 /* A force computed by fn (see tb_force_args), called once per force
-   evaluation with whole arrays. */
+   evaluation with whole arrays (test_forces.c_force_callback_pushes,
+   test_integrators.each_method_makes_its_force_evaluations). */
 TB_API tb_status tb_world_add_force(tb_world *world, tb_force_fn *fn, void *user, tb_force_id *id);
 TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
 
@@ -363,7 +415,7 @@ TB_API tb_shape_def tb_default_shape_def(void);
    1e100), a plane normal that is not unit within 1e-6, a plane on a body,
    a stale body, friction < 0, restitution outside [0, 1],
    rolling_resistance < 0 or not finite, a non-unit orientation, any value
-   past the input rule. */
+   past the input rule (test_contacts_api.bad_shapes_are_refused). */
 TB_API tb_status tb_world_add_shape(tb_world *world, const tb_shape_def *def, tb_shape_id *id);
 TB_API tb_status tb_world_remove_shape(tb_world *world, tb_shape_id id);
 TB_API size_t tb_world_shape_count(const tb_world *world);
@@ -374,7 +426,8 @@ TB_API tb_shape_id tb_world_shape_at(const tb_world *world, size_t slot);
 /* What a shape is, as the world holds it: the definition it was added with
    (the orientation normalised; a box's half_length 0, a capsule's
    half_extents 0), so that a host can draw it at its body's pose.
-   TB_ERR_STALE_ID for a removed or foreign id. */
+   TB_ERR_STALE_ID for a removed or foreign id
+   (test_contacts_api.shapes_read_back_as_defined). */
 TB_API tb_status tb_shape_definition(const tb_world *world, tb_shape_id id, tb_shape_def *def);
 
 TB_API tb_contact_settings tb_default_contact_settings(void);
@@ -384,12 +437,14 @@ TB_API tb_status tb_world_set_contact_settings(tb_world *world, const tb_contact
 TB_API tb_contact_settings tb_world_contact_settings(const tb_world *world);
 
 /* The contacts that began and ended in the last step, valid until the next
-   step or structural change; count may be NULL. */
+   step or structural change; count may be NULL
+   (test_contacts_bounce.events_report_impacts). */
 TB_API const tb_contact_event *tb_world_contact_events(const tb_world *world, size_t *count);
 /* Points of contact that are touching now (after the last step). */
 TB_API size_t tb_world_contact_count(const tb_world *world);
 /* The deepest overlap (m, >= 0) among those points, as the last step found
-   it at its start, before solving (0: none overlaps, or no step yet). */
+   it at its start, before solving (0: none overlaps, or no step yet;
+   test_contacts_api.deepest_overlap_is_read). */
 TB_API double tb_world_deepest_overlap(const tb_world *world);
 
 /* Sleep: an island of bodies joined by touching contacts that rests for
@@ -399,8 +454,10 @@ TB_API double tb_world_deepest_overlap(const tb_world *world);
    wakes, whole, when an awake body's bounds (or a particle faster than
    sleep_speed) reach it, when any of its state is set or a force or torque
    applied, when one of its bodies is removed, and when gravity, shapes or
-   contact settings change. Worlds with force callbacks never sleep: a
-   callback's force is unknown to the rest test. */
+   contact settings change (test_contacts_sleep.every_listed_trigger_wakes_an_island,
+   resting_box_falls_asleep_and_stays_put, islands_wake_together). Worlds
+   with force callbacks never sleep: a callback's force is unknown to the
+   rest test (test_contacts_sleep.sleep_settings). */
 TB_API tb_status tb_body_asleep(const tb_world *world, tb_body_id id, int *asleep);
 TB_API tb_status tb_body_wake(tb_world *world, tb_body_id id);
 TB_API size_t tb_world_sleeping_count(const tb_world *world);
@@ -413,7 +470,9 @@ TB_API size_t tb_world_sleeping_count(const tb_world *world);
    excluded) with the damping ratio it sees, on the most damped mode, and
    its decay limit on the fastest drag or body damping (docs/integrators.md;
    within 10% of the measured blow-up on damped chains and cloth,
-   test_stability.advisor_predicts_damped_chains). Changes nothing. */
+   test_stability.advisor_predicts_damped_chains, advisor_predicts_damped_cloth;
+   explicit Euler on an undamped chain: 0, advisor_refuses_bad_steps).
+   Changes nothing. */
 TB_API tb_status tb_world_advise(tb_world *world, double h, tb_advice *advice);
 
 /* tb_world_energy with the potential energy force callbacks report
@@ -421,7 +480,9 @@ TB_API tb_status tb_world_advise(tb_world *world, double h, tb_advice *advice);
    callback runs once at the current state, its forces thrown away. A
    callback that fails fails this call (TB_ERR_CALLBACK), *energy
    untouched; refused while stepping (TB_ERR_BUSY). Lua worlds: the
-   binding's w:energy() and tb_lua_energy. */
+   binding's w:energy() and tb_lua_energy
+   (test_integrators.energy_accounting_adds_up,
+   test_lua.energy_from_lua_counts_callbacks). */
 TB_API tb_status tb_world_energy_with_callbacks(tb_world *world, tb_energy *energy);
 
 /* ---------------------------------------------------------- diagnostics -- */
@@ -430,7 +491,8 @@ TB_API tb_energy tb_world_energy(const tb_world *world);
 /* Total linear momentum, kg m/s. */
 TB_API void tb_world_momentum(const tb_world *world, double momentum[3]);
 /* Total angular momentum about the world origin, kg m^2/s:
-   sum m x x v over particles, sum (x x P + L) over bodies. */
+   sum m x x v over particles, sum (x x P + L) over bodies
+   (test_bodies.diagnostics_add_up). */
 TB_API void tb_world_angular_momentum(const tb_world *world, double angular[3]);
 
 #ifdef __cplusplus

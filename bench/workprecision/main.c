@@ -60,8 +60,10 @@
      scene and tolerance 1e-3, 1e-6 and 1e-9, each adaptive run's error and
      cost against the cheapest fixed-step method at the error it achieved,
      and whether it is within ADAPTIVE_TARGET times that cost (the issue's
-     target, counted on the smooth scenes: all but the stiff chain and
-     cloth, whose lines are printed but not counted).
+     target, counted on the smooth scenes: all but the stiff chains and
+     cloth, whose lines are printed but not counted). On the damped
+     chain, each fixed-step method's legend gives the advisor's damped
+     stability limit, which the chart marks (report.c, write_meta).
 
    Errors are dimensionless: positions are divided by the scene's length
    scale (stated per scene), orientations are angles in radians.

@@ -370,3 +370,24 @@ double counted_evaluations(const scene *s, double h, long n, double tolerance)
     release(&r);
     return done > 0 ? (double)count / (h * (double)done) : NAN;
 }
+
+/* The advisor's stability limit (s) of method `m` on the scene as built,
+   for the scene's coarsest step: damping counted (tb_world_advise);
+   INFINITY when nothing limits it or the method is adaptive or ODE's, NAN
+   when the world refuses the method. */
+double advised_limit(const scene *s, const series *m)
+{
+    sim r;
+    tb_advice advice;
+    char message[TB_MESSAGE_SIZE];
+    double limit = NAN;
+    if (m->adaptive || m->ode)
+        return INFINITY;
+    memset(&r, 0, sizeof r);
+    if (build_tumble(&r, s, m->name, 0, NULL, message, sizeof message) != TB_OK)
+        return NAN;
+    if (tb_world_advise(r.world, s->duration / (double)s->coarse, &advice) == TB_OK)
+        limit = advice.limit;
+    tb_world_destroy(r.world);
+    return limit;
+}

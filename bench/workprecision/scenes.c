@@ -127,6 +127,34 @@ static void chain(scene *s)
     s->scale = 1;
 }
 
+/* A damped chain of unequal beads near its stability limits: 20 beads of
+   3 to 17 g, 5 cm apart along x, on springs of 1000 to 3000 N/m (rest 5
+   cm), each damped at ratio 0.3 with its reduced mass (c = 0.6 sqrt(k mu)),
+   the first tied to an anchor 2 m up, released under gravity (the damped
+   chain of test_stability.advisor_predicts_damped_chains, hung up). Its
+   stiffest mode, 1267 rad/s, is more damped than each spring (the
+   advisor sees 0.41), so each method's limit is its damped one: symplectic
+   Euler about 1.1 ms, Verlet 1.4 ms, RK4 2.1 ms, and explicit Euler none
+   (the transverse modes are undamped). The chart marks the advisor's
+   limits (write_meta). */
+static void damped_chain(scene *s)
+{
+    static const double anchor[3] = { 0, 0, 2 };
+    particle_system *p = &s->ps;
+    int i;
+    for (i = 0; i < 20; ++i) {
+        const double m = 0.01 * (1 + 0.7 * sin(1.9 * i)), k = 2000 * (1 + 0.5 * cos(2.7 * i));
+        const double previous = i > 0 ? p->mass[i - 1] : 0, mu = previous > 0 ? m * previous / (m + previous) : m;
+        particle(p, 0.05 * (i + 1), 0, 2, m);
+        spring(p, i, i - 1, anchor, k, 2 * 0.3 * sqrt(k * mu), 0.05);
+    }
+    p->gravity[2] = -9.81;
+    s->kind = PARTICLES;
+    s->ode = 1;
+    s->scale = 1;
+    s->limits = 1;
+}
+
 /* A small cloth: 8 x 8 particles, 0.5 m square, 0.1 kg, flat 1.5 m up,
    two corners pinned; structural (60 N/m), shear (20 N/m) and bend (5 N/m) springs with
    damping 0.02 N s/m, as in scenes/cloth.lua. Gershgorin bounds the fastest
@@ -250,6 +278,16 @@ int make_scenes(scene *scenes)
     scenes[count].duration = 1, scenes[count].coarse = 250, scenes[count].reference_steps = 1L << 19;
     scenes[count].stiff = 1;
     chain(&scenes[count++]);
+
+    scenes[count].name = "damped_chain";
+    scenes[count].short_title = "damped chain, stability limits";
+    scenes[count].title = "damped chain: 20 beads of 3-17 g, k = 1000-3000 N/m, damping ratio 0.3, 1 s; "
+                          "dotted: stability limits";
+    scenes[count].error_label = "largest bead position error / 1 m at t = 1 s";
+    scenes[count].truth = "converged reference: rk4 at h = 1/2^19 s";
+    scenes[count].duration = 1, scenes[count].coarse = 250, scenes[count].reference_steps = 1L << 19;
+    scenes[count].stiff = 1;
+    damped_chain(&scenes[count++]);
 
     scenes[count].name = "cloth";
     scenes[count].short_title = "cloth patch, 8 x 8";

@@ -31,7 +31,7 @@
 #define MAX_PARTICLES 64
 #define PLAN_SIZE 16         /* bytes for the name of the method auto chose */
 #define MAX_SAMPLES 9        /* timing samples of a point, at most */
-#define SCENE_COUNT 9
+#define SCENE_COUNT 10
 
 /* ------------------------------------------------------------ scenes -- */
 
@@ -68,6 +68,7 @@ typedef struct scene {
     long reference_steps;    /* > 0: converged reference by rk4 at this many steps */
     int ode;                 /* the scene can be built in ODE */
     int stiff;               /* stiff springs: not in the adaptive target (it is about smooth scenes) */
+    int limits;              /* the chart marks each method's stability limit (the advisor's) */
     double scale;            /* m: position errors are divided by it */
     particle_system ps;      /* PARTICLES */
     double tracer_x0[3];     /* TRACER: m */
@@ -96,7 +97,7 @@ typedef struct series {
 } series;
 
 /* ODE last: the ODE comparison and the legend strip rely on it. */
-enum { SERIES_COUNT = 9, RK4 = 3, DOPRI5 = 6, AUTO = 7, ODE = SERIES_COUNT - 1 };
+enum { SERIES_COUNT = 9, SYMPLECTIC_EULER = 1, RK4 = 3, DOPRI5 = 6, AUTO = 7, ODE = SERIES_COUNT - 1 };
 extern const series SERIES[SERIES_COUNT];
 
 int refused(const scene *s, const series *m, char *message, size_t size);
@@ -104,6 +105,7 @@ double error_of(const scene *s, const double *state, const double *truth);
 double timed_run(const scene *s, const series *m, double h, long n, double tolerance, long *done, double *state,
                  char *plan, long *substeps);
 double counted_evaluations(const scene *s, double h, long n, double tolerance);
+double advised_limit(const scene *s, const series *m);
 
 /* ------------------------------------------------------------ sweeps -- */
 

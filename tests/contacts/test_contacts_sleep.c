@@ -256,6 +256,67 @@ static void woken_world_moves_again(void **state)
     tb_world_destroy(w);
 }
 
+/* The header's list of what wakes a sleeping island, one trigger at a
+   time on a column of two boxes asleep on the plane (one island): each
+   of the bottom box's setters, a held force, a force at a body point and
+   a held torque, removing the top box, new contact settings, a new shape
+   and new gravity wake both boxes by the end of the next step; a particle
+   (colliding as a sphere of 5 cm) thrown at the top box faster than
+   sleep_speed wakes them when it reaches them. A step with none of these leaves them asleep. */
+enum { SET_POSITION, SET_ORIENTATION, SET_VELOCITY, SET_SPIN, FORCE, FORCE_AT_POINT, TORQUE, REMOVE_TOP,
+       SETTINGS, SHAPE, GRAVITY, PARTICLE, NOTHING, TRIGGERS };
+
+static void pull(tb_world *w, tb_body_id bottom, tb_body_id top, int trigger)
+{
+    const double x[3] = { 0, 0, 0.5 }, q[4] = { 1, 0, 0, 0 }, zero[3] = { 0, 0, 0 }, f[3] = { 0.1, 0, 0 };
+    const double g[3] = { 0, 0, -9.8 }, far[3] = { 10, 0, 0.5 };
+    tb_contact_settings cs = tb_world_contact_settings(w);
+    tb_particle_def p = tb_default_particle_def();
+    switch (trigger) {
+    case SET_POSITION: assert_int_equal(tb_body_set_position(w, bottom, x), TB_OK); break;
+    case SET_ORIENTATION: assert_int_equal(tb_body_set_orientation(w, bottom, q), TB_OK); break;
+    case SET_VELOCITY: assert_int_equal(tb_body_set_velocity(w, bottom, zero), TB_OK); break;
+    case SET_SPIN: assert_int_equal(tb_body_set_angular_velocity(w, bottom, zero), TB_OK); break;
+    case FORCE: assert_int_equal(tb_body_apply_force(w, bottom, f, x), TB_OK); break;
+    case FORCE_AT_POINT: assert_int_equal(tb_body_apply_force_at_body_point(w, bottom, f, zero), TB_OK); break;
+    case TORQUE: assert_int_equal(tb_body_apply_torque(w, bottom, f), TB_OK); break;
+    case REMOVE_TOP: assert_int_equal(tb_world_remove_body(w, top), TB_OK); break;
+    case SETTINGS: cs.velocity_iterations += 1; assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK); break;
+    case SHAPE: add_box(w, far, 1, 0.6); break;
+    case GRAVITY: assert_int_equal(tb_world_set_gravity(w, g), TB_OK); break;
+    case PARTICLE:
+        p.position[0] = -1, p.position[2] = 1.5, p.velocity[0] = 3; /* reaches the top box in about 0.3 s */
+        assert_int_equal(tb_world_add_particle(w, &p, NULL), TB_OK);
+        break;
+    default: break;
+    }
+}
+
+static void every_listed_trigger_wakes_an_island(void **state)
+{
+    int trigger;
+    (void)state;
+    for (trigger = 0; trigger < TRIGGERS; ++trigger) {
+        tb_world *w = world_on_plane(0.6, 0);
+        const double low[3] = { 0, 0, 0.5 }, high[3] = { 0, 0, 1.5 };
+        tb_body_id bottom = add_box(w, low, 1, 0.6), top = add_box(w, high, 1, 0.6);
+        int asleep = 1, i, steps = trigger == PARTICLE || trigger == NOTHING ? 30 : 1;
+        tb_contact_settings cs = tb_world_contact_settings(w);
+        cs.particle_radius = 0.05; /* particles collide (they do not by default) */
+        assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
+        assert_int_equal(steps_to_sleep(w, top, 200) < 200, 1);
+        assert_int_equal(tb_world_sleeping_count(w), 2);
+        pull(w, bottom, top, trigger);
+        for (i = 0; i < steps && asleep; ++i) {
+            assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+            assert_int_equal(tb_body_asleep(w, bottom, &asleep), TB_OK);
+        }
+        print_message("trigger %2d: %s after %d step(s)\n", trigger, asleep ? "asleep" : "awake", i);
+        assert_int_equal(asleep, trigger == NOTHING);
+        tb_world_destroy(w);
+    }
+}
+
 /* Sleep is off with sleep_time = INFINITY and in worlds with a force
    callback; bad sleep settings are refused and the old ones kept. */
 static tb_status no_force(const tb_force_args *args, void *user)
@@ -299,6 +360,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(sleeping_blocks_stay_put),
     cmocka_unit_test(woken_world_moves_again),
     cmocka_unit_test(sleep_settings),
+    cmocka_unit_test(every_listed_trigger_wakes_an_island),
 };
 
 TB_TEST_MAIN(tests)

@@ -4,21 +4,10 @@
    asserts the method's own error formula. */
 #include "test_main.h"
 #include "tumble.h"
+#include "particle_worlds.h"
 
 #include <math.h>
 #include <string.h>
-
-static tb_world *world_with(const char *integrator, double gz, double linear, double quadratic)
-{
-    tb_world_def def = tb_default_world_def();
-    tb_world *w;
-    def.integrator = integrator;
-    def.gravity[2] = gz;
-    def.linear_drag = linear;
-    def.quadratic_drag = quadratic;
-    assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
-    return w;
-}
 
 static tb_particle_id particle(tb_world *w, const double x[3], const double v[3], double mass, int pinned)
 {

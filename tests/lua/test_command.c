@@ -339,7 +339,7 @@ static void plot_is_drawn_with_gnuplot(void **state)
 static void reference_scenes_run(void **state)
 {
     static const char *const names[] = { "oscillator", "damped", "kepler", "vortex", "projectile",
-                                         "chain", "cloth", "flip", "top" };
+                                         "chain", "damped_chain", "cloth", "flip", "top" };
     size_t k;
     (void)state;
     for (k = 0; k < sizeof names / sizeof names[0]; ++k) {
@@ -454,6 +454,35 @@ static void overrides_and_help(void **state)
     assert_non_null(strstr(out_text, "--max-memory"));
 }
 
+/* The README: "On a terminal a run longer than a second shows a progress
+   line on stderr", and never into a pipe or a file. A scene whose force
+   callback spends 3 ms of processor time an evaluation runs 400 steps of
+   symplectic Euler (one evaluation each): 1.2 s. Under `script`, which
+   gives it a terminal, the line shows; with stderr in a file it does
+   not. */
+static void progress_shows_on_a_terminal_only(void **state)
+{
+    char cmd[2048], path[1100], text[8192];
+    int rc;
+    (void)state;
+    write_file("slow.lua", "local tumble = require 'tumble'\n"
+                           "local w = tumble.world{ gravity = {0, 0, -9.81}, integrator = 'symplectic_euler' }\n"
+                           "w:particle{ pos = {0, 0, 0} }\n"
+                           "w:force(function() local t0 = os.clock() while os.clock() - t0 < 0.003 do end end)\n"
+                           "return { world = w, duration = 4, record_every = 1 }\n");
+    snprintf(cmd, sizeof cmd, "cd '%s' && script -qec \"'%s' run slow.lua --dt 0.01 --out slow.csv\" /dev/null "
+             "> tty.txt 2>&1", work_dir(), TUMBLE_EXE);
+    rc = system(cmd);
+    assert_true(WIFEXITED(rc) && WEXITSTATUS(rc) == 0);
+    work_path(path, sizeof path, "tty.txt");
+    slurp(path, text, sizeof text);
+    assert_non_null(strstr(text, "tumble: t = "));
+    assert_non_null(strstr(text, " steps/s, about "));
+    assert_int_equal(tumble("run slow.lua --dt 0.01 --out slow.csv"), 0);
+    assert_null(strstr(err_text, "tumble: t = "));
+    assert_null(strstr(out_text, "tumble: t = "));
+}
+
 /* The number after `label` in the summary. */
 static double summary_number(const char *label)
 {
@@ -461,6 +490,104 @@ static double summary_number(const char *label)
     if (!at)
         fail_msg("no '%s' in the summary: %s", label, out_text);
     return strtod(at + strlen(label), NULL);
+}
+
+/* The guide's printed examples against their closed forms (docs/guide.md,
+   sections 1, 4, 10 and 11; the scripts are the guide's):
+   - a throw under verlet, exact under constant gravity: 600 steps, 76 rows
+     (every 8 steps and the last), energy drift within 1e-14 (rounding);
+   - two 0.1 kg particles on a 200 N/m spring with damping 0.1 N s/m at
+     --dt 0.05: the stiffest mode is the pair's, w = sqrt(k / mu) = 63.25
+     rad/s, damping ratio c / (2 sqrt(k mu)) = 0.0158, and Verlet's damped
+     limit 2 / (z + sqrt(1 - 3 z^2)) / w = 0.03114 s, advice 0.9 of it;
+   - a ball dropped with its lowest point 1 m up, restitution 0.5, at 60
+     Hz: impacts at sqrt(2 g) e^k m/s (4.43, 2.21, 1.11, 0.55 to the two
+     decimals printed), reported at the end of the step in which the
+     closed-form impact time falls;
+   - the same ball at 240 Hz, written to a file by the script, which only
+     --trust allows: apexes e^2 = 0.25 m and e^4 = 0.0625 m (to the four
+     decimals printed), at the first step past the closed-form apex
+     times. */
+static void guide_examples_print_their_closed_forms(void **state)
+{
+    const double g = 9.81, w = sqrt(200 / 0.05), z = 0.1 / (2 * sqrt(200 * 0.05));
+    const double limit = 2 / (z + sqrt(1 - 3 * z * z)) / w;
+    char want[256], path[1100], text[1024];
+    double t_impact = sqrt(2 / g), v = sqrt(2 * g), t_apex;
+    int k;
+    (void)state;
+    write_file("throw.lua", "local tumble = require 'tumble'\n"
+                            "local w = tumble.world{ dt = 1/240 }\n"
+                            "w:particle{ pos = {0, 0, 1}, vel = {9, 0, 12}, mass = 2 }\n"
+                            "return { world = w, duration = 2.5, record_every = 1/30 }\n");
+    assert_int_equal(tumble("run throw.lua"), 0);
+    assert_non_null(strstr(out_text, "steps       600,"));
+    assert_non_null(strstr(out_text, "wrote       throw.csv (76 rows)"));
+    assert_below(fabs(summary_number("relative drift ")), 1e-14);
+
+    write_file("springs.lua", "local tumble = require 'tumble'\n"
+                              "local w = tumble.world{ dt = 1/1000 }\n"
+                              "local a = w:particle{ pos = {0, 0, 1}, mass = 0.1 }\n"
+                              "local b = w:particle{ pos = {0.2, 0, 1}, mass = 0.1 }\n"
+                              "w:spring(a, {0, 0, 2}, { k = 50 })\n"
+                              "w:spring(a, b, { k = 200, damping = 0.1, rest = 0.25 })\n"
+                              "return { world = w, duration = 3, record_every = 1/100 }\n");
+    assert_int_equal(tumble("run springs.lua --dt 0.05"), 0);
+    snprintf(want, sizeof want, "exceeds the limit %.4g s of verlet (stiffest spring mode %.2f rad/s, damping "
+             "ratio %.3g): use dt <= %.4g s", limit, w, z, 0.9 * limit);
+    print_message("guide's advice: %s\n", want);
+    assert_non_null(strstr(err_text, want));
+
+    write_file("events.lua", "local tumble = require 'tumble'\n"
+                             "local w = tumble.world{}\n"
+                             "local floor = w:shape{ type = 'plane' }\n"
+                             "local ball = w:body{ sphere = 0.1, mass = 1, pos = {0, 0, 1.1} }\n"
+                             "local skin = w:shape{ type = 'sphere', body = ball, radius = 0.1, restitution = 0.5 }\n"
+                             "for i = 1, 90 do\n"
+                             "  w:step()\n"
+                             "  for _, e in ipairs(w:events()) do\n"
+                             "    print(string.format('%.3f s: %s, shapes %d and %d, %.2f m/s', w:time(), e.type, e.a,"
+                             " e.b, e.speed))\n"
+                             "  end\n"
+                             "end\n"
+                             "return { world = w, duration = 0 }\n");
+    assert_int_equal(tumble("run events.lua --out events.csv"), 0);
+    for (k = 0; k < 4; ++k) {
+        snprintf(want, sizeof want, "%.3f s: begin, shapes 1 and 2, %.2f m/s", ceil(t_impact * 60) / 60, v);
+        print_message("guide's events: %s\n", want);
+        assert_non_null(strstr(out_text, want));
+        t_impact += 2 * 0.5 * v / g; /* the rebound at e v rises and falls back */
+        v *= 0.5;
+    }
+
+    write_file("apexes.lua", "local tumble = require 'tumble'\n"
+                             "local w = tumble.world{ dt = 1/240 }\n"
+                             "w:shape{ type = 'plane' }\n"
+                             "local ball = w:body{ sphere = 0.1, mass = 1, pos = {0, 0, 1.1} }\n"
+                             "w:shape{ type = 'sphere', body = ball, radius = 0.1, restitution = 0.5 }\n"
+                             "local out = assert(io.open('apexes.txt', 'w'))\n"
+                             "local rising = false\n"
+                             "for i = 1, 4 * 240 do\n"
+                             "  w:step()\n"
+                             "  local _, _, vz = ball:vel()\n"
+                             "  if rising and vz <= 0 then\n"
+                             "    local _, _, z = ball:pos()\n"
+                             "    out:write(string.format('%.3f s: %.4f m\\n', w:time(), z - 0.1))\n"
+                             "  end\n"
+                             "  rising = vz > 0\n"
+                             "end\n"
+                             "out:close()\n"
+                             "return { world = w, duration = 0 }\n");
+    assert_int_equal(tumble("run apexes.lua --out apexes.csv"), 1); /* the sandbox opens no file to write */
+    assert_non_null(strstr(err_text, "for reading only"));
+    assert_int_equal(tumble("run apexes.lua --trust --out apexes.csv"), 0);
+    work_path(path, sizeof path, "apexes.txt");
+    slurp(path, text, sizeof text);
+    t_apex = sqrt(2 / g) + 0.5 * sqrt(2 * g) / g;
+    snprintf(want, sizeof want, "%.3f s: 0.2500 m\n%.3f s: 0.0625 m\n", ceil(t_apex * 240) / 240,
+             ceil((t_apex + 0.5 * sqrt(2 * g) / g + 0.25 * sqrt(2 * g) / g) * 240) / 240);
+    print_message("guide's apexes:\n%s", want);
+    assert_true(strncmp(text, want, strlen(want)) == 0);
 }
 
 /* --check reruns at dt / 2 (the adaptive methods also at tolerance / 100)
@@ -589,6 +716,8 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(failure_mid_run_leaves_no_file),
     cmocka_unit_test(bad_arguments_are_refused),
     cmocka_unit_test(overrides_and_help),
+    cmocka_unit_test(progress_shows_on_a_terminal_only),
+    cmocka_unit_test(guide_examples_print_their_closed_forms),
     cmocka_unit_test(check_estimates_the_error),
 };
 TB_TEST_MAIN(tests)

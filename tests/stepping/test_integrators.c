@@ -2,6 +2,7 @@
    stability function, on problems whose exact solution is known. */
 #include "test_main.h"
 #include "tumble.h"
+#include "particle_worlds.h"
 
 #include <math.h>
 #include <string.h>
@@ -29,7 +30,9 @@ static tb_world *oscillator(const char *integrator, double w, double x0, double 
     return world;
 }
 
-/* Error in phase space, |(x, v / w) - exact|, after n steps of T / n. */
+/* Error in phase space, |(x, v / w) - exact|, after n steps of T / n.
+   dopri5 runs at tolerance 1e100, which accepts every step whole: the
+   fixed-step Dormand-Prince method. */
 static double oscillator_error(const char *integrator, double T, int n)
 {
     const double w = 2, x0 = 1;
@@ -37,6 +40,8 @@ static double oscillator_error(const char *integrator, double T, int n)
     tb_world *world = oscillator(integrator, w, x0, 0, &id);
     double x[3], v[3], ex, ev;
     int i;
+    if (strcmp(integrator, "dopri5") == 0)
+        assert_int_equal(tb_world_set_tolerance(world, 1e100), TB_OK);
     for (i = 0; i < n; ++i)
         assert_int_equal(tb_world_step(world, T / n), TB_OK);
     tb_particle_position(world, id, x);
@@ -63,6 +68,47 @@ static void euler_is_first_order(void **state) { (void)state; check_order("euler
 static void symplectic_euler_is_first_order(void **state) { (void)state; check_order("symplectic_euler", 2000, 1); }
 static void verlet_is_second_order(void **state) { (void)state; check_order("verlet", 400, 2); }
 static void rk4_is_fourth_order(void **state) { (void)state; check_order("rk4", 100, 4); }
+/* the orders the header's table gives the other methods: verlet_exact
+   translates as verlet; implicit Euler is first order; dopri5's advancing
+   solution is fifth */
+static void verlet_exact_is_second_order(void **state) { (void)state; check_order("verlet_exact", 400, 2); }
+static void implicit_euler_is_first_order(void **state) { (void)state; check_order("implicit_euler", 2000, 1); }
+static void dopri5_is_fifth_order(void **state) { (void)state; check_order("dopri5", 25, 5); }
+
+/* Force evaluations a step, as the header's table gives them, counted by a
+   callback that adds nothing, over 10 steps of 0.5 s of a particle on a
+   spring of w = 2 rad/s (h w = 1, which dopri5 divides at 1e-6):
+   euler, symplectic_euler and implicit_euler 1, verlet and verlet_exact 2
+   (the end-of-step forces are not reused: they may depend on velocity),
+   rk4 4, dopri5 1 + 6 per accepted substep without bodies (first same as
+   last), and tb_world_work counts the same. */
+static tb_status count_calls(const tb_force_args *args, void *user);
+static void each_method_makes_its_force_evaluations(void **state)
+{
+    const char *names[] = { "euler", "symplectic_euler", "verlet", "rk4", "verlet_exact", "implicit_euler" };
+    const long expected[] = { 1, 1, 2, 4, 2, 1 };
+    size_t m;
+    (void)state;
+    for (m = 0; m < 7; ++m) {
+        tb_particle_id id;
+        tb_world *world = oscillator(m < 6 ? names[m] : "dopri5", 2, 1, 0, &id);
+        long calls = 0, want;
+        tb_work work;
+        int i;
+        assert_int_equal(tb_world_add_force(world, count_calls, &calls, NULL), TB_OK);
+        for (i = 0; i < 10; ++i)
+            assert_int_equal(tb_world_step(world, 0.5), TB_OK);
+        work = tb_world_work(world);
+        want = m < 6 ? 10 * expected[m] : (long)(work.steps + 6 * (work.substeps + work.rejected));
+        print_message("%-17s %ld force evaluations in 10 steps (%llu substeps)\n", m < 6 ? names[m] : "dopri5",
+                      calls, (unsigned long long)work.substeps);
+        assert_int_equal(calls, want);
+        assert_int_equal((long)work.evaluations, calls);
+        if (m == 6)
+            assert_true(work.substeps > work.steps); /* the tolerance divided the steps */
+        tb_world_destroy(world);
+    }
+}
 
 /* A tracer in the vortex v = w (-y, x, 0) obeys the linear test equation
    z' = i w z with z = x + i y, so a method with stability function R moves it
@@ -245,21 +291,6 @@ static void dopri5_error_follows_tolerance(void **state)
 
 /* ---- the tolerance against the global error --------------------------------- */
 
-/* Gravity of GM = 1 m^3/s^2 at the origin, as a callback. */
-static tb_status central_gravity(const tb_force_args *a, void *user)
-{
-    size_t i;
-    int k;
-    (void)user;
-    for (i = 0; i < a->count; ++i) {
-        const double *x = a->positions + 3 * i;
-        const double r2 = x[0] * x[0] + x[1] * x[1] + x[2] * x[2], r3 = r2 * sqrt(r2);
-        for (k = 0; k < 3; ++k)
-            a->forces[3 * i + k] -= a->masses[i] * x[k] / r3;
-    }
-    return TB_OK;
-}
-
 /* Kepler orbit, a = 1 m, eccentricity 0.5, from periapsis (0.5 m, at
    sqrt 3 m/s); after 10 periods (T = 20 pi s) it is back at the start. The
    error is the distance from it, in frames of H. */
@@ -272,7 +303,6 @@ static double kepler_error(double tol, double H, tb_work *work)
     tb_world *w;
     tb_particle_id id;
     double x[3];
-    long i;
     def.gravity[2] = 0;
     def.integrator = "dopri5";
     def.tolerance = tol;
@@ -281,8 +311,7 @@ static double kepler_error(double tol, double H, tb_work *work)
     p.velocity[1] = sqrt(3.0);
     assert_int_equal(tb_world_add_particle(w, &p, &id), TB_OK);
     assert_int_equal(tb_world_add_force(w, central_gravity, NULL, NULL), TB_OK);
-    for (i = 0; i < n; ++i)
-        assert_int_equal(tb_world_step(w, T / (double)n), TB_OK);
+    step_through(w, T, n);
     tb_particle_position(w, id, x);
     *work = tb_world_work(w);
     tb_world_destroy(w);
@@ -621,6 +650,10 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(symplectic_euler_is_first_order),
     cmocka_unit_test(verlet_is_second_order),
     cmocka_unit_test(rk4_is_fourth_order),
+    cmocka_unit_test(verlet_exact_is_second_order),
+    cmocka_unit_test(implicit_euler_is_first_order),
+    cmocka_unit_test(dopri5_is_fifth_order),
+    cmocka_unit_test(each_method_makes_its_force_evaluations),
     cmocka_unit_test(vortex_radius_follows_stability_functions),
     cmocka_unit_test(euler_energy_grows_as_predicted),
     cmocka_unit_test(symplectic_euler_energy_stays_bounded),
