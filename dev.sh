@@ -102,6 +102,7 @@ bench)
     install_missing "${packages[@]}"
     build default
     ./build/default/bench/bench_particles
+    ./build/default/bench/bench_lua_force
     ./build/default/bench/bench_bodies
     ./build/default/bench/bench_rotation
     ./build/default/bench/bench_contacts

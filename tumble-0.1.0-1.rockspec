@@ -25,6 +25,7 @@ build = {
             "src/core/isa.c",
             "src/particles/tracers.c",
             "src/particles/particles.c",
+            "src/particles/particle_step.c",
             "src/bodies/bodies.c",
             "src/bodies/body_step.c",
             "src/bodies/mass.c",

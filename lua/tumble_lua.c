@@ -63,6 +63,13 @@ typedef struct tl_world {
     void *alloc_ud;
     int keeps_callbacks; /* a snapshot was taken: callbacks live until the
                             world closes (forget_callback) */
+    const tb_force_args *force_args; /* while a Lua force runs: what its
+                            state table's arrays are filled from (read_state) */
+    size_t zeroed[3];    /* leading entries of the forces, body forces and
+                            body torques tables known to be 0 (run_force) */
+    double *masses;      /* [mass_cap] the particle masses the kept s.mass
+                            table holds (read_masses): mass_count of them */
+    size_t mass_cap, mass_count;
 } tl_world;
 
 typedef struct tl_handle {
@@ -523,7 +530,8 @@ static void forget_callback(lua_State *L, int world_idx, tl_world *lw, int key)
     lua_pop(L, 1);
 }
 
-/* Free every callback record of a world (when it closes). */
+/* Free every callback record of a world (when it closes), and the masses
+   its forces' s.mass holds. */
 static void free_callbacks(tl_world *lw)
 {
     while (lw->callbacks) {
@@ -531,6 +539,10 @@ static void free_callbacks(tl_world *lw)
         lw->callbacks = cb->next;
         lw->alloc(lw->alloc_ud, cb, sizeof *cb, 0);
     }
+    if (lw->masses)
+        lw->alloc(lw->alloc_ud, lw->masses, lw->mass_cap * sizeof *lw->masses, 0);
+    lw->masses = NULL;
+    lw->mass_cap = lw->mass_count = 0;
 }
 
 static int handle_remove(lua_State *L)
@@ -668,6 +680,55 @@ static int get_scratch_table(lua_State *L, int table_idx, const char *name)
     return lua_gettop(L);
 }
 
+/* What a Lua force reads is filled in when it first reads it in a call,
+   not before: the state table's arrays (s.pos, s.vel, s.mass) and the
+   bodies' (s.bodies.pos, ...), each a table kept in the world's table and
+   filled again only in a call that reads it. A force that reads positions
+   and masses costs the copies of those alone (bench/lua_force.c). The
+   state tables' __index (read_state) fills a field and sets it in the
+   table, so the call's further reads are plain table reads; run_force
+   takes the fields out again before the next call. */
+typedef struct tl_array {
+    const char *key;      /* in s, or in s.bodies */
+    const char *kept;     /* the table's key in the world's table */
+} tl_array;
+static const tl_array particle_arrays[] = { { "pos", "force_pos" }, { "vel", "force_vel" },
+                                            { "mass", "force_mass" }, { "bodies", "force_bodies" } };
+static const tl_array body_arrays[] = { { "pos", "body_pos" }, { "rot", "body_rot" }, { "vel", "body_vel" },
+                                        { "omega", "body_omega" }, { "mass", "body_mass" } };
+#define PARTICLE_ARRAYS 4
+#define BODY_ARRAYS 5
+
+static int read_state(lua_State *L);
+
+/* The state table `name` in the world's table (at table_idx), made if
+   missing with a locked metatable whose __index is read_state (upvalues:
+   the world's userdata at world_idx, `bodies`); its arrays are taken out,
+   so that this call's reads fill them afresh. */
+static int get_state_table(lua_State *L, int table_idx, int world_idx, const char *name, int bodies)
+{
+    const int state = get_scratch_table(L, table_idx, name);
+    const tl_array *arrays = bodies ? body_arrays : particle_arrays;
+    int k;
+    if (!lua_getmetatable(L, state)) {
+        lua_createtable(L, 0, 2);
+        lua_pushvalue(L, world_idx);
+        lua_pushinteger(L, bodies);
+        lua_pushcclosure(L, read_state, 2);
+        lua_setfield(L, -2, "__index");
+        lua_pushboolean(L, 0);
+        lua_setfield(L, -2, "__metatable");
+        lua_setmetatable(L, state);
+    } else {
+        lua_pop(L, 1);
+    }
+    for (k = 0; k < (bodies ? BODY_ARRAYS : PARTICLE_ARRAYS); ++k) {
+        lua_pushnil(L);
+        lua_setfield(L, state, arrays[k].key);
+    }
+    return state;
+}
+
 static void fill_array(lua_State *L, int table_idx, const double *values, size_t n)
 {
     size_t i;
@@ -677,60 +738,155 @@ static void fill_array(lua_State *L, int table_idx, const double *values, size_t
     }
 }
 
-/* Add the numbers of the table at idx, 1..n, to out. */
-static void add_from_table(lua_State *L, int table_idx, double *out, size_t n, const char *what)
+/* Add the numbers of the table at idx, 1..n, to out; with `reset`, put 0
+   back where a number was not 0, so the table is zeros again. They are
+   read CHUNK at a time onto the stack, popped together. */
+#define CHUNK 16
+static void add_from_table(lua_State *L, int table_idx, double *out, size_t n, const char *what, int reset)
 {
-    size_t i;
-    for (i = 0; i < n; ++i) {
-        int isnum;
-        double v;
-        lua_rawgeti(L, table_idx, (lua_Integer)i + 1);
-        v = lua_tonumberx(L, -1, &isnum);
-        if (!isnum)
-            luaL_error(L, "%s[%d] is %s, not a number", what, (int)i + 1, luaL_typename(L, -1));
-        out[i] += v;
-        lua_pop(L, 1);
+    double v[CHUNK];
+    size_t i, j, m;
+    luaL_checkstack(L, CHUNK, "reading a callback's numbers");
+    for (i = 0; i < n; i += m) {
+        m = n - i < CHUNK ? n - i : CHUNK;
+        for (j = 0; j < m; ++j)
+            lua_rawgeti(L, table_idx, (lua_Integer)(i + j) + 1);
+        for (j = 0; j < m; ++j) {
+            const int at = (int)j - (int)m;
+            int isnum;
+            v[j] = lua_tonumberx(L, at, &isnum);
+            if (!isnum)
+                luaL_error(L, "%s[%d] is %s, not a number", what, (int)(i + j) + 1, luaL_typename(L, at));
+            out[i + j] += v[j];
+        }
+        lua_pop(L, (int)m);
+        for (j = 0; reset && j < m; ++j)
+            if (v[j] != 0 || signbit(v[j])) {
+                lua_pushnumber(L, 0);
+                lua_rawseti(L, table_idx, (lua_Integer)(i + j) + 1);
+            }
     }
+}
+
+/* s.mass lives across calls: masses change only with the set of particles
+   (none while the world steps), so the kept table is filled again only
+   when they differ from the copy of what it holds, or it was made anew. */
+static void read_masses(lua_State *L, tl_world *lw, int world, const char *kept, const tb_force_args *a)
+{
+    const size_t bytes = a->count * sizeof(double);
+    const int made = lua_getfield(L, world, kept) != LUA_TTABLE;
+    int table;
+    lua_pop(L, 1);
+    table = get_scratch_table(L, world, kept);
+    if (!made && lw->mass_count == a->count && (!bytes || memcmp(lw->masses, a->masses, bytes) == 0))
+        return;
+    if (lw->mass_cap < a->count) {
+        double *copy = lw->alloc(lw->alloc_ud, lw->masses, lw->mass_cap * sizeof(double), bytes);
+        if (!copy)
+            luaL_error(L, "not enough memory");
+        lw->masses = copy;
+        lw->mass_cap = a->count;
+    }
+    lw->mass_count = 0; /* until the table holds them */
+    fill_array(L, table, a->masses, a->count);
+    if (bytes)
+        memcpy(lw->masses, a->masses, bytes);
+    lw->mass_count = a->count;
+}
+
+/* __index of a state table, upvalues (the world's userdata, 0 for s or 1
+   for s.bodies): outside a call, or for another key, nil. */
+static int read_state(lua_State *L)
+{
+    tl_world *lw = test_world(L, lua_upvalueindex(1));
+    const int bodies = (int)lua_tointeger(L, lua_upvalueindex(2));
+    const tb_force_args *a = lw ? lw->force_args : NULL;
+    const char *key = lua_type(L, 2) == LUA_TSTRING ? lua_tostring(L, 2) : "";
+    const tl_array *arrays = bodies ? body_arrays : particle_arrays;
+    const int count = bodies ? BODY_ARRAYS : PARTICLE_ARRAYS;
+    const double *values;
+    size_t length;
+    int k, world;
+    for (k = 0; k < count && strcmp(arrays[k].key, key) != 0; ++k)
+        ;
+    if (!a || k == count)
+        return 0;
+    if (bodies) {
+        const double *v[BODY_ARRAYS] = { a->body_positions, a->body_orientations, a->body_velocities,
+                                         a->body_angular_velocities, a->body_masses };
+        const size_t widths[BODY_ARRAYS] = { 3, 4, 3, 3, 1 };
+        values = v[k];
+        length = widths[k] * a->body_count;
+    } else {
+        const double *v[PARTICLE_ARRAYS] = { a->positions, a->velocities, a->masses, NULL };
+        const size_t widths[PARTICLE_ARRAYS] = { 3, 3, 1, 0 };
+        values = v[k];
+        length = widths[k] * a->count;
+    }
+    lua_getiuservalue(L, lua_upvalueindex(1), 1);
+    world = lua_gettop(L);
+    check_world_table(L, world);
+    if (!bodies && k == 3) { /* s.bodies: a state table of its own */
+        get_state_table(L, world, lua_upvalueindex(1), arrays[k].kept, 1);
+        lua_pushinteger(L, (lua_Integer)a->body_count);
+        lua_setfield(L, -2, "n");
+    } else if (!bodies && k == 2) {
+        read_masses(L, lw, world, arrays[k].kept, a);
+    } else {
+        fill_array(L, get_scratch_table(L, world, arrays[k].kept), values, length);
+    }
+    lua_pushvalue(L, 2);
+    lua_pushvalue(L, -2);
+    lua_rawset(L, 1);
+    return 1;
 }
 
 /* What run_force and run_field get through lua_pcall, as light userdata. */
 typedef struct tl_force_call { tl_callback *cb; const tb_force_args *args; } tl_force_call;
 typedef struct tl_field_call { tl_callback *cb; const tb_field_args *args; } tl_field_call;
 
-/* Call a Lua force, under lua_pcall: (call record, the world's table).
-   fn(t, state, forces, body_forces, body_torques): state = {n, pos, vel,
-   mass, bodies = {n, pos, rot, vel, omega, mass}} in flat arrays; forces,
-   body_forces and body_torques flat arrays of zeros to add to. */
+/* Make entries from + 1 .. n of the table at idx 0. */
+static void zero_from(lua_State *L, int table_idx, size_t from, size_t n)
+{
+    size_t i;
+    for (i = from; i < n; ++i) {
+        lua_pushnumber(L, 0);
+        lua_rawseti(L, table_idx, (lua_Integer)i + 1);
+    }
+}
+
+/* Call a Lua force, under lua_pcall: (call record, the world's table, the
+   world's userdata). fn(t, state, forces, body_forces, body_torques):
+   state = {n, pos, vel, mass, bodies = {n, pos, rot, vel, omega, mass}} in
+   flat arrays, filled when first read (read_state); forces, body_forces and
+   body_torques flat arrays of zeros to add to, kept from call to call: what
+   a call wrote is read and the entries it set put back to 0, so a call
+   costs the entries it writes, not the zeroing of all of them. */
 static int run_force(lua_State *L)
 {
+    static const char *const outs[3] = { "force_out", "body_force_out", "body_torque_out" };
+    static const char *const what[3] = { "forces", "body_forces", "body_torques" };
     tl_force_call *c = lua_touserdata(L, 1);
     const tb_force_args *a = c->args;
+    tl_world *lw = c->cb->owner;
     const int t = 2; /* the world's table */
-    int state;
+    const size_t lengths[3] = { 3 * a->count, 3 * a->body_count, 3 * a->body_count };
+    double *const into[3] = { a->forces, a->body_forces, a->body_torques };
+    int state, k, top;
     check_world_table(L, t);
     lua_rawgeti(L, t, c->cb->key);
     lua_pushnumber(L, a->time);
-    state = get_scratch_table(L, t, "force_state");
+    state = get_state_table(L, t, 3, "force_state", 0);
     lua_pushinteger(L, (lua_Integer)a->count);
     lua_setfield(L, state, "n");
-    fill_array(L, get_scratch_table(L, state, "pos"), a->positions, 3 * a->count);
-    fill_array(L, get_scratch_table(L, state, "vel"), a->velocities, 3 * a->count);
-    fill_array(L, get_scratch_table(L, state, "mass"), a->masses, a->count);
-    lua_settop(L, state);
-    {
-        int bodies = get_scratch_table(L, state, "bodies");
-        lua_pushinteger(L, (lua_Integer)a->body_count);
-        lua_setfield(L, bodies, "n");
-        fill_array(L, get_scratch_table(L, bodies, "pos"), a->body_positions, 3 * a->body_count);
-        fill_array(L, get_scratch_table(L, bodies, "rot"), a->body_orientations, 4 * a->body_count);
-        fill_array(L, get_scratch_table(L, bodies, "vel"), a->body_velocities, 3 * a->body_count);
-        fill_array(L, get_scratch_table(L, bodies, "omega"), a->body_angular_velocities, 3 * a->body_count);
-        fill_array(L, get_scratch_table(L, bodies, "mass"), a->body_masses, a->body_count);
-        lua_settop(L, state);
+    for (k = 0; k < 3; ++k) { /* zeros: the entries past those known to be 0 */
+        if (lua_getfield(L, t, outs[k]) != LUA_TTABLE)
+            lw->zeroed[k] = 0; /* a table made now (get_scratch_table) */
+        lua_pop(L, 1);
+        zero_from(L, get_scratch_table(L, t, outs[k]), lw->zeroed[k], lengths[k]);
+        lw->zeroed[k] = 0; /* the call may write any of them */
     }
-    fill_array(L, get_scratch_table(L, t, "force_out"), NULL, 3 * a->count);
-    fill_array(L, get_scratch_table(L, t, "body_force_out"), NULL, 3 * a->body_count);
-    fill_array(L, get_scratch_table(L, t, "body_torque_out"), NULL, 3 * a->body_count);
+    lw->force_args = a; /* until run_protected puts back what it was */
     lua_call(L, 5, a->potential ? 1 : 0);
     if (a->potential) { /* asked for the energy: a number returned is the force's potential */
         if (lua_type(L, -1) == LUA_TNUMBER)
@@ -741,17 +897,18 @@ static int run_force(lua_State *L)
         lua_pop(L, 1);
     }
     check_world_table(L, t);
-    add_from_table(L, get_scratch_table(L, t, "force_out"), a->forces, 3 * a->count, "forces");
-    if (a->body_count) {
-        add_from_table(L, get_scratch_table(L, t, "body_force_out"), a->body_forces, 3 * a->body_count,
-                       "body_forces");
-        add_from_table(L, get_scratch_table(L, t, "body_torque_out"), a->body_torques, 3 * a->body_count,
-                       "body_torques");
+    top = lua_gettop(L);
+    for (k = 0; k < 3; ++k) {
+        if (lengths[k])
+            add_from_table(L, get_scratch_table(L, t, outs[k]), into[k], lengths[k], what[k], 1);
+        lw->zeroed[k] = lengths[k];
+        lua_settop(L, top);
     }
     return 0;
 }
 
-/* Call a Lua field, under lua_pcall: (call record, the world's table).
+/* Call a Lua field, under lua_pcall: (call record, the world's table, the
+   world's userdata).
    fn(t, pos, vel): pos flat positions, vel a flat array of 3n zeros to add to. */
 static int run_field(lua_State *L)
 {
@@ -767,16 +924,18 @@ static int run_field(lua_State *L)
     fill_array(L, vel, NULL, 3 * a->count);
     lua_call(L, 3, 0);
     check_world_table(L, t);
-    add_from_table(L, get_scratch_table(L, t, "field_out"), a->velocities, 3 * a->count, "vel");
+    add_from_table(L, get_scratch_table(L, t, "field_out"), a->velocities, 3 * a->count, "vel", 0);
     return 0;
 }
 
 /* Run `run` (run_force or run_field) on the thread stepping the world, with
    a traceback handler; a Lua error becomes TB_ERR_CALLBACK and its first
-   line the message. */
+   line the message. The world's force_args are what they were before, after
+   an error too, so no state table reads a finished call's arrays. */
 static tb_status run_protected(tl_callback *cb, lua_CFunction run, void *call, char *message)
 {
     lua_State *L = cb->owner->L;
+    const tb_force_args *outer;
     int top, rc;
     if (!L) {
         copy_first_line(message, TB_MESSAGE_SIZE,
@@ -802,9 +961,10 @@ static tb_status run_protected(tl_callback *cb, lua_CFunction run, void *call, c
         lua_getiuservalue(L, -1, 1);
     else
         lua_pushnil(L);
-    lua_replace(L, top + 4);
-    lua_settop(L, top + 4);
-    rc = lua_pcall(L, 2, 0, top + 1);
+    lua_replace(L, top + 4); /* the table; the world's userdata (or nil) after it */
+    outer = cb->owner->force_args;
+    rc = lua_pcall(L, 3, 0, top + 1);
+    cb->owner->force_args = outer; /* also after an error: no call runs now */
     if (rc != LUA_OK)
         copy_first_line(message, TB_MESSAGE_SIZE,
                         lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : "(error object is not a string)");

@@ -26,6 +26,12 @@ typedef struct tb__split_op {
     int drift;             /* 0: kick, 1: drift */
     double h;              /* s */
     tb__rotation_kind rotation; /* how a drift turns anisotropic bodies */
+    /* a kick whose velocity-dependent forces see the predicted velocity
+       2 v - v_start, v_start the velocity before the list's first op
+       (Verlet's closing kick, as tb__split_extrapolate would give it);
+       only in lists for worlds where no global force acts and bodies
+       are not velocity-dependent */
+    int predicted;
 } tb__split_op;
 
 /* An integrator, as the world holds it (stepping/integrators.c defines
@@ -112,6 +118,9 @@ struct tb_world {
     const double *kick_seen; /* a state vector whose velocities and momenta
                               the velocity-dependent forces of the next kicks
                               see; NULL: the current ones */
+    double *damping_sums;  /* [2] W: while a step asks it (step.c), where the
+                              particles' one-pass kernel puts the drag's power
+                              at the step's start and end; NULL otherwise */
     tb__ids particle_ids;
 
     /* springs: endpoints are particle slots, kept right on swap-remove */

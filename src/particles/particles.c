@@ -1,14 +1,9 @@
-/* particles.c: point masses, their local forces (gravity, drag) and the
-   kernels that move them: derive for generic methods, kick and drift for
-   split methods. */
+/* particles.c: point masses: adding, removing, reading and setting them.
+   The kernels that move them are in particle_step.c. */
 #include "particles/particles.h"
 
 #include <math.h>
 #include <string.h>
-
-/* Particles per block of a split sweep: positions and velocities of a block
-   (2 x 6 KiB) stay in L1 between its kick and its drift. */
-#define BLOCK 256
 
 tb_particle_def tb_default_particle_def(void)
 {
@@ -204,106 +199,4 @@ tb_particle_id tb_world_particle_at(const tb_world *w, size_t slot)
     if (w && slot < w->particle_count)
         tb__ids_at(&w->particle_ids, (uint32_t)slot, &id.index1, &id.generation);
     return id;
-}
-
-/* ------------------------------------------------------------ stepping -- */
-
-/* Acceleration of particles [b, e) from the global forces `f` (or none) and
-   the local ones, gravity and drag: a = (f + m g - (c1 + c2 |v|) v) / m,
-   scaled and added to `out` (a kick: v += h a) or assigned (derive). `v`,
-   the velocity the drag sees, may be `out` itself. */
-static void accelerate(const tb_world *w, size_t b, size_t e, const double *f, const double *v,
-                       double *out, double scale, int add)
-{
-    const double *m = w->particle_mass, *im = w->particle_inv_mass;
-    const double gx = w->gravity[0], gy = w->gravity[1], gz = w->gravity[2];
-    const double c1 = w->linear_drag, c2 = w->quadratic_drag;
-    size_t i;
-    for (i = b; i < e; ++i) {
-        const double vx = v[3 * i], vy = v[3 * i + 1], vz = v[3 * i + 2];
-        const double drag = c2 != 0 ? c1 + c2 * sqrt(vx * vx + vy * vy + vz * vz) : c1;
-        double fx = m[i] * gx - drag * vx, fy = m[i] * gy - drag * vy, fz = m[i] * gz - drag * vz;
-        const double s = scale * im[i];
-        if (f) {
-            fx += f[3 * i];
-            fy += f[3 * i + 1];
-            fz += f[3 * i + 2];
-        }
-        if (add) {
-            out[3 * i] += s * fx;
-            out[3 * i + 1] += s * fy;
-            out[3 * i + 2] += s * fz;
-        } else {
-            out[3 * i] = s * fx;
-            out[3 * i + 1] = s * fy;
-            out[3 * i + 2] = s * fz;
-        }
-    }
-}
-
-void tb__particle_derive(tb_world *w, const double *y, double *dy)
-{
-    const double *vel = y + w->off[TB__PARTICLE_VEL];
-    memcpy(dy + w->off[TB__PARTICLE_POS], vel, 3 * w->particle_count * sizeof(double));
-    accelerate(w, 0, w->particle_count, w->force_ready ? w->particle_force : NULL, vel, dy + w->off[TB__PARTICLE_VEL], 1, 0);
-}
-
-int tb__particle_velocity_dependent(const tb_world *w)
-{
-    return (w->particle_count && (w->linear_drag != 0 || w->quadratic_drag != 0)) || w->spring_damped > 0;
-}
-
-/* The common case of a sweep, where a scene has only the local forces
-   gravity and linear drag (no springs, callbacks or quadratic drag), seen at
-   the velocity being kicked: one pass that kicks and drifts each particle
-   while its velocity is in registers. The same arithmetic as accelerate()
-   (so the same bits) without its per-particle branches; `restrict` lets
-   GCC -O2 pack pairs of doubles. Streaming 10^6 particles it runs near the
-   memory-bandwidth limit (bench/particles.c prints the ratio). */
-static void kick_drift_local(double *restrict x, double *restrict v, const double *restrict m,
-                             const double *restrict im, size_t n, double hk, double hd,
-                             const double g[3], double c1, int drift)
-{
-    const double gx = g[0], gy = g[1], gz = g[2];
-    size_t i;
-    for (i = 0; i < n; ++i) {
-        const double s = hk * im[i], mi = m[i];
-        double *vi = v + 3 * i;
-        vi[0] += s * (mi * gx - c1 * vi[0]);
-        vi[1] += s * (mi * gy - c1 * vi[1]);
-        vi[2] += s * (mi * gz - c1 * vi[2]);
-        if (drift) {
-            double *xi = x + 3 * i;
-            xi[0] += hd * vi[0];
-            xi[1] += hd * vi[1];
-            xi[2] += hd * vi[2];
-        }
-    }
-}
-
-void tb__particle_sweep(tb_world *w, const tb__split_op *ops, int n)
-{
-    double *pos = w->y + w->off[TB__PARTICLE_POS], *vel = w->y + w->off[TB__PARTICLE_VEL];
-    const double *f = w->force_ready ? w->particle_force : NULL;
-    const double *seen = w->kick_seen ? w->kick_seen + w->off[TB__PARTICLE_VEL] : vel;
-    size_t b, i;
-    int k;
-    if (!f && w->quadratic_drag == 0 && seen == vel && !ops[0].drift && (n == 1 || (n == 2 && ops[1].drift))) {
-        /* kick, or kick then drift, with local forces only */
-        kick_drift_local(pos, vel, w->particle_mass, w->particle_inv_mass, w->particle_count, ops[0].h, n == 2 ? ops[1].h : 0,
-                         w->gravity, w->linear_drag, n == 2);
-        return;
-    }
-    for (b = 0; b < w->particle_count; b += BLOCK) {
-        size_t e = b + BLOCK < w->particle_count ? b + BLOCK : w->particle_count;
-        for (k = 0; k < n; ++k) {
-            const double h = ops[k].h;
-            if (ops[k].drift) {
-                for (i = 3 * b; i < 3 * e; ++i)
-                    pos[i] += h * vel[i];
-            } else {
-                accelerate(w, b, e, f, seen, vel, h, 1);
-            }
-        }
-    }
 }

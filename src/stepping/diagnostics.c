@@ -44,7 +44,8 @@ int tb__is_damped(const tb_world *w)
     return 0;
 }
 
-/* -(c1 + c2 |v|) |v|^2 per free particle, -c ((v_a - v_b).n)^2 per spring,
+/* -(c1 + c2 |v|) |v|^2 per free particle (summed as the particles' one-pass
+   kernel sums it, tb__particle_drag_power), -c ((v_a - v_b).n)^2 per spring,
    -c_lin |P|^2 / m and -c_ang w.L per body. */
 double tb__damping_power(const tb_world *w)
 {
@@ -52,11 +53,7 @@ double tb__damping_power(const tb_world *w)
     double p = 0;
     size_t i;
     if (w->linear_drag > 0 || w->quadratic_drag > 0)
-        for (i = 0; i < w->particle_count; ++i) {
-            const double *vi = v + 3 * i, v2 = vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2];
-            if (w->particle_inv_mass[i] > 0)
-                p -= (w->linear_drag + w->quadratic_drag * sqrt(v2)) * v2;
-        }
+        p = tb__particle_drag_power(w);
     for (i = 0; i < w->spring_count; ++i) {
         const uint32_t a = w->spring_a[i], b = w->spring_b[i];
         const double *xb = b == TB__ANCHOR ? w->spring_anchor + 3 * i : x + 3 * b;

@@ -225,6 +225,7 @@ static tb_status take(tb_world *w, tb_snapshot *s)
     s->world.scratch = NULL;
     s->world.scratch_count = 0;
     s->world.kick_seen = NULL;
+    s->world.damping_sums = NULL;
     s->world.contacts = NULL;
     s->has_contacts = w->contacts != NULL;
     s->contacts = w->contacts ? *w->contacts : none;
@@ -353,6 +354,7 @@ static tb_status restore(tb_world *w, const tb_snapshot *s)
     nw.stepping = 0;
     nw.rollback = w->rollback;
     nw.kick_seen = NULL; /* between steps it is always NULL (integrators.c clears it) */
+    nw.damping_sums = NULL; /* and so is this (step.c) */
     if (!nw.y)
         nw.y = tb__empty_state; /* an empty state (core.h) */
     if (nw.y_size == w->y_size) {

@@ -137,8 +137,8 @@ tb_status tb_world_step(tb_world *w, double h)
     int snapshot, guard = w && w->guard != 0;
     double *saved = NULL;
     tb_work work;
-    double power = 0;
-    int damped;
+    double power = 0, sums[2] = { 0, 0 };
+    int damped, summed;
     TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     work = w->work; /* a failed step leaves the counts as they were */
     damped = tb__is_damped(w);
@@ -162,11 +162,17 @@ tb_status tb_world_step(tb_world *w, double h)
             (void)tb__rollback(w); /* out of memory again: the state was not touched yet */
         return st;
     }
-    if (damped)
+    /* the drag's power at the start (and, without contacts, at the end)
+       comes from the particles' sweep when it is the whole step: the same
+       sums, without two passes of their own */
+    summed = damped && tb__one_pass_step(w);
+    if (damped && !summed)
         power = tb__damping_power(w);
+    w->damping_sums = summed ? sums : NULL;
     w->stepping = 1;
     st = tb__method_step(w, w->method, h);
     w->stepping = 0;
+    w->damping_sums = NULL;
     if (st != TB_OK) {
         w->work = work;
         if (guard && tb__rollback(w) != TB_OK)
@@ -182,7 +188,9 @@ tb_status tb_world_step(tb_world *w, double h)
         tb__contacts_solve(w, h, tb__force_lever(w));
         w->work.contact_work += tb__contacts_energy(w) - before;
     }
-    if (damped)
+    if (summed)
+        w->work.damping_work += h / 2 * (sums[0] + (tb__contacts_active(w) ? tb__damping_power(w) : sums[1]));
+    else if (damped)
         w->work.damping_work += h / 2 * (power + tb__damping_power(w));
     if (guard && (st = tb__guard_check(w, h)) != TB_OK) {
         w->work = work;

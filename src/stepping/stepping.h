@@ -16,6 +16,10 @@ const tb__method *tb__method_at(int index); /* NULL past the end */
 /* m->step, counting a fixed-step method's substep (the adaptive ones count
    their own) in w->work. */
 tb_status tb__method_step(tb_world *w, const tb__method *m, double h);
+/* Whether the world's method moves the particles in one sweep of their
+   one-pass kernel this step, with nothing else velocity-dependent: then
+   that sweep can sum the drag's power (w->damping_sums). */
+int tb__one_pass_step(const tb_world *w);
 /* The force_lever of the step just taken (auto: of the method it chose,
    over its substeps). */
 double tb__force_lever(const tb_world *w);
