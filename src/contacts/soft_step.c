@@ -750,7 +750,7 @@ static int impacts(tb__contacts *c, double hs)
         changed = 0;
         for (i = 0; i < c->soft_row_count; ++i) {
             tb__soft_row *o = &c->soft_rows[i];
-            double s, vn, target, tau = -1, lambda;
+            double s, vn, target, tau = -1, lambda, speed = 0;
             int k;
             if (o->restitution == 0 || (vn = tb__soft_rate(c, o)) > -threshold)
                 continue;
@@ -758,7 +758,6 @@ static int impacts(tb__contacts *c, double hs)
             if (s > 0) {
                 /* a gap closing in the substep: when, and how fast */
                 const double kick = kick_rate(c, o), u = vn - 0.5 * kick, a = kick / hs;
-                double speed;
                 tau = impact_time(s, u, a, &speed);
                 /* a gap that closes at the substep's end, to rounding, is
                    this substep's: the next would find it touching, and
@@ -775,6 +774,7 @@ static int impacts(tb__contacts *c, double hs)
                     continue;
                 tau = fmax(ta, tb);
                 target = -o->restitution * vn;
+                speed = -vn;
             }
             lambda = o->mass * (target - vn);
             if (!(lambda > 0))
@@ -793,6 +793,11 @@ static int impacts(tb__contacts *c, double hs)
             }
             tb__soft_push(c, o, lambda);
             o->bounce += lambda;
+            if (!o->struck) {
+                /* the speed it struck at, for its event */
+                o->struck = 1;
+                o->approach = -speed;
+            }
             o->bounced = 1;
             changed = any = 1;
         }
@@ -885,7 +890,7 @@ static void store(tb_world *w, tb__contacts *c, int n)
         p->normal_impulse = n * fmax(o->impulse - o->settled, 0);
         for (k = 0; k < 3; ++k)
             p->friction_impulse[k] = 0;
-        p->active = o->most > 0;
+        p->active = o->most > 0 || o->bounced; /* a bounce alone touched too */
         p->speed = o->struck && o->approach < 0 && p->active ? -o->approach : 0;
     }
     for (i = 0; i < c->soft_patch_count; ++i) {
