@@ -453,8 +453,10 @@ static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double
            from substep to substep */
         add_loads(c, s, k);
         substitute(s, k);
-        /* a point solved to pull lets go */
-        for (i = from; i < to; ++i) {
+        /* a point solved to pull lets go; in the last round the solve
+           stands, cut at no pull (the next solve of the substep starts
+           from it) */
+        for (i = from; i < to && round + 1 < TB__STACK_ROUNDS; ++i) {
             tb__soft_row *o = &c->soft_rows[s->order[i]];
             if (s->solved[i] && s->x[i] < -tiny * (o->mass + 1)) {
                 s->solved[i] = 0;
