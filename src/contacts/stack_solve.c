@@ -52,6 +52,8 @@ struct tb__stacks {
     size_t *position;          /* [rows]: a soft row's position, TB__NONE: soft */
     double *x, *vn0, *push;    /* right side and solution; the rate a solve starts at; the push */
     unsigned char *solved;     /* the position's row is solved (else held) */
+    unsigned char *given_up;   /* [island_count]: its factor failed this step; its rows are the
+                                  soft ones' */
     size_t row_cap;
     size_t *body_rows;         /* [2 rows]: the rows of each body, from body_start */
     size_t link_cap;
@@ -67,16 +69,16 @@ static tb_status reserve(tb_world *w, struct tb__stacks *s, size_t rows, size_t 
 {
     void **row_arrays[] = { (void **)&s->island_start, (void **)&s->order, (void **)&s->first,
                             (void **)&s->offset, (void **)&s->position, (void **)&s->x, (void **)&s->vn0,
-                            (void **)&s->push, (void **)&s->solved };
+                            (void **)&s->push, (void **)&s->solved, (void **)&s->given_up };
     const size_t row_sizes[] = { sizeof(size_t), sizeof(size_t), sizeof(size_t), sizeof(size_t),
-                                 sizeof(size_t), sizeof(double), sizeof(double), sizeof(double), 1 };
+                                 sizeof(size_t), sizeof(double), sizeof(double), sizeof(double), 1, 1 };
     void **body_arrays[] = { (void **)&s->body_start, (void **)&s->body_order, (void **)&s->queue };
     const size_t body_sizes[] = { sizeof(size_t), sizeof(int32_t), sizeof(int32_t) };
     void **env_arrays[] = { (void **)&s->a, (void **)&s->l };
     const size_t env_sizes[] = { sizeof(double), sizeof(double) };
     tb_status st;
     if (rows + 1 > s->row_cap) {
-        if ((st = tb__grow(w, row_arrays, row_sizes, 9, 0, s->row_cap, 2 * rows + 1)) != TB_OK)
+        if ((st = tb__grow(w, row_arrays, row_sizes, 10, 0, s->row_cap, 2 * rows + 1)) != TB_OK)
             return st;
         s->row_cap = 2 * rows + 1;
     }
@@ -319,6 +321,7 @@ tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c)
         walk(c, s, far, -4, &count);
         end = count;
         s->island_start[s->island_count] = placed;
+        s->given_up[s->island_count] = 0;
         if (place(c, s, from, end, &placed, &env))
             ++s->island_count;
         for (k = from; k < end; ++k)
@@ -426,6 +429,22 @@ static void level(const tb__contacts *c, struct tb__stacks *s, size_t from, size
     }
 }
 
+/* Island k's factor failed (a pivot not positive: rounding beyond the
+   compliance): its patches' rows are the soft ones' for the rest of the
+   step, as if the island were too wide */
+static void give_up(tb__contacts *c, struct tb__stacks *s, size_t k)
+{
+    const size_t from = s->island_start[k], to = s->island_start[k + 1];
+    size_t i;
+    s->given_up[k] = 1;
+    for (i = 0; i < c->soft_patch_count; ++i) {
+        tb__soft_patch *p = &c->soft_patches[i];
+        const size_t at = s->position[p->first];
+        if (at != TB__NONE && at >= from && at < to)
+            p->stacked = 0;
+    }
+}
+
 /* Island k's touching normal rows, solved together and rigid, aiming at
    no approach: a motion the bodies can always make (the push of overlaps
    is tb__stacks_push's; a gap still open is its patch's speculative
@@ -444,8 +463,10 @@ static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double
     }
     for (round = 0; round < TB__STACK_ROUNDS && changed; ++round) {
         changed = 0;
-        if (!factor(s, k))
+        if (!factor(s, k)) {
+            give_up(c, s, k);
             return;
+        }
         for (i = from; i < to; ++i)
             s->x[i] = s->solved[i] ? -tb__soft_rate(c, &c->soft_rows[s->order[i]]) : 0;
         /* the whole impulse, not a change: the rows' share of a load
@@ -503,7 +524,8 @@ int tb__stacks_solve(tb__contacts *c, double hs)
     if (!s)
         return 0;
     for (k = 0; k < s->island_count; ++k)
-        solve_island(c, s, k, hs);
+        if (!s->given_up[k])
+            solve_island(c, s, k, hs);
     return s->island_count > 0;
 }
 
@@ -524,6 +546,8 @@ void tb__stacks_push(tb__contacts *c, double bias_rate, int sign)
         return;
     for (k = 0; k < s->island_count; ++k) {
         const size_t from = s->island_start[k], to = s->island_start[k + 1];
+        if (s->given_up[k])
+            continue;
         if (sign < 0) {
             for (i = from; i < to; ++i)
                 if (s->push[i] != 0)
@@ -559,14 +583,14 @@ void tb__stacks_free(tb_world *w, tb__contacts *c)
     {
         void **row_arrays[] = { (void **)&s->island_start, (void **)&s->order, (void **)&s->first,
                                 (void **)&s->offset, (void **)&s->position, (void **)&s->x, (void **)&s->vn0,
-                                (void **)&s->push, (void **)&s->solved };
+                                (void **)&s->push, (void **)&s->solved, (void **)&s->given_up };
         const size_t row_sizes[] = { sizeof(size_t), sizeof(size_t), sizeof(size_t), sizeof(size_t),
-                                     sizeof(size_t), sizeof(double), sizeof(double), sizeof(double), 1 };
+                                     sizeof(size_t), sizeof(double), sizeof(double), sizeof(double), 1, 1 };
         void **body_arrays[] = { (void **)&s->body_start, (void **)&s->body_order, (void **)&s->queue };
         const size_t body_sizes[] = { sizeof(size_t), sizeof(int32_t), sizeof(int32_t) };
         void **env_arrays[] = { (void **)&s->a, (void **)&s->l };
         const size_t env_sizes[] = { sizeof(double), sizeof(double) };
-        tb__free_arrays(w, row_arrays, row_sizes, 9, s->row_cap);
+        tb__free_arrays(w, row_arrays, row_sizes, 10, s->row_cap);
         tb__free_arrays(w, body_arrays, body_sizes, 3, s->body_cap);
         tb__free_arrays(w, env_arrays, env_sizes, 2, s->env_cap);
     }
