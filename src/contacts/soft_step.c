@@ -87,8 +87,8 @@ static void rotation_since(const double q[4], const double q0[4], double out[9])
    start's inverse inertia times arm. Every row responds through the
    inertia of the start pose, as its mass was found; the drift then takes
    w from L at the new orientation. */
-static void apply(tb__contacts *c, int32_t i, double lambda, const double d[3], const double arm[3],
-                  const double spin[3])
+void tb__soft_apply(tb__contacts *c, int32_t i, double lambda, const double d[3], const double arm[3],
+                    const double spin[3])
 {
     tb__soft_body *s = &c->soft_bodies[i];
     const double im = c->bodies[i].inv_mass * lambda;
@@ -109,9 +109,9 @@ static void apply(tb__contacts *c, int32_t i, double lambda, const double d[3], 
 void tb__soft_push(tb__contacts *c, const tb__soft_row *o, double lambda)
 {
     if (o->b >= 0)
-        apply(c, o->b, lambda, o->normal, o->arm_b, o->spin_b);
+        tb__soft_apply(c, o->b, lambda, o->normal, o->arm_b, o->spin_b);
     if (o->a >= 0)
-        apply(c, o->a, -lambda, o->normal, o->arm_a, o->spin_a);
+        tb__soft_apply(c, o->a, -lambda, o->normal, o->arm_a, o->spin_a);
 }
 
 /* The relative velocity of b against a along row d */
@@ -229,9 +229,9 @@ static void push_centre(tb__contacts *c, const tb__soft_patch *p, double l1, dou
         if (l[d] == 0)
             continue;
         if (p->b >= 0)
-            apply(c, p->b, l[d], p->tangent[d], p->arm_b[d], p->spin_b[d]);
+            tb__soft_apply(c, p->b, l[d], p->tangent[d], p->arm_b[d], p->spin_b[d]);
         if (p->a >= 0)
-            apply(c, p->a, -l[d], p->tangent[d], p->arm_a[d], p->spin_a[d]);
+            tb__soft_apply(c, p->a, -l[d], p->tangent[d], p->arm_a[d], p->spin_a[d]);
     }
 }
 

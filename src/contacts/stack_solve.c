@@ -1,6 +1,6 @@
-/* stack_solve.c: the touching normal rows of an island solved together,
-   rigid and exactly, in the soft step's solves (docs/contacts.md,
-   "Islands solved together").
+/* stack_solve.c: the touching normal rows of an island, and its sticking
+   friction, solved together, rigid and exactly, in the soft step's solves
+   (docs/contacts.md, "Islands solved together").
    A soft row holds a load F at an overlap of F over its own effective
    mass times omega^2: a light body under a heavy one sinks by the mass
    ratio, and a tall stack's interfaces lean under its offsets' moments
@@ -16,7 +16,9 @@
      a tower, a light plank under a heavy beam. Heaps and walls, whose
      band grows with their size, stay soft.
    - Which rows: the points within TB__TOUCHING of the slop of touching,
-     aiming at no approach, a motion the bodies can always make, so the
+     and the friction of each patch that may stick (solve_island),
+     aiming at no approach and no slip, a motion the bodies can always
+     make, so the
      compliance never meets a contradiction. A gap still open is its
      patch's speculative row's (soft_step.c); solved with the island, a
      gap closing within the substep would meet a whole touching row of
@@ -97,10 +99,62 @@ static tb_status reserve(tb_world *w, struct tb__stacks *s, size_t rows, size_t 
     return TB_OK;
 }
 
-/* The other side of row o from body i (-1: static) */
-static int32_t other(const tb__soft_row *o, int32_t i)
+/* A row of the band, by its code: a point's normal row (code < the soft
+   rows' count), or one of a patch's two friction rows at its centre
+   (2 codes a patch after them) */
+typedef struct band_row {
+    int32_t a, b;
+    const double *dir, *arm_a, *arm_b, *spin_a, *spin_b;
+    double *impulse;
+    tb__soft_patch *patch;      /* a friction row's patch; NULL: a normal row */
+} band_row;
+
+static band_row view(const tb__contacts *c, size_t code)
 {
-    return o->a == i ? o->b : o->a;
+    band_row v;
+    if (code < c->soft_row_count) {
+        tb__soft_row *o = &c->soft_rows[code];
+        v.a = o->a, v.b = o->b, v.dir = o->normal, v.arm_a = o->arm_a, v.arm_b = o->arm_b;
+        v.spin_a = o->spin_a, v.spin_b = o->spin_b, v.impulse = &o->impulse, v.patch = NULL;
+    } else {
+        const size_t f = code - c->soft_row_count;
+        tb__soft_patch *p = &c->soft_patches[f / 2];
+        const int d = (int)(f % 2);
+        v.a = p->a, v.b = p->b, v.dir = p->tangent[d], v.arm_a = p->arm_a[d], v.arm_b = p->arm_b[d];
+        v.spin_a = p->spin_a[d], v.spin_b = p->spin_b[d], v.impulse = &p->friction_impulse[d], v.patch = p;
+    }
+    return v;
+}
+
+/* The relative velocity of b against a along the row */
+static double band_rate(const tb__contacts *c, const band_row *v)
+{
+    double r = 0;
+    if (v->b >= 0) {
+        const tb__soft_body *s = &c->soft_bodies[v->b];
+        r += tb__dot3(v->dir, s->v) + tb__dot3(v->arm_b, s->w);
+    }
+    if (v->a >= 0) {
+        const tb__soft_body *s = &c->soft_bodies[v->a];
+        r -= tb__dot3(v->dir, s->v) + tb__dot3(v->arm_a, s->w);
+    }
+    return r;
+}
+
+/* An impulse along the row, equal and opposite on its sides */
+static void band_push(tb__contacts *c, const band_row *v, double lambda)
+{
+    if (v->b >= 0)
+        tb__soft_apply(c, v->b, lambda, v->dir, v->arm_b, v->spin_b);
+    if (v->a >= 0)
+        tb__soft_apply(c, v->a, -lambda, v->dir, v->arm_a, v->spin_a);
+}
+
+/* The other side of the row of code from body i (-1: static) */
+static int32_t other(const tb__contacts *c, size_t code, int32_t i)
+{
+    const band_row v = view(c, code);
+    return v.a == i ? v.b : v.a;
 }
 
 /* Breadth-first from body start over the rows, writing the walk into
@@ -114,7 +168,7 @@ static int32_t walk(tb__contacts *c, struct tb__stacks *s, int32_t start, int32_
     while (head < *count) {
         const int32_t i = s->queue[head++];
         for (k = s->body_start[i]; k < s->body_start[i + 1]; ++k) {
-            const int32_t j = other(&c->soft_rows[s->body_rows[k]], i);
+            const int32_t j = other(c, s->body_rows[k], i);
             if (j >= 0 && s->body_order[j] != tag) {
                 s->body_order[j] = tag;
                 s->queue[(*count)++] = j;
@@ -126,11 +180,11 @@ static int32_t walk(tb__contacts *c, struct tb__stacks *s, int32_t start, int32_
 
 /* J M^-1 J^T between rows o and p through body i, with the signs of
    their sides (b +, a -) */
-static double coupling(const tb__contacts *c, const tb__soft_row *o, const tb__soft_row *p, int32_t i)
+static double coupling(const tb__contacts *c, const band_row *o, const band_row *p, int32_t i)
 {
     const double so = o->b == i ? 1 : -1, sp = p->b == i ? 1 : -1;
     const double *arm = o->b == i ? o->arm_b : o->arm_a, *spin = p->b == i ? p->spin_b : p->spin_a;
-    double k = c->bodies[i].inv_mass * tb__dot3(o->normal, p->normal);
+    double k = c->bodies[i].inv_mass * tb__dot3(o->dir, p->dir);
     if (c->bodies[i].tier == TB__BODIES)
         k += tb__dot3(arm, spin);
     return so * sp * k;
@@ -145,16 +199,18 @@ static void assemble(tb__contacts *c, struct tb__stacks *s, size_t k)
     for (i = from; i < to; ++i)
         memset(s->a + s->offset[i], 0, (i - s->first[i] + 1) * sizeof *s->a);
     for (i = from; i < to; ++i) {
-        const tb__soft_row *o = &c->soft_rows[s->order[i]];
+        const band_row o = view(c, s->order[i]);
         int side;
         for (side = 0; side < 2; ++side) {
-            const int32_t b = side ? o->b : o->a;
+            const int32_t b = side ? o.b : o.a;
             if (b < 0)
                 continue;
             for (m = s->body_start[b]; m < s->body_start[b + 1]; ++m) {
                 n = s->position[s->body_rows[m]];
-                if (n <= i)
-                    s->a[s->offset[i] + n - s->first[i]] += coupling(c, o, &c->soft_rows[s->order[n]], b);
+                if (n <= i) {
+                    const band_row q = view(c, s->order[n]);
+                    s->a[s->offset[i] + n - s->first[i]] += coupling(c, &o, &q, b);
+                }
             }
         }
         s->a[s->offset[i] + i - s->first[i]] *= 1 + TB__STACK_COMPLIANCE;
@@ -230,7 +286,7 @@ static int place(tb__contacts *c, struct tb__stacks *s, size_t from, size_t to, 
         const int32_t b = s->queue[i];
         for (k = s->body_start[b]; k < s->body_start[b + 1]; ++k) {
             const size_t r = s->body_rows[k];
-            const int32_t o = other(&c->soft_rows[r], b);
+            const int32_t o = other(c, r, b);
             if (o < 0 || s->body_order[o] < s->body_order[b])
                 s->order[n++] = r;
         }
@@ -239,18 +295,18 @@ static int place(tb__contacts *c, struct tb__stacks *s, size_t from, size_t to, 
     for (i = from; i < to; ++i)
         s->body_order[s->queue[i]] = -1;
     for (k = start; k < n; ++k) {
-        const tb__soft_row *o = &c->soft_rows[s->order[k]];
+        const band_row o = view(c, s->order[k]);
         size_t f = k;
-        if (o->a >= 0) {
-            if (s->body_order[o->a] < 0)
-                s->body_order[o->a] = (int32_t)(k - start);
-            f = start + (size_t)s->body_order[o->a];
+        if (o.a >= 0) {
+            if (s->body_order[o.a] < 0)
+                s->body_order[o.a] = (int32_t)(k - start);
+            f = start + (size_t)s->body_order[o.a];
         }
-        if (o->b >= 0) {
-            if (s->body_order[o->b] < 0)
-                s->body_order[o->b] = (int32_t)(k - start);
-            if (start + (size_t)s->body_order[o->b] < f)
-                f = start + (size_t)s->body_order[o->b];
+        if (o.b >= 0) {
+            if (s->body_order[o.b] < 0)
+                s->body_order[o.b] = (int32_t)(k - start);
+            if (start + (size_t)s->body_order[o.b] < f)
+                f = start + (size_t)s->body_order[o.b];
         }
         s->first[k] = f;
         s->offset[k] = width;
@@ -272,7 +328,7 @@ static int place(tb__contacts *c, struct tb__stacks *s, size_t from, size_t to, 
 tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c)
 {
     struct tb__stacks *s = c->stacks;
-    const size_t rows = c->soft_row_count, bodies = c->body_count;
+    const size_t rows = c->soft_row_count, bodies = c->body_count, codes = rows + 2 * c->soft_patch_count;
     size_t i, k, count = 0, placed = 0, env = 0;
     tb_status st;
     if (!s) {
@@ -284,28 +340,33 @@ tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c)
     s->island_count = 0;
     if (rows == 0 || bodies == 0)
         return TB_OK;
-    if ((st = reserve(w, s, rows, bodies, 0)) != TB_OK)
+    if ((st = reserve(w, s, codes, bodies, 0)) != TB_OK)
         return st;
-    /* the rows of each body */
+    /* the rows of each body: its points' normal rows, then the friction
+       rows of its patches with friction */
     memset(s->body_start, 0, (bodies + 1) * sizeof *s->body_start);
-    for (i = 0; i < rows; ++i) {
-        const tb__soft_row *o = &c->soft_rows[i];
+    for (i = 0; i < codes; ++i) {
+        const band_row o = view(c, i);
         s->position[i] = TB__NONE;
-        if (o->a >= 0)
-            ++s->body_start[o->a + 1];
-        if (o->b >= 0)
-            ++s->body_start[o->b + 1];
+        if (o.patch && !(o.patch->friction > 0))
+            continue;
+        if (o.a >= 0)
+            ++s->body_start[o.a + 1];
+        if (o.b >= 0)
+            ++s->body_start[o.b + 1];
     }
     for (i = 0; i < bodies; ++i)
         s->body_start[i + 1] += s->body_start[i];
     for (i = 0; i < bodies; ++i)
         s->body_order[i] = (int32_t)s->body_start[i];
-    for (i = 0; i < rows; ++i) {
-        const tb__soft_row *o = &c->soft_rows[i];
-        if (o->a >= 0)
-            s->body_rows[s->body_order[o->a]++] = i;
-        if (o->b >= 0)
-            s->body_rows[s->body_order[o->b]++] = i;
+    for (i = 0; i < codes; ++i) {
+        const band_row o = view(c, i);
+        if (o.patch && !(o.patch->friction > 0))
+            continue;
+        if (o.a >= 0)
+            s->body_rows[s->body_order[o.a]++] = i;
+        if (o.b >= 0)
+            s->body_rows[s->body_order[o.b]++] = i;
     }
     /* islands: a walk from any body, then from the last it reached (an
        end of the island) for the order */
@@ -329,7 +390,7 @@ tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c)
         count = from;
     }
     s->island_start[s->island_count] = placed;
-    if ((st = reserve(w, s, rows, bodies, env)) != TB_OK) {
+    if ((st = reserve(w, s, codes, bodies, env)) != TB_OK) {
         s->island_count = 0;
         return st;
     }
@@ -350,12 +411,12 @@ static void add_loads(const tb__contacts *c, struct tb__stacks *s, size_t k)
     size_t i, q;
     for (i = from; i < to; ++i) {
         const double *ai = s->a + s->offset[i] - s->first[i];
-        const double li = c->soft_rows[s->order[i]].impulse;
+        const double li = *view(c, s->order[i]).impulse;
         if (!s->solved[i])
             continue;
         for (q = s->first[i]; q < i; ++q)
             if (s->solved[q]) {
-                s->x[i] += ai[q] * c->soft_rows[s->order[q]].impulse;
+                s->x[i] += ai[q] * *view(c, s->order[q]).impulse;
                 s->x[q] += ai[q] * li;
             }
         s->x[i] += ai[i] * li;
@@ -445,10 +506,51 @@ static void give_up(tb__contacts *c, struct tb__stacks *s, size_t k)
     }
 }
 
-/* Island k's touching normal rows, solved together and rigid, aiming at
-   no approach: a motion the bodies can always make (the push of overlaps
-   is tb__stacks_push's; a gap still open is its patch's speculative
-   row's). */
+/* The normal impulse of patch p's points: the solve's where the row is
+   solved (x), else what it holds; and its bounce */
+static double patch_press(const tb__contacts *c, const struct tb__stacks *s, const tb__soft_patch *p)
+{
+    double n = 0;
+    size_t k;
+    for (k = 0; k < p->count; ++k) {
+        const tb__soft_row *o = &c->soft_rows[p->first + k];
+        const size_t at = s->position[p->first + k];
+        n += (at != TB__NONE && s->solved[at] ? fmax(s->x[at], 0) : o->impulse) + o->bounce;
+    }
+    return n;
+}
+
+/* Whether patch p's friction may stick: its centre's slip stopped by the
+   patch alone (its tangent mass) within the cone of what its points
+   push now. A patch that slides is left to its own pass, which meets
+   the slip's direction exactly (soft_step_slides_to_v2_over_2_mu_g). */
+static int sticks(const tb__contacts *c, const struct tb__stacks *s, const tb__soft_patch *p)
+{
+    double slip[2], stop[2], press = 0;
+    size_t k;
+    int d;
+    (void)s;
+    for (d = 0; d < 2; ++d) {
+        const band_row v = view(c, c->soft_row_count + 2 * (size_t)(p - c->soft_patches) + (size_t)d);
+        slip[d] = band_rate(c, &v);
+    }
+    stop[0] = p->tangent_mass[0] * slip[0] + p->tangent_mass[1] * slip[1];
+    stop[1] = p->tangent_mass[1] * slip[0] + p->tangent_mass[2] * slip[1];
+    for (k = 0; k < p->count; ++k)
+        press += c->soft_rows[p->first + k].impulse + c->soft_rows[p->first + k].bounce;
+    return hypot(p->friction_impulse[0] - stop[0], p->friction_impulse[1] - stop[1]) <= p->friction * press;
+}
+
+/* Island k's rows solved together and rigid: its touching points aiming
+   at no approach, and the friction of its patches at no slip where it
+   sticks (within the cone, mu times the patch's normal impulse): a motion
+   the bodies can always make (the push of overlaps is tb__stacks_push's;
+   a gap still open is its patch's speculative row's). Friction solved
+   one patch at a time after the normal rows lets a box rock about the
+   patch's centre while the centre holds, and it creeps down an incline
+   (soft_step_box_holds_on_an_incline). A patch whose friction would
+   leave the cone slides: held at the cone's edge along the solve's
+   direction, and the patch's own pass then meets it exactly. */
 static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double hs)
 {
     const size_t from = s->island_start[k], to = s->island_start[k + 1];
@@ -456,19 +558,21 @@ static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double
     size_t i, round;
     int changed = 1;
     for (i = from; i < to; ++i) {
-        tb__soft_row *o = &c->soft_rows[s->order[i]];
-        const double sep = tb__soft_separation(c, o);
-        s->vn0[i] = tb__soft_rate(c, o);
-        s->solved[i] = sep <= touch;
+        const band_row v = view(c, s->order[i]);
+        s->vn0[i] = band_rate(c, &v);
+        s->solved[i] = v.patch ? sticks(c, s, v.patch) : tb__soft_separation(c, &c->soft_rows[s->order[i]]) <= touch;
     }
     for (round = 0; round < TB__STACK_ROUNDS && changed; ++round) {
+        const int last = round + 1 == TB__STACK_ROUNDS;
         changed = 0;
         if (!factor(s, k)) {
             give_up(c, s, k);
             return;
         }
-        for (i = from; i < to; ++i)
-            s->x[i] = s->solved[i] ? -tb__soft_rate(c, &c->soft_rows[s->order[i]]) : 0;
+        for (i = from; i < to; ++i) {
+            const band_row v = view(c, s->order[i]);
+            s->x[i] = s->solved[i] ? -band_rate(c, &v) : 0;
+        }
         /* the whole impulse, not a change: the rows' share of a load
            is then the least one (the compliance's), and stays the same
            from substep to substep */
@@ -477,41 +581,64 @@ static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double
         /* a point solved to pull lets go; in the last round the solve
            stands, cut at no pull (the next solve of the substep starts
            from it) */
-        for (i = from; i < to && round + 1 < TB__STACK_ROUNDS; ++i) {
-            tb__soft_row *o = &c->soft_rows[s->order[i]];
-            if (s->solved[i] && s->x[i] < -tiny * (o->mass + 1)) {
+        for (i = from; i < to && !last; ++i) {
+            const band_row v = view(c, s->order[i]);
+            if (!v.patch && s->solved[i] && s->x[i] < -tiny * (c->soft_rows[s->order[i]].mass + 1)) {
                 s->solved[i] = 0;
                 changed = 1;
-                tb__soft_push(c, o, -o->impulse);
-                o->impulse = 0;
+                band_push(c, &v, -*v.impulse);
+                *v.impulse = 0;
             }
         }
         if (changed)
             continue;
+        /* friction beyond its cone slides, held at the cone's edge */
+        for (i = from; i + 1 < to; ++i) {
+            const band_row v = view(c, s->order[i]);
+            tb__soft_patch *p = v.patch;
+            double f, most, cut;
+            int d;
+            /* the pair of a patch: its first row, then its second */
+            if (!p || (s->order[i] - c->soft_row_count) % 2 || !s->solved[i] || s->order[i + 1] != s->order[i] + 1 ||
+                !s->solved[i + 1])
+                continue;
+            f = hypot(s->x[i], s->x[i + 1]);
+            most = p->friction * patch_press(c, s, p);
+            if (f <= most * (1 + 1e-12))
+                continue;
+            cut = f > 0 ? most / f : 0;
+            for (d = 0; d < 2; ++d) {
+                const band_row w = view(c, s->order[i + d]);
+                const double held = s->x[i + d] * cut;
+                band_push(c, &w, held - *w.impulse);
+                *w.impulse = held;
+                s->solved[i + d] = 0;
+            }
+            changed = !last;
+        }
+        if (changed)
+            continue;
         for (i = from; i < to; ++i) {
-            tb__soft_row *o = &c->soft_rows[s->order[i]];
-            const double total = fmax(s->x[i], 0);
+            const band_row v = view(c, s->order[i]);
+            const double total = v.patch ? s->x[i] : fmax(s->x[i], 0);
             if (!s->solved[i])
                 continue;
-            tb__soft_push(c, o, total - o->impulse);
-            o->impulse = total;
+            band_push(c, &v, total - *v.impulse);
+            *v.impulse = total;
         }
         /* a touching point let go that now approaches is taken in */
         for (i = from; i < to; ++i) {
-            const tb__soft_row *o = &c->soft_rows[s->order[i]];
-            double sep, vn;
-            if (s->solved[i])
+            const band_row v = view(c, s->order[i]);
+            if (s->solved[i] || v.patch)
                 continue;
-            sep = tb__soft_separation(c, o);
-            vn = tb__soft_rate(c, o);
-            if (sep <= touch && vn < -tiny) {
+            if (tb__soft_separation(c, &c->soft_rows[s->order[i]]) <= touch && band_rate(c, &v) < -tiny) {
                 s->solved[i] = 1;
                 changed = 1;
             }
         }
     }
     for (i = from; i < to; ++i)
-        if (s->solved[i]) {
+        if (s->solved[i] && s->order[i] < c->soft_row_count) {
             tb__soft_row *o = &c->soft_rows[s->order[i]];
             tb__soft_note(c, o, s->vn0[i], tb__soft_separation(c, o), hs);
         }
@@ -550,27 +677,34 @@ void tb__stacks_push(tb__contacts *c, double bias_rate, int sign)
             continue;
         if (sign < 0) {
             for (i = from; i < to; ++i)
-                if (s->push[i] != 0)
-                    tb__soft_push(c, &c->soft_rows[s->order[i]], -s->push[i]);
+                if (s->push[i] != 0) {
+                    const band_row v = view(c, s->order[i]);
+                    band_push(c, &v, -s->push[i]);
+                }
             continue;
         }
         for (i = from; i < to; ++i) {
-            const double sep = tb__soft_separation(c, &c->soft_rows[s->order[i]]);
+            const double sep = s->order[i] < c->soft_row_count ? tb__soft_separation(c, &c->soft_rows[s->order[i]]) : 0;
             s->x[i] = s->solved[i] && sep < -slop ? -fmax(bias_rate * (sep + slop), -max_push) : 0;
         }
         for (patch = from, i = from + 1; i <= to; ++i) {
-            const tb__soft_row *o = &c->soft_rows[s->order[patch]];
-            const tb__soft_row *p = i < to ? &c->soft_rows[s->order[i]] : NULL;
-            if (p && p->a == o->a && p->b == o->b && memcmp(p->normal, o->normal, sizeof p->normal) == 0)
+            /* a patch's normal rows are next to each other, with the same
+               bodies and normal; friction rows are not levelled */
+            const tb__soft_row *o = s->order[patch] < c->soft_row_count ? &c->soft_rows[s->order[patch]] : NULL;
+            const tb__soft_row *p = i < to && s->order[i] < c->soft_row_count ? &c->soft_rows[s->order[i]] : NULL;
+            if (o && p && p->a == o->a && p->b == o->b && memcmp(p->normal, o->normal, sizeof p->normal) == 0)
                 continue;
-            level(c, s, patch, i);
+            if (o)
+                level(c, s, patch, i);
             patch = i;
         }
         substitute(s, k);
         for (i = from; i < to; ++i) {
             s->push[i] = s->solved[i] ? s->x[i] : 0;
-            if (s->push[i] != 0)
-                tb__soft_push(c, &c->soft_rows[s->order[i]], s->push[i]);
+            if (s->push[i] != 0) {
+                const band_row v = view(c, s->order[i]);
+                band_push(c, &v, s->push[i]);
+            }
         }
     }
 }
