@@ -87,8 +87,8 @@ static void rotation_since(const double q[4], const double q0[4], double out[9])
    start's inverse inertia times arm. Every row responds through the
    inertia of the start pose, as its mass was found; the drift then takes
    w from L at the new orientation. */
-void tb__soft_apply(tb__contacts *c, int32_t i, double lambda, const double d[3], const double arm[3],
-                    const double spin[3])
+static void apply(tb__contacts *c, int32_t i, double lambda, const double d[3], const double arm[3],
+                  const double spin[3])
 {
     tb__soft_body *s = &c->soft_bodies[i];
     const double im = c->bodies[i].inv_mass * lambda;
@@ -105,28 +105,40 @@ void tb__soft_apply(tb__contacts *c, int32_t i, double lambda, const double d[3]
     }
 }
 
+void tb__soft_pair(tb__contacts *c, int32_t a, int32_t b, double lambda, const double d[3], const double arm_a[3],
+                   const double arm_b[3], const double spin_a[3], const double spin_b[3])
+{
+    if (b >= 0)
+        apply(c, b, lambda, d, arm_b, spin_b);
+    if (a >= 0)
+        apply(c, a, -lambda, d, arm_a, spin_a);
+}
+
+double tb__soft_relative(const tb__contacts *c, int32_t a, int32_t b, const double d[3], const double arm_a[3],
+                         const double arm_b[3])
+{
+    double r = 0;
+    if (b >= 0) {
+        const tb__soft_body *s = &c->soft_bodies[b];
+        r += tb__dot3(d, s->v) + tb__dot3(arm_b, s->w);
+    }
+    if (a >= 0) {
+        const tb__soft_body *s = &c->soft_bodies[a];
+        r -= tb__dot3(d, s->v) + tb__dot3(arm_a, s->w);
+    }
+    return r;
+}
+
 /* A scalar impulse along row o's normal, equal and opposite on its sides. */
 void tb__soft_push(tb__contacts *c, const tb__soft_row *o, double lambda)
 {
-    if (o->b >= 0)
-        tb__soft_apply(c, o->b, lambda, o->normal, o->arm_b, o->spin_b);
-    if (o->a >= 0)
-        tb__soft_apply(c, o->a, -lambda, o->normal, o->arm_a, o->spin_a);
+    tb__soft_pair(c, o->a, o->b, lambda, o->normal, o->arm_a, o->arm_b, o->spin_a, o->spin_b);
 }
 
-/* The relative velocity of b against a along row d */
+/* The relative velocity of b against a along row o's normal */
 double tb__soft_rate(const tb__contacts *c, const tb__soft_row *o)
 {
-    double r = 0;
-    if (o->b >= 0) {
-        const tb__soft_body *s = &c->soft_bodies[o->b];
-        r += tb__dot3(o->normal, s->v) + tb__dot3(o->arm_b, s->w);
-    }
-    if (o->a >= 0) {
-        const tb__soft_body *s = &c->soft_bodies[o->a];
-        r -= tb__dot3(o->normal, s->v) + tb__dot3(o->arm_a, s->w);
-    }
-    return r;
+    return tb__soft_relative(c, o->a, o->b, o->normal, o->arm_a, o->arm_b);
 }
 
 /* ... and along the normal, the part of it the substep's external kick gave */
@@ -225,29 +237,15 @@ static void push_centre(tb__contacts *c, const tb__soft_patch *p, double l1, dou
 {
     int d;
     const double l[2] = { l1, l2 };
-    for (d = 0; d < 2; ++d) {
-        if (l[d] == 0)
-            continue;
-        if (p->b >= 0)
-            tb__soft_apply(c, p->b, l[d], p->tangent[d], p->arm_b[d], p->spin_b[d]);
-        if (p->a >= 0)
-            tb__soft_apply(c, p->a, -l[d], p->tangent[d], p->arm_a[d], p->spin_a[d]);
-    }
+    for (d = 0; d < 2; ++d)
+        if (l[d] != 0)
+            tb__soft_pair(c, p->a, p->b, l[d], p->tangent[d], p->arm_a[d], p->arm_b[d], p->spin_a[d], p->spin_b[d]);
 }
 
 /* The relative velocity of b against a at the centre along tangent d */
 static double slip(const tb__contacts *c, const tb__soft_patch *p, int d)
 {
-    double r = 0;
-    if (p->b >= 0) {
-        const tb__soft_body *s = &c->soft_bodies[p->b];
-        r += tb__dot3(p->tangent[d], s->v) + tb__dot3(p->arm_b[d], s->w);
-    }
-    if (p->a >= 0) {
-        const tb__soft_body *s = &c->soft_bodies[p->a];
-        r -= tb__dot3(p->tangent[d], s->v) + tb__dot3(p->arm_a[d], s->w);
-    }
-    return r;
+    return tb__soft_relative(c, p->a, p->b, p->tangent[d], p->arm_a[d], p->arm_b[d]);
 }
 
 /* A point's normal row; its accumulated impulse. With bias, soft: it

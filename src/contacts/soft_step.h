@@ -69,10 +69,13 @@ typedef struct tb__soft_row {
 double tb__soft_rate(const tb__contacts *c, const tb__soft_row *o);
 /* Row o's separation now, from the bodies' motion since the start */
 double tb__soft_separation(const tb__contacts *c, const tb__soft_row *o);
-/* Solver body i (>= 0) receives an impulse lambda along unit d whose
-   angular part is arm (r x d); spin: the inverse inertia times arm */
-void tb__soft_apply(tb__contacts *c, int32_t i, double lambda, const double d[3], const double arm[3],
-                    const double spin[3]);
+/* An impulse lambda along d, equal and opposite on bodies b (+) and a (-)
+   (-1: the static world), with each side's arm and spin */
+void tb__soft_pair(tb__contacts *c, int32_t a, int32_t b, double lambda, const double d[3], const double arm_a[3],
+                   const double arm_b[3], const double spin_a[3], const double spin_b[3]);
+/* The relative velocity of b against a along d, with each side's arm */
+double tb__soft_relative(const tb__contacts *c, int32_t a, int32_t b, const double d[3], const double arm_a[3],
+                         const double arm_b[3]);
 /* A scalar impulse along row o's normal, equal and opposite on its sides */
 void tb__soft_push(tb__contacts *c, const tb__soft_row *o, double lambda);
 /* After row o's impulse changed in a substep of hs, at the normal velocity

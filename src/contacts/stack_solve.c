@@ -57,7 +57,7 @@ struct tb__stacks {
     unsigned char *given_up;   /* [island_count]: its factor failed this step; its rows are the
                                   soft ones' */
     size_t row_cap;
-    size_t *body_rows;         /* [2 rows]: the rows of each body, from body_start */
+    size_t *body_rows;         /* [2 codes]: the rows of each body, from body_start */
     size_t link_cap;
     size_t *body_start;        /* [bodies + 1] */
     int32_t *body_order, *queue;
@@ -66,37 +66,44 @@ struct tb__stacks {
     size_t env_cap;
 };
 
+/* The solver's parallel arrays in three groups, each grown together:
+   per row of the band (and island), per body, per entry of the band */
+typedef struct group {
+    void **arrays[10];
+    size_t sizes[10];
+    int n;
+    size_t *cap;
+} group;
+
+static void groups(struct tb__stacks *s, group g[3])
+{
+    const group rows = { { (void **)&s->island_start, (void **)&s->order, (void **)&s->first, (void **)&s->offset,
+                           (void **)&s->position, (void **)&s->x, (void **)&s->vn0, (void **)&s->push,
+                           (void **)&s->solved, (void **)&s->given_up },
+                         { sizeof(size_t), sizeof(size_t), sizeof(size_t), sizeof(size_t), sizeof(size_t),
+                           sizeof(double), sizeof(double), sizeof(double), 1, 1 },
+                         10, &s->row_cap };
+    const group bodies = { { (void **)&s->body_start, (void **)&s->body_order, (void **)&s->queue },
+                           { sizeof(size_t), sizeof(int32_t), sizeof(int32_t) }, 3, &s->body_cap };
+    const group band = { { (void **)&s->a, (void **)&s->l }, { sizeof(double), sizeof(double) }, 2, &s->env_cap };
+    g[0] = rows, g[1] = bodies, g[2] = band;
+}
+
 /* Every array at least the step's size: all or nothing */
 static tb_status reserve(tb_world *w, struct tb__stacks *s, size_t rows, size_t bodies, size_t env)
 {
-    void **row_arrays[] = { (void **)&s->island_start, (void **)&s->order, (void **)&s->first,
-                            (void **)&s->offset, (void **)&s->position, (void **)&s->x, (void **)&s->vn0,
-                            (void **)&s->push, (void **)&s->solved, (void **)&s->given_up };
-    const size_t row_sizes[] = { sizeof(size_t), sizeof(size_t), sizeof(size_t), sizeof(size_t),
-                                 sizeof(size_t), sizeof(double), sizeof(double), sizeof(double), 1, 1 };
-    void **body_arrays[] = { (void **)&s->body_start, (void **)&s->body_order, (void **)&s->queue };
-    const size_t body_sizes[] = { sizeof(size_t), sizeof(int32_t), sizeof(int32_t) };
-    void **env_arrays[] = { (void **)&s->a, (void **)&s->l };
-    const size_t env_sizes[] = { sizeof(double), sizeof(double) };
+    const size_t need[3] = { rows + 1, bodies + 1, env };
+    group g[3];
     tb_status st;
-    if (rows + 1 > s->row_cap) {
-        if ((st = tb__grow(w, row_arrays, row_sizes, 10, 0, s->row_cap, 2 * rows + 1)) != TB_OK)
-            return st;
-        s->row_cap = 2 * rows + 1;
-    }
-    if ((st = tb__reserve(w, (void **)&s->body_rows, &s->link_cap, 2 * rows, sizeof *s->body_rows)) != TB_OK)
-        return st;
-    if (bodies + 1 > s->body_cap) {
-        if ((st = tb__grow(w, body_arrays, body_sizes, 3, 0, s->body_cap, 2 * bodies + 1)) != TB_OK)
-            return st;
-        s->body_cap = 2 * bodies + 1;
-    }
-    if (env > s->env_cap) {
-        if ((st = tb__grow(w, env_arrays, env_sizes, 2, 0, s->env_cap, 2 * env)) != TB_OK)
-            return st;
-        s->env_cap = 2 * env;
-    }
-    return TB_OK;
+    int k;
+    groups(s, g);
+    for (k = 0; k < 3; ++k)
+        if (need[k] > *g[k].cap) {
+            if ((st = tb__grow(w, g[k].arrays, g[k].sizes, g[k].n, 0, *g[k].cap, 2 * need[k])) != TB_OK)
+                return st;
+            *g[k].cap = 2 * need[k];
+        }
+    return tb__reserve(w, (void **)&s->body_rows, &s->link_cap, 2 * rows, sizeof *s->body_rows);
 }
 
 /* A row of the band, by its code: a point's normal row (code < the soft
@@ -126,28 +133,14 @@ static band_row view(const tb__contacts *c, size_t code)
     return v;
 }
 
-/* The relative velocity of b against a along the row */
 static double band_rate(const tb__contacts *c, const band_row *v)
 {
-    double r = 0;
-    if (v->b >= 0) {
-        const tb__soft_body *s = &c->soft_bodies[v->b];
-        r += tb__dot3(v->dir, s->v) + tb__dot3(v->arm_b, s->w);
-    }
-    if (v->a >= 0) {
-        const tb__soft_body *s = &c->soft_bodies[v->a];
-        r -= tb__dot3(v->dir, s->v) + tb__dot3(v->arm_a, s->w);
-    }
-    return r;
+    return tb__soft_relative(c, v->a, v->b, v->dir, v->arm_a, v->arm_b);
 }
 
-/* An impulse along the row, equal and opposite on its sides */
 static void band_push(tb__contacts *c, const band_row *v, double lambda)
 {
-    if (v->b >= 0)
-        tb__soft_apply(c, v->b, lambda, v->dir, v->arm_b, v->spin_b);
-    if (v->a >= 0)
-        tb__soft_apply(c, v->a, -lambda, v->dir, v->arm_a, v->spin_a);
+    tb__soft_pair(c, v->a, v->b, lambda, v->dir, v->arm_a, v->arm_b, v->spin_a, v->spin_b);
 }
 
 /* The other side of the row of code from body i (-1: static) */
@@ -524,12 +517,11 @@ static double patch_press(const tb__contacts *c, const struct tb__stacks *s, con
    patch alone (its tangent mass) within the cone of what its points
    push now. A patch that slides is left to its own pass, which meets
    the slip's direction exactly (soft_step_slides_to_v2_over_2_mu_g). */
-static int sticks(const tb__contacts *c, const struct tb__stacks *s, const tb__soft_patch *p)
+static int sticks(const tb__contacts *c, const tb__soft_patch *p)
 {
     double slip[2], stop[2], press = 0;
     size_t k;
     int d;
-    (void)s;
     for (d = 0; d < 2; ++d) {
         const band_row v = view(c, c->soft_row_count + 2 * (size_t)(p - c->soft_patches) + (size_t)d);
         slip[d] = band_rate(c, &v);
@@ -560,7 +552,7 @@ static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double
     for (i = from; i < to; ++i) {
         const band_row v = view(c, s->order[i]);
         s->vn0[i] = band_rate(c, &v);
-        s->solved[i] = v.patch ? sticks(c, s, v.patch) : tb__soft_separation(c, &c->soft_rows[s->order[i]]) <= touch;
+        s->solved[i] = v.patch ? sticks(c, v.patch) : tb__soft_separation(c, &c->soft_rows[s->order[i]]) <= touch;
     }
     for (round = 0; round < TB__STACK_ROUNDS && changed; ++round) {
         const int last = round + 1 == TB__STACK_ROUNDS;
@@ -712,22 +704,13 @@ void tb__stacks_push(tb__contacts *c, double bias_rate, int sign)
 void tb__stacks_free(tb_world *w, tb__contacts *c)
 {
     struct tb__stacks *s = c->stacks;
+    group g[3];
+    int k;
     if (!s)
         return;
-    {
-        void **row_arrays[] = { (void **)&s->island_start, (void **)&s->order, (void **)&s->first,
-                                (void **)&s->offset, (void **)&s->position, (void **)&s->x, (void **)&s->vn0,
-                                (void **)&s->push, (void **)&s->solved, (void **)&s->given_up };
-        const size_t row_sizes[] = { sizeof(size_t), sizeof(size_t), sizeof(size_t), sizeof(size_t),
-                                     sizeof(size_t), sizeof(double), sizeof(double), sizeof(double), 1, 1 };
-        void **body_arrays[] = { (void **)&s->body_start, (void **)&s->body_order, (void **)&s->queue };
-        const size_t body_sizes[] = { sizeof(size_t), sizeof(int32_t), sizeof(int32_t) };
-        void **env_arrays[] = { (void **)&s->a, (void **)&s->l };
-        const size_t env_sizes[] = { sizeof(double), sizeof(double) };
-        tb__free_arrays(w, row_arrays, row_sizes, 10, s->row_cap);
-        tb__free_arrays(w, body_arrays, body_sizes, 3, s->body_cap);
-        tb__free_arrays(w, env_arrays, env_sizes, 2, s->env_cap);
-    }
+    groups(s, g);
+    for (k = 0; k < 3; ++k)
+        tb__free_arrays(w, g[k].arrays, g[k].sizes, g[k].n, *g[k].cap);
     tb__alloc(w, s->body_rows, s->link_cap * sizeof *s->body_rows, 0);
     tb__alloc(w, s, sizeof *s, 0);
     c->stacks = NULL;

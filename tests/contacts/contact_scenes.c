@@ -158,3 +158,38 @@ int ball_apexes(tb_world *w, tb_body_id id, double r, double hz, double sampled[
     }
     return n;
 }
+
+void step_changing(tb_world *w, double seconds, double h, int changing)
+{
+    double t = 0;
+    int n = 0;
+    while (t < seconds - 1e-9) {
+        const double step = changing && n++ % 2 ? h / 3 : h;
+        assert_int_equal(tb_world_step(w, step), TB_OK);
+        t += step;
+    }
+}
+
+double column_after(double h, int changing, int substeps)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    tb_contact_settings cs;
+    tb_body_id ids[10];
+    double worst = 0, x[3];
+    int i;
+    awake(w);
+    cs = tb_world_contact_settings(w);
+    cs.substeps = substeps;
+    assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
+    for (i = 0; i < 10; ++i) {
+        const double at[3] = { 0, 0, 0.5 + i };
+        ids[i] = add_box(w, at, 1, 0.6);
+    }
+    step_changing(w, 10, h, changing);
+    for (i = 0; i < 10; ++i) {
+        tb_body_position(w, ids[i], x);
+        worst = fmax(worst, fabs(x[2] - (0.5 + i)) + hypot(x[0], x[1]));
+    }
+    tb_world_destroy(w);
+    return worst;
+}

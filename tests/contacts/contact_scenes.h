@@ -52,4 +52,13 @@ double uniform(uint64_t *state);
 /* Sleep off: tests of the solver's own resting behaviour. */
 void awake(tb_world *w);
 
+/* Steps w for `seconds` at steps of h, or of h and h / 3 in turn (a
+   game's frame times changing). */
+void step_changing(tb_world *w, double seconds, double h, int changing);
+
+/* How far the worst box of a column of 10 unit boxes (mu 0.6, sleep off)
+   is from where it was put after 10 s of step_changing, with `substeps`
+   (0: the default solver). */
+double column_after(double h, int changing, int substeps);
+
 #endif
