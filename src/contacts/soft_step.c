@@ -16,7 +16,8 @@
       pushed out around the drift), the other normal rows soft (a
       spring-damper of `hertz` and `damping_ratio` on the overlap, pushing
       at most `max_push`), speculative where the points are still apart;
-      a patch whose point closes its gap within the substep is solved
+      a patch whose point closes its gap within the substep (an impact)
+      has its normal rows solved together (solve_impact) and is solved
       TB__IMPACT_PASSES times;
    5. moves positions by the velocities the solve left (x by v, q by the
       torque-free turn of L: tb__rotation_split2), and a body an impact
@@ -317,12 +318,120 @@ static void disc_step(const double mass[3], const double acc[2], double r1, doub
 
 /* The passes over an impact's rows (solve_patches) */
 #define TB__IMPACT_PASSES 4
+/* the compliance of an impact's rows solved together, relative to their
+   own inverse mass: it shares the blow between points that are
+   redundant (a face's four corners) */
+#define TB__IMPACT_COMPLIANCE 1e-3
+
+/* J M^-1 J^T between rows o and q of one patch (same bodies, same normal) */
+static double row_coupling(const tb__contacts *c, const tb__soft_row *o, const tb__soft_row *q)
+{
+    double k = 0;
+    if (o->b >= 0)
+        k += c->bodies[o->b].inv_mass + (c->bodies[o->b].tier == TB__BODIES ? tb__dot3(o->arm_b, q->spin_b) : 0);
+    if (o->a >= 0)
+        k += c->bodies[o->a].inv_mass + (c->bodies[o->a].tier == TB__BODIES ? tb__dot3(o->arm_a, q->spin_a) : 0);
+    return k;
+}
+
+/* x = A^-1 b for the rows of set (bits) of the n x n matrix a, by
+   elimination without pivots (a is positive definite); 0 if a pivot is
+   not positive */
+static int solve_set(double a[TB__MANIFOLD_POINTS][TB__MANIFOLD_POINTS], const double b[], int n, unsigned set,
+                     double x[])
+{
+    double m[TB__MANIFOLD_POINTS][TB__MANIFOLD_POINTS + 1];
+    int idx[TB__MANIFOLD_POINTS], k = 0, i, j, r;
+    for (i = 0; i < n; ++i)
+        if (set >> i & 1u)
+            idx[k++] = i;
+    for (i = 0; i < k; ++i) {
+        for (j = 0; j < k; ++j)
+            m[i][j] = a[idx[i]][idx[j]];
+        m[i][k] = b[idx[i]];
+    }
+    for (i = 0; i < k; ++i) {
+        if (!(m[i][i] > 0))
+            return 0;
+        for (r = i + 1; r < k; ++r) {
+            const double f = m[r][i] / m[i][i];
+            for (j = i; j <= k; ++j)
+                m[r][j] -= f * m[i][j];
+        }
+    }
+    for (i = 0; i < n; ++i)
+        x[i] = 0;
+    for (i = k; i-- > 0;) {
+        double sum = m[i][k];
+        for (j = i + 1; j < k; ++j)
+            sum -= m[i][j] * x[idx[j]];
+        x[idx[i]] = sum / m[i][i];
+    }
+    return 1;
+}
+
+/* An impact's normal rows (patch p's points, one of which closes its gap
+   within the substep) solved together, rigid: the impulses >= 0 with
+   which every point approaches no faster than its gap closes (an overlap
+   at the push's rate), pushing only where it then meets that speed
+   (the complementary set, found among the subsets of the points). Solved
+   one after another, a flat face's first corner takes the blow and tips
+   the body, which lands rocking and slides away
+   (dropped_boxes_lie_on_the_plane, woken_world_moves_again). 0 (and
+   nothing done) if no set is consistent. */
+static int solve_impact(tb__contacts *c, tb__soft_patch *p, double hs, const soft *sf)
+{
+    const int n = (int)p->count;
+    double a[TB__MANIFOLD_POINTS][TB__MANIFOLD_POINTS], b[TB__MANIFOLD_POINTS], x[TB__MANIFOLD_POINTS];
+    double vn[TB__MANIFOLD_POINTS], sep[TB__MANIFOLD_POINTS];
+    unsigned set;
+    int i, j;
+    if (n > TB__MANIFOLD_POINTS)
+        return 0;
+    for (i = 0; i < n; ++i) {
+        const tb__soft_row *o = &c->soft_rows[p->first + i];
+        double target;
+        sep[i] = tb__soft_separation(c, o), vn[i] = tb__soft_rate(c, o);
+        if (p->stacked && sep[i] <= TB__TOUCHING * c->settings.slop)
+            return 0; /* its touching points are its island's */
+        target = sep[i] > 0 ? sep[i] / hs : fmax(sf->bias_rate * sep[i], -c->settings.max_push);
+        for (j = 0; j < n; ++j)
+            a[i][j] = row_coupling(c, o, &c->soft_rows[p->first + j]);
+        a[i][i] *= 1 + TB__IMPACT_COMPLIANCE;
+        b[i] = -(vn[i] + target);
+    }
+    for (i = 0; i < n; ++i)
+        for (j = 0; j < n; ++j)
+            b[i] += a[i][j] * c->soft_rows[p->first + j].impulse;
+    /* the largest sets first: most often every point pushes */
+    for (set = (1u << n) - 1; set + 1 > 0; --set) {
+        int ok = solve_set(a, b, n, set, x);
+        for (i = 0; i < n && ok; ++i) {
+            double w = -b[i];
+            for (j = 0; j < n; ++j)
+                w += a[i][j] * x[j];
+            ok = (set >> i & 1u) ? x[i] >= 0 : w >= -1e-12 * (1 + fabs(b[i]));
+        }
+        if (!ok)
+            continue;
+        for (i = 0; i < n; ++i) {
+            tb__soft_row *o = &c->soft_rows[p->first + i];
+            const double lambda = x[i] - o->impulse;
+            o->impulse = x[i];
+            tb__soft_push(c, o, lambda);
+            tb__soft_note(c, o, vn[i], sep[i], hs);
+        }
+        return 1;
+    }
+    return 0;
+}
 
 /* Patch p once: its points, then its twist, rolling resistance and
    friction. Whether a point still apart (or just touching) closes its gap
    within the substep: an impact, whose rows a single pass leaves
    coupled. */
-static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft *sf, int bias, int settling)
+static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft *sf, int bias, int settling,
+                       int normals_done)
 {
     int closing = 0;
     const double *n = c->soft_rows[p->first].normal;
@@ -331,7 +440,8 @@ static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft
     for (k = 0; k < p->count; ++k) {
         tb__soft_row *o = &c->soft_rows[p->first + k];
         const int stacked = p->stacked && tb__soft_separation(c, o) <= TB__TOUCHING * c->settings.slop;
-        const double f = (stacked ? o->impulse : solve_normal(c, o, hs, sf, bias, &closing, p->stacked)) + o->bounce;
+        const double f =
+            (stacked || normals_done ? o->impulse : solve_normal(c, o, hs, sf, bias, &closing, p->stacked)) + o->bounce;
         total += f;
         twist_limit += o->lever * f;
     }
@@ -368,12 +478,30 @@ static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft
     return closing;
 }
 
+/* Whether a point of patch p still apart closes its gap within the
+   substep at the velocities now */
+static int closes(const tb__contacts *c, const tb__soft_patch *p, double hs)
+{
+    size_t k;
+    for (k = 0; k < p->count; ++k) {
+        const tb__soft_row *o = &c->soft_rows[p->first + k];
+        const double s = tb__soft_separation(c, o);
+        if (s >= 0 && tb__soft_rate(c, o) * hs < -s)
+            return 1;
+    }
+    return 0;
+}
+
 /* One pass over the patches. A patch with a point that closes its gap
-   within the substep is an impact, and its rows are solved together, by
-   TB__IMPACT_PASSES passes over them: in one pass the rows met later
-   (another point, the friction at the centre) spin the body and drive the
-   points met first through the surface, at any speed a spinning body
-   brings (soft_step_spinning_plate_stays_on_the_slab). */
+   within the substep is an impact: its normal rows are solved together
+   (solve_impact; its touching points are its island's where it is
+   stacked, and then one after another), then its friction, twist and
+   rolling resistance, TB__IMPACT_PASSES times: in one pass the rows met
+   later (another point, the friction at the centre) spin the body and
+   drive the points met first through the surface, at any speed a
+   spinning body brings (soft_step_spinning_plate_stays_on_the_slab). A
+   point found closing only within the pass has its patch passed over
+   the same way, one row after another. */
 static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias, int stacked_only, int settling)
 {
     size_t i;
@@ -382,9 +510,14 @@ static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias, 
         int pass;
         if (stacked_only && !p->stacked)
             continue;
-        if (solve_patch(c, p, hs, sf, bias, settling))
+        if (bias && closes(c, p, hs)) {
+            for (pass = 0; pass < TB__IMPACT_PASSES; ++pass)
+                solve_patch(c, p, hs, sf, bias, settling, solve_impact(c, p, hs, sf));
+            continue;
+        }
+        if (solve_patch(c, p, hs, sf, bias, settling, 0))
             for (pass = 1; pass < TB__IMPACT_PASSES; ++pass)
-                solve_patch(c, p, hs, sf, bias, settling);
+                solve_patch(c, p, hs, sf, bias, settling, 0);
     }
 }
 
