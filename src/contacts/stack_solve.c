@@ -56,6 +56,9 @@ struct tb__stacks {
     unsigned char *solved;     /* the position's row is solved (else held) */
     unsigned char *given_up;   /* [island_count]: its factor failed this step; its rows are the
                                   soft ones' */
+    unsigned char *factored;   /* the solved rows the factor in l is of */
+    unsigned char *current;    /* [island_count]: l is the factor of a as it is, for the
+                                  rows in factored */
     size_t row_cap;
     size_t *body_rows;         /* [2 codes]: the rows of each body, from body_start */
     size_t link_cap;
@@ -69,8 +72,8 @@ struct tb__stacks {
 /* The solver's parallel arrays in three groups, each grown together:
    per row of the band (and island), per body, per entry of the band */
 typedef struct group {
-    void **arrays[10];
-    size_t sizes[10];
+    void **arrays[12];
+    size_t sizes[12];
     int n;
     size_t *cap;
 } group;
@@ -79,10 +82,11 @@ static void groups(struct tb__stacks *s, group g[3])
 {
     const group rows = { { (void **)&s->island_start, (void **)&s->order, (void **)&s->first, (void **)&s->offset,
                            (void **)&s->position, (void **)&s->x, (void **)&s->vn0, (void **)&s->push,
-                           (void **)&s->solved, (void **)&s->given_up },
+                           (void **)&s->solved, (void **)&s->given_up, (void **)&s->factored,
+                           (void **)&s->current },
                          { sizeof(size_t), sizeof(size_t), sizeof(size_t), sizeof(size_t), sizeof(size_t),
-                           sizeof(double), sizeof(double), sizeof(double), 1, 1 },
-                         10, &s->row_cap };
+                           sizeof(double), sizeof(double), sizeof(double), 1, 1, 1, 1 },
+                         12, &s->row_cap };
     const group bodies = { { (void **)&s->body_start, (void **)&s->body_order, (void **)&s->queue },
                            { sizeof(size_t), sizeof(int32_t), sizeof(int32_t) }, 3, &s->body_cap };
     const group band = { { (void **)&s->a, (void **)&s->l }, { sizeof(double), sizeof(double) }, 2, &s->env_cap };
@@ -208,6 +212,7 @@ static void assemble(tb__contacts *c, struct tb__stacks *s, size_t k)
         }
         s->a[s->offset[i] + i - s->first[i]] *= 1 + TB__STACK_COMPLIANCE;
     }
+    s->current[k] = 0;
 }
 
 void tb__stacks_assemble(tb__contacts *c)
@@ -224,6 +229,9 @@ static int factor(struct tb__stacks *s, size_t k)
 {
     const size_t from = s->island_start[k], to = s->island_start[k + 1];
     size_t i, j, q;
+    if (s->current[k] && memcmp(s->factored + from, s->solved + from, to - from) == 0)
+        return 1; /* the same matrix and rows as the factor in l */
+    s->current[k] = 0;
     for (i = from; i < to; ++i) {
         double *li = s->l + s->offset[i] - s->first[i];
         const double *ai = s->a + s->offset[i] - s->first[i];
@@ -242,6 +250,8 @@ static int factor(struct tb__stacks *s, size_t k)
             return 0;
         li[i] = sqrt(d);
     }
+    memcpy(s->factored + from, s->solved + from, to - from);
+    s->current[k] = 1;
     return 1;
 }
 
