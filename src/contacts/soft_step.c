@@ -160,8 +160,9 @@ static double kick_rate(const tb__contacts *c, const tb__soft_row *o)
 }
 
 /* The separation now, from the bodies' displacements and first-order
-   turns at the start's arms */
-double tb__soft_separation(const tb__contacts *c, const tb__soft_row *o)
+   turns at the start's arms: found again whenever positions move
+   (separations), read between */
+static double separation_from_motion(const tb__contacts *c, const tb__soft_row *o)
 {
     double s = o->separation, d[3];
     if (o->b >= 0) {
@@ -177,6 +178,20 @@ double tb__soft_separation(const tb__contacts *c, const tb__soft_row *o)
              o->normal[2] * (a->shift[2] + d[2] - o->core_a[2]);
     }
     return s;
+}
+
+double tb__soft_separation(const tb__contacts *c, const tb__soft_row *o)
+{
+    (void)c;
+    return o->now;
+}
+
+/* Every row's separation now, after the positions moved */
+static void separations(tb__contacts *c)
+{
+    size_t i;
+    for (i = 0; i < c->soft_row_count; ++i)
+        c->soft_rows[i].now = separation_from_motion(c, &c->soft_rows[i]);
 }
 
 /* The soft constraint's coefficients for a substep of hs: a spring of
@@ -1132,7 +1147,10 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
                           sizeof *c->soft_bodies)) != TB_OK)
         return st;
     load(w, c, n);
-    if ((st = set_up_rows(w, c, h, n)) != TB_OK || (st = tb__stacks_set_up(w, c)) != TB_OK)
+    if ((st = set_up_rows(w, c, h, n)) != TB_OK)
+        return st;
+    separations(c);
+    if ((st = tb__stacks_set_up(w, c)) != TB_OK)
         return st;
     for (i = 0; i < n; ++i) {
         half_kick(c);
@@ -1153,6 +1171,7 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
         tb__stacks_push(c, sf.bias_rate, -1);
         if (struck)
             impacts_moved(c);
+        separations(c);
         respond(c);
         tb__stacks_solve(c, hs);
         solve_patches(c, hs, &sf, 0, 0, 0);

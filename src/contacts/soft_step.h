@@ -55,6 +55,7 @@ typedef struct tb__soft_row {
     double mass;                /* 1 / (J M^-1 J^T), at the start pose */
     double impulse;             /* N s: accumulated in the current substep */
     double separation;          /* m: at the start of the step */
+    double now;                 /* m: the separation now (after the last drift) */
     double lever;               /* m: from the patch's centre (a's side) */
     double restitution;
     double approach;            /* m/s (< 0): normal velocity at which the point struck */
@@ -67,7 +68,8 @@ typedef struct tb__soft_row {
 
 /* The relative velocity of b against a along row o's normal */
 double tb__soft_rate(const tb__contacts *c, const tb__soft_row *o);
-/* Row o's separation now, from the bodies' motion since the start */
+/* Row o's separation now, from the bodies' motion since the start (found
+   after each drift) */
 double tb__soft_separation(const tb__contacts *c, const tb__soft_row *o);
 /* An impulse lambda along d, equal and opposite on bodies b (+) and a (-)
    (-1: the static world), with each side's arm and spin */
