@@ -97,8 +97,9 @@ void tb__soft_note(tb__contacts *c, tb__soft_row *o, double vn, double s, double
    narrow enough, solved together (their patches marked stacked), and the
    push of their overlaps */
 tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c);
-/* whether there were any */
-int tb__stacks_solve(tb__contacts *c, double hs);
+/* Every narrow island's rows solved (with bias: before the drift, its
+   points closing their gaps too); whether there were any */
+int tb__stacks_solve(tb__contacts *c, double hs, int bias);
 /* The bands again, from the rows' responses now */
 void tb__stacks_assemble(tb__contacts *c);
 void tb__stacks_push(tb__contacts *c, double bias_rate, int sign);
