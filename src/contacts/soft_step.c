@@ -43,9 +43,10 @@
    A patch is one manifold: a normal row per point (impulse >= 0), then,
    at the centre of its points, friction (two rows within the circle mu
    times the points' normal impulses), twist (within mu times the sum of
-   each point's impulse times its lever from the centre; a round point's
-   over the disc its load presses) and rolling resistance (about the tangents,
-   within rho times the normal impulse).
+   each point's impulse times its lever from the centre: none for one
+   point, which has no lever, as rigid bodies touch at a point:
+   capsule_stood_on_end_keeps_its_spin) and rolling resistance (about the
+   tangents, within rho times the normal impulse).
    Every row keeps the arms of the start of the step (the Jacobian is that
    of the start pose) and moves the bodies through their inertia at their
    orientation now (taken again after each drift: respond); the
@@ -208,7 +209,6 @@ static void separations(tb__contacts *c)
    the load. */
 typedef struct soft {
     double bias_rate, mass_scale, impulse_scale;
-    double omega;               /* 1/s: the spring's angular frequency */
 } soft;
 
 static soft softness(double hertz, double zeta, double hs)
@@ -219,7 +219,6 @@ static soft softness(double hertz, double zeta, double hs)
     s.bias_rate = omega / a1;
     s.mass_scale = a2 * a3;
     s.impulse_scale = a3;
-    s.omega = omega;
     return s;
 }
 
@@ -450,8 +449,7 @@ static int solve_impact(tb__contacts *c, tb__soft_patch *p, double hs, const sof
    friction. Whether a point still apart (or just touching) closes its gap
    within the substep: an impact, whose rows a single pass leaves
    coupled. */
-static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft *sf, int bias, int settling,
-                       int normals_done)
+static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft *sf, int bias, int normals_done)
 {
     int closing = 0;
     const double *n = c->soft_rows[p->first].normal;
@@ -464,20 +462,6 @@ static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft
             (stacked || normals_done ? o->impulse : solve_normal(c, o, hs, sf, bias, &closing, p->stacked)) + o->bounce;
         total += f;
         twist_limit += o->lever * f;
-    }
-    if (p->count == 1 && p->round > 0) {
-        /* one round point: the disc a contact of stiffness m omega^2
-           presses under its load, of radius sqrt(2 r d) for the overlap
-           d = load / (m omega^2) that spring would hold, pressed evenly,
-           its friction at 2/3 of it (whether the row is soft or solved
-           rigid with its stack) */
-        const tb__soft_row *o = &c->soft_rows[p->first];
-        /* the load is the substep's: settle's push, which ends the step
-           at rest, adds to the impulse but not to the force that
-           presses the disc (soft_step_spinning_ball_stops_on_its_overlap) */
-        const double load = settling ? o->settled + o->bounce : total;
-        const double overlap = o->mass > 0 ? load / (hs * o->mass * sf->omega * sf->omega) : 0;
-        twist_limit = total * (2.0 / 3) * sqrt(2 * p->round * overlap);
     }
     if (p->friction > 0) {
         const double old = p->twist_impulse, most = p->friction * twist_limit;
@@ -522,7 +506,7 @@ static int closes(const tb__contacts *c, const tb__soft_patch *p, double hs)
    spinning body brings (soft_step_spinning_plate_stays_on_the_slab). A
    point found closing only within the pass has its patch passed over
    the same way, one row after another. */
-static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias, int settling)
+static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias)
 {
     size_t i;
     for (i = 0; i < c->soft_patch_count; ++i) {
@@ -530,12 +514,12 @@ static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias, 
         int pass;
         if (bias && closes(c, p, hs)) {
             for (pass = 0; pass < TB__IMPACT_PASSES; ++pass)
-                solve_patch(c, p, hs, sf, bias, settling, solve_impact(c, p, hs, sf));
+                solve_patch(c, p, hs, sf, bias, solve_impact(c, p, hs, sf));
             continue;
         }
-        if (solve_patch(c, p, hs, sf, bias, settling, 0))
+        if (solve_patch(c, p, hs, sf, bias, 0))
             for (pass = 1; pass < TB__IMPACT_PASSES; ++pass)
-                solve_patch(c, p, hs, sf, bias, settling, 0);
+                solve_patch(c, p, hs, sf, bias, 0);
     }
 }
 
@@ -748,7 +732,6 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
         memcpy(pa->tangent, e->tangent, sizeof pa->tangent);
         pa->friction = e->friction;
         pa->rolling = e->rolling;
-        pa->round = e->round;
         pa->stacked = 0;
         for (d = 0; d < 2; ++d) {
             pa->friction_impulse[d] = carry * tb__dot3(e->friction_impulse, e->tangent[d]);
@@ -1080,7 +1063,7 @@ static void settle(tb__contacts *c, double hs, const soft *sf)
         memcpy(p->settled_rolling, p->rolling_impulse, sizeof p->settled_rolling);
     }
     tb__stacks_solve(c, hs, 0);
-    solve_patches(c, hs, sf, 0, 1);
+    solve_patches(c, hs, sf, 0);
     for (i = 0; i < c->soft_row_count; ++i)
         c->soft_rows[i].settled = c->soft_rows[i].impulse - c->soft_rows[i].settled;
     for (i = 0; i < c->soft_patch_count; ++i) {
@@ -1166,7 +1149,7 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
         struck = impacts(c, hs);
         warm_start(c);
         tb__stacks_solve(c, hs, 1);
-        solve_patches(c, hs, &sf, 1, 0);
+        solve_patches(c, hs, &sf, 1);
         tb__stacks_solve(c, hs, 1);
         tb__stacks_push(c, sf.bias_rate, 1);
         drift(c, hs);
@@ -1176,7 +1159,7 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
         separations(c);
         respond(c);
         tb__stacks_solve(c, hs, 0);
-        solve_patches(c, hs, &sf, 0, 0);
+        solve_patches(c, hs, &sf, 0);
         if (struck)
             unbounce(c);
         half_kick(c);

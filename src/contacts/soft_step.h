@@ -37,7 +37,6 @@ typedef struct tb__soft_patch {
     double twist_mass;
     double rolling_mass[3];     /* 2 x 2 inverse, about the tangents */
     double friction, rolling;
-    double round;               /* m: the entry's radius of curvature at one point */
     double friction_impulse[2], twist_impulse, rolling_impulse[2]; /* N s, N m s: this substep's */
     double settled[2], settled_twist, settled_rolling[2]; /* what settle added */
     int stacked;                /* its normal rows are solved with its stack's (stack_solve.c) */
