@@ -657,6 +657,8 @@ static void solve_rigid(struct tb__stacks *s, size_t k)
             pq += s->dir[i] * s->image[i];
             dd += s->a[s->offset[i] + i - s->first[i]] * s->dir[i] * s->dir[i];
         }
+        /* a direction the rows barely move (its curvature under 1e-7 of
+           its diagonal's) lies along redundant points: no step on it */
         if (!(pq > 1e-7 * dd))
             break;
         alpha = rz / pq;
