@@ -15,9 +15,9 @@
       narrow enough, and those closing their gaps, together and rigid
       (stack_solve.c, whose overlaps are pushed out around the drift),
       before the patches and again after them, last: the drift then
-      moves by velocities the island's rows balance (a sliding box's
-      friction met after them tipped it forward 6e-5 rad and it slid 1e-4
-      too far: soft_step_slides_to_v2_over_2_mu_g); the other normal
+      moves by velocities the island's rows balance (friction met after
+      them tips a sliding box forward, and it slides 1e-4 too far:
+      soft_step_slides_to_v2_over_2_mu_g); the other normal
       rows soft (a
       spring-damper of `hertz` and `damping_ratio` on the overlap, pushing
       at most `max_push`), speculative where the points are still apart;
@@ -134,6 +134,13 @@ double tb__soft_relative(const tb__contacts *c, int32_t a, int32_t b, const doub
         r -= tb__dot3(d, s->v) + tb__dot3(arm_a, s->w);
     }
     return r;
+}
+
+double tb__soft_through(const tb__contacts *c, int32_t i, const double d1[3], const double arm1[3],
+                        const double d2[3], const double spin2[3])
+{
+    const double k = c->bodies[i].inv_mass * tb__dot3(d1, d2);
+    return c->bodies[i].tier == TB__BODIES ? k + tb__dot3(arm1, spin2) : k;
 }
 
 /* A scalar impulse along row o's normal, equal and opposite on its sides. */
@@ -347,9 +354,9 @@ static double row_coupling(const tb__contacts *c, const tb__soft_row *o, const t
 {
     double k = 0;
     if (o->b >= 0)
-        k += c->bodies[o->b].inv_mass + (c->bodies[o->b].tier == TB__BODIES ? tb__dot3(o->arm_b, q->spin_b) : 0);
+        k += tb__soft_through(c, o->b, o->normal, o->arm_b, q->normal, q->spin_b);
     if (o->a >= 0)
-        k += c->bodies[o->a].inv_mass + (c->bodies[o->a].tier == TB__BODIES ? tb__dot3(o->arm_a, q->spin_a) : 0);
+        k += tb__soft_through(c, o->a, o->normal, o->arm_a, q->normal, q->spin_a);
     return k;
 }
 

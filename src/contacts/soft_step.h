@@ -77,6 +77,11 @@ void tb__soft_pair(tb__contacts *c, int32_t a, int32_t b, double lambda, const d
 /* The relative velocity of b against a along d, with each side's arm */
 double tb__soft_relative(const tb__contacts *c, int32_t a, int32_t b, const double d[3], const double arm_a[3],
                          const double arm_b[3]);
+/* J M^-1 J^T between two rows through solver body i: the row along d1
+   with arm r x d1 on i meets the row along d2 whose spin on i is spin2
+   (i's inverse inertia times its arm); the sides' signs are the caller's */
+double tb__soft_through(const tb__contacts *c, int32_t i, const double d1[3], const double arm1[3],
+                        const double d2[3], const double spin2[3]);
 /* A scalar impulse along row o's normal, equal and opposite on its sides */
 void tb__soft_push(tb__contacts *c, const tb__soft_row *o, double lambda);
 /* After row o's impulse changed in a substep of hs, at the normal velocity
@@ -97,8 +102,8 @@ void tb__soft_note(tb__contacts *c, tb__soft_row *o, double vn, double s, double
    push of their overlaps */
 tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c);
 /* Every narrow island's rows solved (with bias: before the drift, its
-   points closing their gaps too); whether there were any */
-int tb__stacks_solve(tb__contacts *c, double hs, int bias);
+   points closing their gaps too) */
+void tb__stacks_solve(tb__contacts *c, double hs, int bias);
 /* The bands again, from the rows' responses now */
 void tb__stacks_assemble(tb__contacts *c);
 void tb__stacks_push(tb__contacts *c, double bias_rate, int sign);

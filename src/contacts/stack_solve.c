@@ -206,10 +206,7 @@ static double coupling(const tb__contacts *c, const band_row *o, const band_row 
 {
     const double so = o->b == i ? 1 : -1, sp = p->b == i ? 1 : -1;
     const double *arm = o->b == i ? o->arm_b : o->arm_a, *spin = p->b == i ? p->spin_b : p->spin_a;
-    double k = c->bodies[i].inv_mass * tb__dot3(o->dir, p->dir);
-    if (c->bodies[i].tier == TB__BODIES)
-        k += tb__dot3(arm, spin);
-    return so * sp * k;
+    return so * sp * tb__soft_through(c, i, o->dir, arm, p->dir, spin);
 }
 
 /* Island k's band assembled into a: the rows of every body coupled in
@@ -815,8 +812,8 @@ static double island_energy(const tb__contacts *c, const struct tb__stacks *s, s
    gaps where that takes no energy. Aiming at no approach, the solve is a
    projection of the bodies' velocities and takes energy away; a point
    closing its gap aims at an approach, and where such aims meet nearly
-   opposed surfaces the impulses that meet them exactly can do work (a
-   body between the ground and a wall's foot was thrown at 80 m/s:
+   opposed surfaces the impulses that meet them exactly can do work (they
+   throw a body between the ground and a wall's foot at 80 m/s:
    test_contacts_stress.dropped_heaps_of_60): such a solve is taken back
    and the island solved without them, their patches' own rows meeting
    them one at a time. */
@@ -849,16 +846,15 @@ static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double
         }
 }
 
-int tb__stacks_solve(tb__contacts *c, double hs, int bias)
+void tb__stacks_solve(tb__contacts *c, double hs, int bias)
 {
     struct tb__stacks *s = c->stacks;
     size_t k;
     if (!s)
-        return 0;
+        return;
     for (k = 0; k < s->island_count; ++k)
         if (!s->given_up[k])
             solve_island(c, s, k, hs, bias);
-    return s->island_count > 0;
 }
 
 /* The push of every stacked island's overlaps, as velocities that move
