@@ -31,7 +31,7 @@
      through it (heavy_box_lands_on_light_ones_soft). Such aims can do
      work where they meet nearly opposed surfaces; a solve that raises
      the island's energy is taken back and done without them
-     (solve_island). Overlap beyond TB__TOUCHING of the slop is pushed
+     (solve_island). Overlap, and the gap of a touching point, is taken
      out apart from the velocities (tb__stacks_push), levelled per patch:
      pushing within the solve, where friction meets it, rocks a stack
      (offset_tower_stands).
@@ -596,10 +596,10 @@ static int sticks(const tb__contacts *c, const tb__soft_patch *p)
 
 /* The approach speed position i's normal row allows: none where it
    touches, its gap over the substep where it is still apart */
-static double allowed(const tb__contacts *c, const struct tb__stacks *s, size_t i, double hs, double touch)
+static double allowed(const tb__contacts *c, const struct tb__stacks *s, size_t i, double hs, int bias)
 {
     const double sep = s->order[i] < c->soft_row_count ? tb__soft_separation(c, &c->soft_rows[s->order[i]]) : 0;
-    return sep > touch ? sep / hs : 0;
+    return bias && sep > TB__TOUCHING * c->settings.slop ? sep / hs : 0;
 }
 
 /* Whether position i's normal row is solved with its island: it touches
@@ -714,7 +714,7 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
         }
         for (i = from; i < to; ++i) {
             const band_row v = view(c, s->order[i]);
-            const double gap = s->solved[i] ? allowed(c, s, i, hs, touch) : 0;
+            const double gap = s->solved[i] ? allowed(c, s, i, hs, bias) : 0;
             s->x[i] = s->solved[i] ? -band_rate(c, &v) - gap : 0;
             closing |= gap > 0;
         }
@@ -859,16 +859,17 @@ void tb__stacks_solve(tb__contacts *c, double hs, int bias)
 
 /* The push of every stacked island's overlaps, as velocities that move
    positions over the drift and are then taken back (sign +1, then -1):
-   impulses that bring each overlapping point out at the soft rows' rate
-   (bias_rate times the overlap beyond a touch, at most max_push),
-   levelled per patch,
+   impulses that bring each overlapping or touching point to its surface
+   at the soft rows' rate (bias_rate times the separation, at most
+   max_push), levelled per patch; left alone, the touching band's 5 um
+   stayed (dropped_boxes_lie_on_the_plane),
    solved together with the rows the last solve held. Pushed as velocities
    within the solve, the rows' friction would meet them and rock a stack
    it stands on. */
 void tb__stacks_push(tb__contacts *c, double bias_rate, int sign)
 {
     struct tb__stacks *s = c->stacks;
-    const double max_push = c->settings.max_push, slop = TB__TOUCHING * c->settings.slop;
+    const double max_push = c->settings.max_push, touch = TB__TOUCHING * c->settings.slop;
     size_t k, i;
     if (!s)
         return;
@@ -886,7 +887,7 @@ void tb__stacks_push(tb__contacts *c, double bias_rate, int sign)
         }
         for (i = from; i < to; ++i) {
             const double sep = s->order[i] < c->soft_row_count ? tb__soft_separation(c, &c->soft_rows[s->order[i]]) : 0;
-            s->x[i] = s->solved[i] && sep < -slop ? -fmax(bias_rate * (sep + slop), -max_push) : 0;
+            s->x[i] = s->solved[i] && sep < touch ? -fmax(bias_rate * sep, -max_push) : 0;
         }
         level_patches(c, s, k);
         substitute(s, k);
