@@ -470,8 +470,11 @@ static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft
         total += f;
         twist_limit += o->lever * f;
     }
-    if (p->friction > 0) {
-        const double old = p->twist_impulse, most = p->friction * twist_limit;
+    if (p->friction > 0 || p->rolling > 0) {
+        /* rolling resistance resists a spin about the normal as it does
+           a roll, up to rho times the normal impulse: a ball spun in
+           place on a heap slows (heap_of_balls_falls_asleep) */
+        const double old = p->twist_impulse, most = p->friction * twist_limit + p->rolling * total;
         const double next = fmin(fmax(old - p->twist_mass * spin(c, p, n), -most), most);
         p->twist_impulse = next;
         turn_patch(c, p, n, p->turn_a[0], p->turn_b[0], next - old);
@@ -781,23 +784,24 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
     return TB_OK;
 }
 
-/* Every row's and patch's accumulated impulse applied again */
-static void warm_start(tb__contacts *c)
+/* A share of every row's and patch's accumulated impulse applied again
+   (1: the warm start) */
+static void push_share(tb__contacts *c, double share)
 {
     size_t i;
     for (i = 0; i < c->soft_row_count; ++i) {
         const tb__soft_row *o = &c->soft_rows[i];
         if (o->impulse != 0)
-            tb__soft_push(c, o, o->impulse);
+            tb__soft_push(c, o, share * o->impulse);
     }
     for (i = 0; i < c->soft_patch_count; ++i) {
         const tb__soft_patch *p = &c->soft_patches[i];
-        push_centre(c, p, p->friction_impulse[0], p->friction_impulse[1]);
+        push_centre(c, p, share * p->friction_impulse[0], share * p->friction_impulse[1]);
         if (p->twist_impulse != 0)
-            turn_patch(c, p, c->soft_rows[p->first].normal, p->turn_a[0], p->turn_b[0], p->twist_impulse);
+            turn_patch(c, p, c->soft_rows[p->first].normal, p->turn_a[0], p->turn_b[0], share * p->twist_impulse);
         if (p->rolling_impulse[0] != 0 || p->rolling_impulse[1] != 0) {
-            turn_patch(c, p, p->tangent[0], p->turn_a[1], p->turn_b[1], p->rolling_impulse[0]);
-            turn_patch(c, p, p->tangent[1], p->turn_a[2], p->turn_b[2], p->rolling_impulse[1]);
+            turn_patch(c, p, p->tangent[0], p->turn_a[1], p->turn_b[1], share * p->rolling_impulse[0]);
+            turn_patch(c, p, p->tangent[1], p->turn_a[2], p->turn_b[2], share * p->rolling_impulse[1]);
         }
     }
 }
@@ -1069,6 +1073,19 @@ static void settle(tb__contacts *c, double hs, const soft *sf)
         p->settled_twist = p->twist_impulse;
         memcpy(p->settled_rolling, p->rolling_impulse, sizeof p->settled_rolling);
     }
+    /* half the last substep's impulses first: what holds a body at rest
+       against the final half kick, so that one pass leaves a heap's
+       bodies at rest where alone it left them falling at g hs / 2
+       (heap_falls_asleep) */
+    push_share(c, 0.5);
+    for (i = 0; i < c->soft_row_count; ++i)
+        c->soft_rows[i].impulse *= 1.5;
+    for (i = 0; i < c->soft_patch_count; ++i) {
+        tb__soft_patch *p = &c->soft_patches[i];
+        p->friction_impulse[0] *= 1.5, p->friction_impulse[1] *= 1.5;
+        p->twist_impulse *= 1.5;
+        p->rolling_impulse[0] *= 1.5, p->rolling_impulse[1] *= 1.5;
+    }
     tb__stacks_solve(c, hs, 0);
     solve_patches(c, hs, sf, 0);
     for (i = 0; i < c->soft_row_count; ++i)
@@ -1154,7 +1171,7 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
            test_contacts_heaps.dense_heaps_never_gain_energy under the
            soft step) */
         struck = impacts(c, hs);
-        warm_start(c);
+        push_share(c, 1);
         tb__stacks_solve(c, hs, 1);
         solve_patches(c, hs, &sf, 1);
         tb__stacks_solve(c, hs, 1);
