@@ -15,7 +15,7 @@ typedef struct tb__soft_body {
     double inv_world[9];        /* R diag(invI) R^T at q (0 for particles) */
     double shift[3];            /* m: x - x0 */
     double delta[9];            /* the rotation from q0 to q */
-    double v_struck[3], l_struck[3]; /* m/s, N m s: v and L before this substep's impacts */
+    double v_struck[3];         /* m/s: v before this substep's impacts */
     double struck_at;           /* s into the substep of its impact; < 0: none */
 } tb__soft_body;
 
