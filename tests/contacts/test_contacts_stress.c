@@ -8,9 +8,9 @@
    lift. The worst figures are printed for docs/contacts.md.
 
    The suite runs dropped_heaps and dropped_heaps_of_60, which both
-   solvers pass. The harder heaps
-   fail under both solvers today, and so are left out of the suite (see
-   `failing` at the end); they run by name:
+   solvers pass, and thrown_heaps_soft_step, which the soft step passes.
+   The harder heaps fail under both solvers today, and so are left out of
+   the suite (see `failing` at the end); they run by name:
      ./test_contacts_stress thrown_heaps
    and smallest_failing_scenes runs the smallest scene found for each kind
    of failure. */
@@ -462,15 +462,20 @@ static int run_heap(const heap_spec *spec, worst *out, char *failure, size_t siz
     return failed;
 }
 
-/* `seeds` heaps of family f under each solver, each stopped at its first
-   failed check; prints the worst figures, then fails if any heap failed,
-   with the first failure under each solver. */
-static void run_case(const family *f, int seeds, int bodies)
+#define SWEEPS 1 /* the default solver */
+#define SOFT 2   /* the soft step */
+
+/* `seeds` heaps of family f under each solver of `solvers`, each stopped
+   at its first failed check; prints the worst figures, then fails if any
+   heap failed, with the first failure under each solver. */
+static void run_case(const family *f, int seeds, int bodies, int solvers)
 {
     static const int substeps[2] = { 0, 4 };
     char failure[2][200] = { "", "" };
     int s, seed, failed[2] = { 0, 0 };
     for (s = 0; s < 2; ++s) {
+        if (!(solvers >> s & 1))
+            continue;
         worst out;
         memset(&out, 0, sizeof out);
         out.lift = -INFINITY;
@@ -498,7 +503,7 @@ static void run_case(const family *f, int seeds, int bodies)
 static void dropped_heaps(void **state)
 {
     (void)state;
-    run_case(&dropped, 8, 20);
+    run_case(&dropped, 8, 20, SWEEPS | SOFT);
 }
 
 /* The same heaps of 60 bodies, 8 seeds, under each solver. Measured:
@@ -508,12 +513,24 @@ static void dropped_heaps(void **state)
 static void dropped_heaps_of_60(void **state)
 {
     (void)state;
-    run_case(&dropped, 8, 60);
+    run_case(&dropped, 8, 60, SWEEPS | SOFT);
+}
+
+/* Heaps of 60 of wood to stone (mass ratios to 867) thrown at up to 5 m/s
+   and 5 rad/s, 8 seeds, under the soft step (the default solver drives a
+   capsule 0.18 m under the plane in one: thrown_heaps, left out below).
+   Measured: deepest 6.3 cm (a light capsule under heavy bodies), fastest
+   19.6 m/s, energy never more than 5.9e-9 m of lift above the start. */
+static void thrown_heaps_soft_step(void **state)
+{
+    (void)state;
+    run_case(&thrown, 8, 60, SOFT);
 }
 
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(dropped_heaps),
     cmocka_unit_test(dropped_heaps_of_60),
+    cmocka_unit_test(thrown_heaps_soft_step),
 };
 
 /* ---- failing today: left out of the suite, run by name ---------------------
@@ -540,19 +557,19 @@ static const struct CMUnitTest tests[] = {
 static void thrown_heaps(void **state)
 {
     (void)state;
-    run_case(&thrown, 8, 60);
+    run_case(&thrown, 8, 60, SWEEPS | SOFT);
 }
 
 static void extreme_heaps(void **state)
 {
     (void)state;
-    run_case(&extreme, 8, 60);
+    run_case(&extreme, 8, 60, SWEEPS | SOFT);
 }
 
 static void heaps_built_overlapping(void **state)
 {
     (void)state;
-    run_case(&overlapping, 8, 60);
+    run_case(&overlapping, 8, 60, SWEEPS | SOFT);
 }
 
 /* The smallest failing scenes, each a heap with all but a few bodies left
