@@ -49,6 +49,7 @@ build = {
             "src/contacts/cold_start.c",
             "src/contacts/sleep.c",
             "src/contacts/soft_step.c", "src/contacts/stack_solve.c",
+            "src/contacts/continuous.c",
             "lua/tumble_lua.c",
             },
             incdirs = { "include", "src", "lua" },

@@ -14,8 +14,7 @@
 
 /* ---- placing shapes ------------------------------------------------------- */
 
-/* The shape in the world, for a body at x with orientation q. */
-static void place(const tb__shape *s, const double x[3], const double q[4], tb__geom *g)
+void tb__place_shape(const tb__shape *s, const double x[3], const double q[4], tb__geom *g)
 {
     double R[9], qs[4], off[3];
     int i;
@@ -772,7 +771,7 @@ static tb_status collide_planes(tb_world *w, tb__contacts *c)
         if (s->kind != TB__SHAPE_PLANE)
             continue;
         ++planes;
-        place(s, NULL, NULL, &plane);
+        tb__place_shape(s, NULL, NULL, &plane);
         for (k = 0; k < c->proxy_count; ++k) {
             const double *lo = c->lo + 3 * k, *hi = c->hi + 3 * k;
             double nearest = 0;
@@ -815,11 +814,11 @@ static void make_proxy(tb_world *w, tb__contacts *c, size_t k, uint32_t i, doubl
         const uint32_t island = w->body_island[slot];
         if (island && c->still[k] == island && c->owner[k] == slot + 1 && c->proxy[k] == i)
             return;
-        place(s, body_x(w, slot), body_q(w, slot), g);
+        tb__place_shape(s, body_x(w, slot), body_q(w, slot), g);
         c->owner[k] = slot + 1;
         c->still[k] = island;
     } else {
-        place(s, NULL, NULL, g);
+        tb__place_shape(s, NULL, NULL, g);
         c->owner[k] = 0;
         c->still[k] = UINT32_MAX; /* static: still, but never kept */
     }

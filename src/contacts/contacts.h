@@ -408,6 +408,9 @@ void tb__contacts_solve(tb_world *w, double h, double force_lever);
    contacts' work (tb_work), found without a pass over the world: a
    sleeping pile costs nothing (docs/contacts.md, "Sleep"). */
 double tb__contacts_energy(const tb_world *w);
+/* Shape s in the world, for a body at x with orientation q (x NULL: a
+   static shape, posed in the world) */
+void tb__place_shape(const tb__shape *s, const double x[3], const double q[4], tb__geom *g);
 void tb__contacts_free(tb_world *w);
 
 /* soft_step.c: the step's contacts solved by the soft-step solver

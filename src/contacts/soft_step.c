@@ -47,8 +47,9 @@
    point, which has no lever, as rigid bodies touch at a point:
    capsule_stood_on_end_keeps_its_spin) and rolling resistance (about the
    tangents, within rho times the normal impulse).
-   Every row keeps the arms of the start of the step (the Jacobian is that
-   of the start pose) and moves the bodies through their inertia at their
+   Every normal row's arms turn with the bodies (its Jacobian is that of
+   the pose now: turn_arms), the patches' rows keep the arms of the start
+   of the step, and all move the bodies through their inertia at their
    orientation now (taken again after each drift: respond); the
    separation is recomputed every substep from the bodies' displacements
    and their turns since the start, exactly. */
@@ -823,9 +824,7 @@ static void half_kick(tb__contacts *c)
     }
 }
 
-/* Body i's q changed: normalised, and its rotation since the start, its
-   inverse inertia and w at the new orientation */
-static void turned(tb__contacts *c, size_t i)
+void tb__soft_turned(tb__contacts *c, size_t i)
 {
     const tb__solver_body *b = &c->bodies[i];
     tb__soft_body *s = &c->soft_bodies[i];
@@ -850,7 +849,7 @@ static void drift(tb__contacts *c, double hs)
         }
         if (b->tier == TB__BODIES) {
             tb__rotation_split2(s->q, s->L, b->inv_inertia, hs);
-            turned(c, i);
+            tb__soft_turned(c, i);
         }
     }
 }
@@ -1200,6 +1199,7 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
     }
     settle(c, hs, &sf);
     restitution(c);
+    tb__soft_continuous(w, c);
     store(w, c, n);
     c->kept_h = h;
     c->sweeps = 0;

@@ -82,6 +82,13 @@ double tb__soft_relative(const tb__contacts *c, int32_t a, int32_t b, const doub
    (i's inverse inertia times its arm); the sides' signs are the caller's */
 double tb__soft_through(const tb__contacts *c, int32_t i, const double d1[3], const double arm1[3],
                         const double d2[3], const double spin2[3]);
+/* Solver body i's q changed: normalised, and its rotation since the
+   start, its inverse inertia and w at the new orientation */
+void tb__soft_turned(tb__contacts *c, size_t i);
+/* continuous.c: after the substeps, each body that ends deeper than the
+   slop in a static shape it was clear of at the start taken back to its
+   time of impact, its energy kept from rising */
+void tb__soft_continuous(tb_world *w, tb__contacts *c);
 /* A scalar impulse along row o's normal, equal and opposite on its sides */
 void tb__soft_push(tb__contacts *c, const tb__soft_row *o, double lambda);
 /* After row o's impulse changed in a substep of hs, at the normal velocity
