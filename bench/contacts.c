@@ -130,7 +130,12 @@ static void add_plane(tb_world *w, double friction)
     check(tb_world_add_shape(w, &plane, NULL), w, "plane");
 }
 
-/* ode_heavy_landing's scene in tumble (the default settings). */
+/* --substeps=N: every scene's contacts by the soft-step solver with N
+   substeps (0: the default solver) */
+static int substeps = 0;
+
+/* ode_heavy_landing's scene in tumble (the default settings, but for
+   --substeps). */
 static void tumble_heavy(const ode_heavy_def *d, ode_heavy_result *out)
 {
     tb_world *w = new_world(d->gravity, "heavy");
@@ -138,6 +143,11 @@ static void tumble_heavy(const ode_heavy_def *d, ode_heavy_result *out)
     const double top = 1.5 + d->under, size[3] = { 1, 1, 1 };
     int i, k, landed = 0;
     memset(out, 0, sizeof *out);
+    if (substeps > 0) {
+        tb_contact_settings cs = tb_world_contact_settings(w);
+        cs.substeps = substeps;
+        check(tb_world_set_contact_settings(w, &cs), w, "heavy settings");
+    }
     add_plane(w, 0.6);
     for (i = 0; i < d->under + 2 && i < 18; ++i) {
         tb_body_def b = tb_default_body_def();
@@ -276,9 +286,6 @@ typedef struct pyramid_run {
 /* Sleep on (the default) or off (every body solved every step); the
    velocity pass's most sweeps and early stop (tolerance < 0: the
    default's). */
-/* --substeps=N: every scene's contacts by the soft-step solver with N
-   substeps (0: the default solver) */
-static int substeps = 0;
 
 static void set_sleep(tb_world *w, int velocity_iterations, double tolerance, int sleep)
 {
