@@ -618,6 +618,10 @@ static const reduced scenes[] = {
       "a 1 cm plate (7.6 kg, 0.12 x 0.44 m) at 27 m/s struck on the plane and spun to 129 rad/s: 0.148 m under "
       "at step 4, its rows' four points above the plane" },
     { &extreme, 6, 4, { 4, 12 }, 2, "a 2 m block's neighbour 0.11 m under the plane at step 94 (soft step)" },
+    { &extreme, 8, 4, { 49, 50, 54 }, 3,
+      "a 0.16 kg plate squeezed against a wall by an 18 kg ball (7 mm, spun to 600 rad/s) took 63 N s a substep; "
+      "given again as the next step's warm start after the ball had gone, it threw the plate at 392 m/s at step 34 "
+      "(soft step)" },
 };
 
 static void smallest_failing_scenes(void **state)
