@@ -165,8 +165,8 @@ static void soft_step_spinning_ball_keeps_its_spin(void **state)
    would hold it at an overlap of g / omega^2 = 0.276 mm. Bounds: a sink
    under 1e-8 m (each solve meets the rigid rows to 1e-9 m/s:
    stack_solve.c, solve_rigid; 10 s of that), and nothing sideways or
-   after the first second beyond 1e-12 m (measured 0, 1.4e-20 m and
-   1.3e-20 m). */
+   after the first second beyond 1e-12 m (measured 0, 6.4e-21 m and
+   6.0e-21 m). */
 static void box_rests_still(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -201,7 +201,7 @@ static void box_rests_still(void **state)
    settles. The column's rows are solved together, rigid (stack_solve.c),
    each solve to 1e-9 m/s (solve_rigid). Bounds: 10 s of that, 1e-8 m,
    for the top's sink, any box's wander sideways and its motion from 5 s
-   to 10 s (measured 0, 1.6e-16 m and 9.6e-17 m; the soft rows alone gave
+   to 10 s (measured 0, 1.0e-16 m and 2.6e-17 m; the soft rows alone gave
    27.5 mm, 9.3 mm and 0.52 mm). */
 static void column_of_ten_stands(void **state)
 {
@@ -243,7 +243,7 @@ static void column_of_ten_stands(void **state)
    carried scaled by the step's ratio, as a force, rocked it over 5 cm
    within 10 s at the changing steps; carried as an impulse a substep, it
    stands. Bound: 1e-8 m, 10 s of solves met to 1e-9 m/s (solve_rigid;
-   measured 4.8e-16 and 9.1e-16 m). */
+   measured 4.9e-16 and 4.7e-16 m). */
 static void soft_step_column_stands_under_changing_steps(void **state)
 {
     const double steady = column_after(1.0 / 30, 0, 4), changing = column_after(1.0 / 30, 1, 4);
@@ -293,7 +293,7 @@ static double incline_creep(double h, int changing)
    time after them, friction held the patch's centre while the box
    rocked about it, and it crept 2.9 mm (steady) and 10 mm (changing).
    Bound: 1e-8 m, 10 s of solves met to 1e-9 m/s (solve_rigid; measured
-   1.3e-20 and 2.3e-21 m). */
+   2.8e-17 and 4.6e-14 m). */
 static void soft_step_box_holds_on_an_incline(void **state)
 {
     const double steady = incline_creep(1.0 / 30, 0), changing = incline_creep(1.0 / 30, 1);
