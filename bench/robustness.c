@@ -27,7 +27,8 @@
      over it; sliding off an edge is not passing through) (target: none in
      100).
    - heap: 2000 spheres, boxes and capsules (0.1 to 0.3 m) dropped from a
-     grid, each shifted up to 5 cm and turned at random, onto the ground:
+     grid, each shifted up to 5 cm and turned at random, balls and
+     capsules with rolling resistance 0.05 of their radius, onto the ground:
      when the last body falls asleep (target: within 20 s), the fastest
      body and any centre below the floor.
    - cradle: 5 touching balls (1 kg, r = 0.1 m, restitution 1, no gravity,
@@ -359,9 +360,7 @@ static void random_turn(unsigned long long *seed, double q[4])
    heap rolls on for ever in every engine, and Box3D's heaps of spheres or
    capsules sleep at 16 to 18 s only with its samples' 0.05
    (docs/notes.md, "Box3D's soft contacts"). */
-#ifndef ROLLING
 #define ROLLING 0.05
-#endif
 
 static void heap(int count)
 {

@@ -244,8 +244,6 @@ typedef struct side {
     uint32_t key;
     int32_t body;
     double friction, restitution, rolling;
-    double curvature_radius;   /* m: a round shape's radius; 0: sharp (corners, edges, points);
-                                  INFINITY: flat */
     double core;               /* m: from its surface to its core (a sphere's centre, a
                                   capsule's segment): the radius; 0 for boxes and planes */
 } side;
@@ -260,7 +258,7 @@ static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
         s->friction = c->settings.particle_friction;
         s->restitution = c->settings.particle_restitution;
         s->rolling = 0;
-        s->curvature_radius = s->core = fmax(c->settings.particle_radius, 0);
+        s->core = fmax(c->settings.particle_radius, 0);
         return solver_body(w, c, TB__PARTICLES, slot, &s->body);
     } else {
         const tb__shape *sh = &c->shapes[proxy];
@@ -269,8 +267,6 @@ static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
         s->friction = sh->friction;
         s->restitution = sh->restitution;
         s->rolling = sh->rolling_resistance;
-        s->curvature_radius = sh->kind == TB__SHAPE_PLANE ? INFINITY
-                              : sh->kind == TB__SHAPE_BOX ? 0 : sh->radius;
         s->core = sh->kind == TB__SHAPE_SPHERE || sh->kind == TB__SHAPE_CAPSULE ? sh->radius : 0;
         s->body = -1;
         if (sh->body && tb__ids_lookup(&w->body_ids, sh->body, sh->body_generation, &slot) &&
@@ -317,9 +313,6 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
     e->friction = sqrt(a.friction * b.friction);
     e->restitution = fmax(a.restitution, b.restitution);
     e->rolling = fmax(a.rolling, b.rolling);
-    /* two round surfaces touch like spheres of 1 / (1/ra + 1/rb) on a plane */
-    e->round = a.curvature_radius == 0 || b.curvature_radius == 0 ? 0
-               : 1 / (1 / a.curvature_radius + 1 / b.curvature_radius);
     e->core[0] = a.core, e->core[1] = b.core;
     e->count = m->count;
     e->touching = e->asleep = e->colour = e->cached = e->reused = 0;

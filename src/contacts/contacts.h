@@ -224,8 +224,6 @@ typedef struct tb__entry {
     double normal[3], tangent[2][3];
     double friction, restitution;
     double rolling;            /* m: the pair's rolling resistance */
-    double round;              /* m: the radius of the sphere on a plane the pair touches
-                                  like at one point (0: a corner, an edge or a point) */
     double core[2];            /* m: each side's depth from its surface to its core (a
                                   sphere's centre, a capsule's segment; 0: box, plane) */
     double friction_impulse[3];/* N s, world: the patch's, kept from step to step */

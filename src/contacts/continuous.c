@@ -20,7 +20,6 @@
 
 #include <math.h>
 #include <string.h>
-#include <stdlib.h>
 
 #define TB__TOI_STEPS 32 /* advances at most: past them the body is left where it is */
 
@@ -132,8 +131,6 @@ void tb__soft_continuous(tb_world *w, tb__contacts *c)
 {
     const double target = 0.25 * c->settings.slop;
     size_t p;
-    if (getenv("NOCA"))
-        return;
     for (p = 0; p < c->soft_patch_count; ++p) {
         const tb__soft_patch *pa = &c->soft_patches[p];
         const tb__entry *e = pa->entry;
@@ -143,8 +140,9 @@ void tb__soft_continuous(tb_world *w, tb__contacts *c)
         const tb__shape *fixed, *moving;
         const tb__solver_body *b;
         const tb__soft_body *s;
-        double sweep, turn, t, known = INFINITY;
+        double sweep, turn, t, known = INFINITY, moved[3];
         size_t r;
+        int k;
         tb__geom g;
         if ((e->body_a >= 0) == (e->body_b >= 0) || (moving_key & TB__PARTICLE_KEY) || (fixed_key & TB__PARTICLE_KEY))
             continue; /* two bodies, or none, or a particle */
@@ -156,9 +154,9 @@ void tb__soft_continuous(tb_world *w, tb__contacts *c)
         if (fixed->body)
             continue; /* a sleeping body's shape: its pose is not the shape's own */
         turn = 2 * acos(fmin(fabs(dot4(b->q0, s->q)), 1));
-        sweep = sqrt((s->x[0] - b->x0[0]) * (s->x[0] - b->x0[0]) + (s->x[1] - b->x0[1]) * (s->x[1] - b->x0[1]) +
-                     (s->x[2] - b->x0[2]) * (s->x[2] - b->x0[2])) +
-                4 / 3.14159265358979323846 * turn * moving->reach;
+        for (k = 0; k < 3; ++k)
+            moved[k] = s->x[k] - b->x0[k];
+        sweep = tb__norm3(moved) + 4 / 3.14159265358979323846 * turn * moving->reach;
         if (!(sweep > target))
             continue;
         for (r = 0; r < pa->count; ++r)

@@ -86,8 +86,8 @@ double tb__soft_through(const tb__contacts *c, int32_t i, const double d1[3], co
    start, its inverse inertia and w at the new orientation */
 void tb__soft_turned(tb__contacts *c, size_t i);
 /* continuous.c: after the substeps, each body that ends deeper than the
-   slop in a static shape it was clear of at the start taken back to its
-   time of impact, its energy kept from rising */
+   slop in a static shape, where no row held it, taken back to its time
+   of impact, its energy kept from rising */
 void tb__soft_continuous(tb_world *w, tb__contacts *c);
 /* A scalar impulse along row o's normal, equal and opposite on its sides */
 void tb__soft_push(tb__contacts *c, const tb__soft_row *o, double lambda);

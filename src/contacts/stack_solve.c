@@ -673,7 +673,7 @@ static void solve_rigid(struct tb__stacks *s, size_t k)
             s->res[i] -= alpha * s->image[i];
         }
         if (least <= enough)
-            break; /* met: no next direction to find (13% of the pile's time) */
+            break; /* met: no next direction is needed */
         memcpy(s->pre + from, s->res + from, (to - from) * sizeof *s->pre);
         substitute_into(s, k, s->pre);
         for (i = from; i < to; ++i)
