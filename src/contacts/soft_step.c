@@ -536,19 +536,14 @@ static void solve_patches(tb__contacts *c, double hs, const soft *sf, int bias)
     }
 }
 
+/* 1 / (J M^-1 J^T) of row o, from its spins (row_response) */
 static double row_mass(const tb__contacts *c, const tb__soft_row *o)
 {
-    double k = 0, t[3];
-    if (o->b >= 0) {
-        const tb__soft_body *s = &c->soft_bodies[o->b];
-        tb__mul(s->inv_world, o->arm_b, t);
-        k += c->bodies[o->b].inv_mass + tb__dot3(o->arm_b, t);
-    }
-    if (o->a >= 0) {
-        const tb__soft_body *s = &c->soft_bodies[o->a];
-        tb__mul(s->inv_world, o->arm_a, t);
-        k += c->bodies[o->a].inv_mass + tb__dot3(o->arm_a, t);
-    }
+    double k = 0;
+    if (o->b >= 0)
+        k += c->bodies[o->b].inv_mass + tb__dot3(o->arm_b, o->spin_b);
+    if (o->a >= 0)
+        k += c->bodies[o->a].inv_mass + tb__dot3(o->arm_a, o->spin_a);
     return k > 0 ? 1 / k : 0;
 }
 
@@ -624,18 +619,14 @@ static void invert2(const double k[3], double out[3])
     }
 }
 
-/* d1 . (the sides' inverse world inertia) d2 */
-static double angular_inverse(const tb__contacts *c, const tb__soft_patch *p, const double d1[3], const double d2[3])
+/* d1 . (the sides' inverse world inertia) axis d, from the patch's turns */
+static double angular_inverse(const tb__soft_patch *p, const double d1[3], int d)
 {
-    double k = 0, t[3];
-    if (p->b >= 0) {
-        tb__mul(c->soft_bodies[p->b].inv_world, d2, t);
-        k += tb__dot3(d1, t);
-    }
-    if (p->a >= 0) {
-        tb__mul(c->soft_bodies[p->a].inv_world, d2, t);
-        k += tb__dot3(d1, t);
-    }
+    double k = 0;
+    if (p->b >= 0)
+        k += tb__dot3(d1, p->turn_b[d]);
+    if (p->a >= 0)
+        k += tb__dot3(d1, p->turn_a[d]);
     return k;
 }
 
@@ -668,7 +659,7 @@ static void set_up_patch(tb__contacts *c, tb__soft_patch *p)
 /* A patch's spins and masses, through the inertia of the start */
 static void patch_response(tb__contacts *c, tb__soft_patch *p)
 {
-    double k[3], im = 0, t[3];
+    double k[3], im = 0;
     int d, e;
     for (d = 0; d < 2; ++d) {
         start_spin(c, p->a, p->arm_a[d], p->spin_a[d]);
@@ -686,25 +677,20 @@ static void patch_response(tb__contacts *c, tb__soft_patch *p)
     for (d = 0; d < 2; ++d)
         for (e = d; e < 2; ++e) {
             double sum = d == e ? im : 0;
-            if (p->b >= 0) {
-                tb__mul(c->soft_bodies[p->b].inv_world, p->arm_b[e], t);
-                sum += tb__dot3(p->arm_b[d], t);
-            }
-            if (p->a >= 0) {
-                tb__mul(c->soft_bodies[p->a].inv_world, p->arm_a[e], t);
-                sum += tb__dot3(p->arm_a[d], t);
-            }
+            if (p->b >= 0)
+                sum += tb__dot3(p->arm_b[d], p->spin_b[e]);
+            if (p->a >= 0)
+                sum += tb__dot3(p->arm_a[d], p->spin_a[e]);
             k[d + e] = sum;
         }
     invert2(k, p->tangent_mass);
     {
-        const double *n = c->soft_rows[p->first].normal;
-        const double kt = angular_inverse(c, p, n, n);
+        const double kt = angular_inverse(p, c->soft_rows[p->first].normal, 0);
         p->twist_mass = kt > 0 ? 1 / kt : 0;
     }
-    k[0] = angular_inverse(c, p, p->tangent[0], p->tangent[0]);
-    k[1] = angular_inverse(c, p, p->tangent[0], p->tangent[1]);
-    k[2] = angular_inverse(c, p, p->tangent[1], p->tangent[1]);
+    k[0] = angular_inverse(p, p->tangent[0], 1);
+    k[1] = angular_inverse(p, p->tangent[0], 2);
+    k[2] = angular_inverse(p, p->tangent[1], 2);
     invert2(k, p->rolling_mass);
 }
 
@@ -770,7 +756,6 @@ static tb_status set_up_rows(tb_world *w, tb__contacts *c, double h, int n)
             tb__cross(o->ra, o->normal, o->arm_a);
             tb__cross(o->rb, o->normal, o->arm_b);
             row_response(c, o);
-            o->mass = row_mass(c, o);
             o->separation = p->separation;
             o->restitution = e->restitution;
             o->approach = 0;
