@@ -131,8 +131,9 @@ static void add_plane(tb_world *w, double friction)
 }
 
 /* --substeps=N: every scene's contacts by the soft-step solver with N
-   substeps (0: the default solver) */
-static int substeps = 0;
+   substeps (0: the sweeps; -1, without the option: the default settings,
+   the soft step with 4) */
+static int substeps = -1;
 
 /* ode_heavy_landing's scene in tumble (the default settings, but for
    --substeps). */
@@ -143,7 +144,7 @@ static void tumble_heavy(const ode_heavy_def *d, ode_heavy_result *out)
     const double top = 1.5 + d->under, size[3] = { 1, 1, 1 };
     int i, k, landed = 0;
     memset(out, 0, sizeof *out);
-    if (substeps > 0) {
+    if (substeps >= 0) {
         tb_contact_settings cs = tb_world_contact_settings(w);
         cs.substeps = substeps;
         check(tb_world_set_contact_settings(w, &cs), w, "heavy settings");
@@ -290,7 +291,8 @@ typedef struct pyramid_run {
 static void set_sleep(tb_world *w, int velocity_iterations, double tolerance, int sleep)
 {
     tb_contact_settings cs = tb_default_contact_settings();
-    cs.substeps = substeps;
+    if (substeps >= 0)
+        cs.substeps = substeps;
     cs.velocity_iterations = velocity_iterations;
     if (tolerance >= 0)
         cs.velocity_tolerance = tolerance;
@@ -522,8 +524,11 @@ int main(int argc, char **argv)
            BENCH_RUNS);
     bench_print_build();
     bench_print_asserts();
-    if (substeps > 0)
-        printf("soft-step solver: %d substeps\n", substeps);
+    if (substeps != 0)
+        printf("soft-step solver (the default): %d substeps\n",
+               substeps > 0 ? substeps : tb_default_contact_settings().substeps);
+    else
+        printf("the sweeps (substeps 0)\n");
     printf("\n");
     fflush(stdout);
 
@@ -535,8 +540,12 @@ int main(int argc, char **argv)
             fprintf(stderr, BENCH_NAME ": ODE pyramid refused or failed\n");
             return EXIT_FAILURE;
         }
-        tumble_pyramid(&pd, iterations, 0, 0, &pyr1, NULL);
-        tumble_pyramid(&pd, 2 * iterations, 0, 0, &pyr2, NULL);
+        if (substeps == 0) { /* the sweeps' every-sweep runs (the soft step has no sweeps) */
+            tumble_pyramid(&pd, iterations, 0, 0, &pyr1, NULL);
+            tumble_pyramid(&pd, 2 * iterations, 0, 0, &pyr2, NULL);
+        } else {
+            pyr1 = pyr2 = pyr;
+        }
         tumble_pyramid(&pd, iterations, -1, 1, &pyr_sleep, NULL);
         pd_sleep.auto_disable = 1;
         if (!ode_pyramid(&pd_sleep, &pyr_ode_sleep)) {
@@ -561,9 +570,10 @@ int main(int argc, char **argv)
            "top box within 1 cm throughout (farthest %.3f m): %s\n",
            ode_pyramid_boxes(pd.levels), t_ms, pd.duration, pyr.sink, pyr.drift, pd.iterations, o_ms,
            pyr_ode.top_sink, pyr_ode.top_drift, ratio, met(ratio >= 5), pyr.farthest, met(pyr.farthest <= 0.01));
-    printf("pyramid   %d boxes  awake, every sweep (velocity_tolerance 0): at %d iterations %5.2f ms/step, top box "
-           "farthest %.3f m; at %d iterations %5.2f ms/step, farthest %.3f m\n",
-           ode_pyramid_boxes(pd.levels), iterations, t1_ms, pyr1.farthest, 2 * iterations, t2_ms, pyr2.farthest);
+    if (substeps == 0)
+        printf("pyramid   %d boxes  awake, every sweep (velocity_tolerance 0): at %d iterations %5.2f ms/step, top box "
+               "farthest %.3f m; at %d iterations %5.2f ms/step, farthest %.3f m\n",
+               ode_pyramid_boxes(pd.levels), iterations, t1_ms, pyr1.farthest, 2 * iterations, t2_ms, pyr2.farthest);
     t_ms = median_of(pyr_sleep_ms, BENCH_RUNS);
     o_ms = median_of(pyr_ode_sleep_ms, BENCH_RUNS);
     printf("pyramid   %d boxes  default (sleep on) tumble %5.2f ms/step (mean over %g s; median %.3f), all asleep after "
@@ -609,13 +619,25 @@ int main(int argc, char **argv)
     asleep_lines();
     fflush(stdout);
 
-    /* t = fixed + k points iterations, at two iteration counts, every sweep done */
-    printf("contacts  ns per contact point per velocity iteration: %.1f for the whole step (pyramid, %.0f points x %d "
-           "iterations, every sweep; collision, integration, both passes, events), %.1f for the velocity sweep alone "
-           "(from the rerun at %d iterations) (Box2D v3 publishes about %d ns per contact per substep, 2D float)\n",
-           1e6 * t1_ms / (pyr1.t.contacts_mean * iterations), pyr1.t.contacts_mean, iterations,
-           1e6 * (t2_ms - t1_ms) / (pyr2.t.contacts_mean * 2 * iterations - pyr1.t.contacts_mean * iterations),
-           2 * iterations, BOX2D_NS_PER_CONTACT);
+    /* the soft step: the whole step's time over its points and substeps;
+       the sweeps: t = fixed + k points iterations, at two iteration
+       counts, every sweep done */
+    if (substeps != 0) {
+        const int n = substeps > 0 ? substeps : tb_default_contact_settings().substeps;
+        printf("contacts  ns per contact point per substep, for the whole step (collision, integration, solve, "
+               "events): pile %.1f (%.0f points x %d substeps), pyramid %.1f (%.0f points) (Box2D v3 publishes about "
+               "%d ns per contact per substep, 2D float)\n",
+               1e6 * median_of(pile_ms, BENCH_RUNS) / (pile.contacts_mean * n), pile.contacts_mean, n,
+               1e6 * median_of(pyr_ms, BENCH_RUNS) / (pyr.t.contacts_mean * n), pyr.t.contacts_mean,
+               BOX2D_NS_PER_CONTACT);
+    } else {
+        printf("contacts  ns per contact point per velocity iteration: %.1f for the whole step (pyramid, %.0f points x %d "
+               "iterations, every sweep; collision, integration, both passes, events), %.1f for the velocity sweep alone "
+               "(from the rerun at %d iterations) (Box2D v3 publishes about %d ns per contact per substep, 2D float)\n",
+               1e6 * t1_ms / (pyr1.t.contacts_mean * iterations), pyr1.t.contacts_mean, iterations,
+               1e6 * (t2_ms - t1_ms) / (pyr2.t.contacts_mean * 2 * iterations - pyr1.t.contacts_mean * iterations),
+               2 * iterations, BOX2D_NS_PER_CONTACT);
+    }
     {
         static const struct {
             double ratio;

@@ -39,7 +39,7 @@
    Each scene prints its mean milliseconds per step too. Scene names
    (wall, tower, lever, plate, cradle, heap) on the command line run only
    those; --substeps=N runs them under the soft-step solver with N
-   substeps, and --hertz=F sets its contact stiffness (F = 0: a quarter of
+   substeps (the default settings: 4; 0: the sweeps), and --hertz=F sets its contact stiffness (F = 0: a quarter of
    the substep rate, the stiffest it allows). */
 #define _POSIX_C_SOURCE 199309L
 #define BENCH_NAME "bench_robustness"
@@ -54,9 +54,10 @@
 #define G 9.81
 #define PI 3.14159265358979323846
 
-/* --substeps and --hertz: the soft-step solver's settings for every scene
-   (0 substeps: the default solver) */
-static int substeps = 0;
+/* --substeps and --hertz: the contact settings for every scene (0
+   substeps: the sweeps; -1, without the option: the default, the soft
+   step with 4) */
+static int substeps = -1;
 static double hertz = -1;
 
 static tb_world *new_world(double gravity)
@@ -69,11 +70,12 @@ static tb_world *new_world(double gravity)
         fprintf(stderr, BENCH_NAME ": %s\n", message);
         exit(EXIT_FAILURE);
     }
-    if (substeps > 0) {
+    if (substeps >= 0 || hertz >= 0) {
         tb_contact_settings cs = tb_world_contact_settings(w);
-        cs.substeps = substeps;
+        if (substeps >= 0)
+            cs.substeps = substeps;
         if (hertz >= 0)
-            cs.hertz = hertz > 0 ? hertz : 0.25 * substeps / H;
+            cs.hertz = hertz > 0 ? hertz : 0.25 * cs.substeps / H;
         check(tb_world_set_contact_settings(w, &cs), w, "soft-step settings");
     }
     return w;
@@ -478,11 +480,15 @@ int main(int argc, char **argv)
         }
     }
     printf("bench_robustness: contact scenes at 60 Hz, default settings (targets in the source's header)\n");
-    if (substeps > 0 && hertz < 0)
-        printf("soft-step solver: %d substeps, contact stiffness the default\n", substeps);
-    else if (substeps > 0)
-        printf("soft-step solver: %d substeps, contact stiffness %g Hz\n", substeps,
-               hertz > 0 ? hertz : 0.25 * substeps / H);
+    {
+        const int n = substeps >= 0 ? substeps : tb_default_contact_settings().substeps;
+        if (n == 0)
+            printf("the sweeps (substeps 0)\n");
+        else if (hertz < 0)
+            printf("soft-step solver: %d substeps, contact stiffness the default\n", n);
+        else
+            printf("soft-step solver: %d substeps, contact stiffness %g Hz\n", n, hertz > 0 ? hertz : 0.25 * n / H);
+    }
     bench_print_build();
     if (wanted(argc, argv, "wall")) {
         wall(5.0);
@@ -490,7 +496,7 @@ int main(int argc, char **argv)
     }
     if (wanted(argc, argv, "tower")) {
         tower(0);
-        if (substeps == 0) /* the soft step has no stack iterations */
+        if (substeps == 0) /* the sweeps' stack iterations (the soft step has none) */
             tower(8);
     }
     if (wanted(argc, argv, "lever")) {

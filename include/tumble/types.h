@@ -194,8 +194,9 @@ typedef struct tb_contact_settings {
     double sleep_time;            /* s: an island of touching bodies that all rest this
                                      long falls asleep; default 0.5, INFINITY: never */
     int substeps;                 /* > 0: the soft-step solver with that many substeps a
-                                     step (4 is a good start; docs/contacts.md); default
-                                     0: the sweeps and the position pass */
+                                     step (docs/contacts.md); default 4; 0: the sweeps
+                                     and the position pass, whose settings are
+                                     velocity_iterations to stack_iterations */
 } tb_contact_settings;
 
 typedef enum tb_contact_event_type { TB_CONTACT_BEGIN, TB_CONTACT_END } tb_contact_event_type;

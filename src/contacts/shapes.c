@@ -37,6 +37,7 @@ tb_contact_settings tb_default_contact_settings(void)
     s.particle_friction = 0.6;
     s.sleep_speed = 0.05;
     s.sleep_time = 0.5;
+    s.substeps = 4;
     return s;
 }
 

@@ -1039,13 +1039,16 @@ static void store(tb_world *w, tb__contacts *c, int n)
             memset(b->turn, 0, sizeof b->turn);
     }
     memset(c->motion, 0, TB__MOTION * (c->body_count + 1) * sizeof *c->motion);
-    /* the impulses of the step, for the next one's warm start; a point
-       touches if its normal row pushed in some substep */
+    /* the impulses of the step, for the next one's warm start (+ 0.0: a
+       zero kept as +0, whichever sign the clamps' fmax gave it, which a
+       compiler may choose either way: the state hash reads the bits,
+       test_snapshot.contact_scene_hash_is_recorded); a point touches if
+       its normal row pushed in some substep */
     for (i = 0; i < c->soft_row_count; ++i) {
         const tb__soft_row *o = &c->soft_rows[i];
         tb__point *p = o->point;
         int k;
-        p->normal_impulse = n * fmax(o->impulse - o->settled, 0);
+        p->normal_impulse = n * fmax(o->impulse - o->settled, 0) + 0.0;
         for (k = 0; k < 3; ++k)
             p->friction_impulse[k] = 0;
         p->active = o->most > 0 || o->bounced; /* a bounce alone touched too */
@@ -1057,11 +1060,13 @@ static void store(tb_world *w, tb__contacts *c, int n)
         int k;
         for (k = 0; k < 3; ++k) {
             e->friction_impulse[k] = n * ((pa->friction_impulse[0] - pa->settled[0]) * pa->tangent[0][k] +
-                                          (pa->friction_impulse[1] - pa->settled[1]) * pa->tangent[1][k]);
+                                          (pa->friction_impulse[1] - pa->settled[1]) * pa->tangent[1][k]) +
+                                     0.0;
             e->rolling_impulse[k] = n * ((pa->rolling_impulse[0] - pa->settled_rolling[0]) * pa->tangent[0][k] +
-                                         (pa->rolling_impulse[1] - pa->settled_rolling[1]) * pa->tangent[1][k]);
+                                         (pa->rolling_impulse[1] - pa->settled_rolling[1]) * pa->tangent[1][k]) +
+                                    0.0;
         }
-        e->twist_impulse = n * (pa->twist_impulse - pa->settled_twist);
+        e->twist_impulse = n * (pa->twist_impulse - pa->settled_twist) + 0.0;
     }
 }
 

@@ -65,6 +65,13 @@ void awake(tb_world *w)
     assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
 }
 
+void sweeps(tb_world *w)
+{
+    tb_contact_settings s = tb_world_contact_settings(w);
+    s.substeps = 0;
+    assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
+}
+
 tb_body_id add_solid(tb_world *w, tb_shape_type type, const double at[3], const double v[3], const double spin[3],
                      double size)
 {

@@ -22,6 +22,7 @@ static tb_world *plane_world(double restitution)
     plane.restitution = restitution;
     assert_int_equal(tb_world_add_shape(w, &plane, NULL), TB_OK);
     s.sleep_time = INFINITY; /* the solver itself, every step */
+    s.substeps = 0;          /* the sweeps, whose lanes these are */
     assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
     return w;
 }

@@ -93,7 +93,7 @@ static void spinning_plate_bounces_without_gaining_energy(void **state)
             worst = fmax(worst, tb_world_energy(w).total - start);
         }
         print_message("%s: plate spun at %2.0f rad/s, restitution %.1f, dropped from %.1f m: largest energy gain "
-                      "%.3g J of %.0f, as lifting it %.2g m\n", substeps ? "soft step" : "default", cases[i][0],
+                      "%.3g J of %.0f, as lifting it %.2g m\n", substeps ? "soft step" : "sweeps", cases[i][0],
                       cases[i][1], cases[i][2], worst, start, worst / (b.mass.mass * G));
         assert_true(worst <= 1e-4 * b.mass.mass * G);
         tb_world_destroy(w);
@@ -201,7 +201,7 @@ static void events_report_impacts(void **state)
             }
         }
         print_message("%s: first impact at %.15f m/s (sqrt(2 g h0) = %.15f), %d begins, %d ends\n",
-                      substeps ? "soft step" : "default", speed, sqrt(2 * G), begins, ends);
+                      substeps ? "soft step" : "sweeps", speed, sqrt(2 * G), begins, ends);
         assert_rel(speed, sqrt(2 * G), 1e-12);
         assert_true(begins >= 2 && ends >= 1);
         tb_world_destroy(w);
@@ -217,7 +217,7 @@ static void events_report_impacts(void **state)
    sphere (measured 203 and, under the soft step, 201: a particle may come
    back for a second touch).
    Under both solvers (the soft step's bounces made no begin events
-   before); substeps: 0, the default solver. */
+   before); substeps: 0, the sweeps. */
 static void spray(int substeps)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -260,7 +260,7 @@ static void spray(int substeps)
         }
     }
     print_message("spray (%s): %zu of 200 particles hit the sphere, deepest in it %.2e m, lowest below the plane "
-                  "%.2e m\n", substeps ? "soft step" : "default", hits, deepest, -lowest);
+                  "%.2e m\n", substeps ? "soft step" : "sweeps", hits, deepest, -lowest);
     assert_below(deepest, slop);
     assert_true(lowest > -slop);
     assert_true(hits >= 200);
@@ -294,10 +294,11 @@ static void apexes_under(const char *method, double hz, double top[2])
    Hz). Symplectic and implicit Euler (lever h, the same steps here: no
    springs or drag) fall short at first order: the shortfall shrinks 4
    times from 60 to 240 Hz (asserted: order within 0.15 of 1; measured
-   10.6% and 2.75% on the first apex). Explicit Euler (lever 0) misses
-   both ways (6% short at 30 Hz, 4.6% over at 60) and converges at first
-   order only from about 240 Hz (2.3% and 0.66% over at 240 and 960 Hz:
-   order 0.89, asserted within 0.3 of 1). */
+   9.5% and 2.65% on the first apex under the default soft step, whose
+   flight between bounces is the method's). Explicit Euler (lever 0)
+   misses both ways and converges at first order only from about 240 Hz
+   (2.7% and 0.68% over at 240 and 960 Hz: order 0.99, asserted within
+   0.3 of 1). */
 static void bounce_heights_follow_each_method(void **state)
 {
     const char *exact[] = { "verlet", "verlet_exact", "rk4", "dopri5", "auto" };

@@ -215,21 +215,25 @@ static void capsule_stood_on_end_keeps_its_spin(void **state)
 }
 
 /* How far a body starting at rest moves in n steps of h under a constant
-   acceleration a, as the named method integrates it: a h^2 (c n + n (n -
-   1) / 2), where c is the share of a step's kick its positions see (1/2:
-   exact, 1/2 a t^2; symplectic and implicit Euler drift with the kicked
-   velocity, 1; explicit Euler with the old one, 0). */
+   acceleration a, as the named method integrates it under the sweeps: a
+   h^2 (c n + n (n - 1) / 2), where c is the share of a step's kick its
+   positions see (1/2: exact, 1/2 a t^2; symplectic and implicit Euler
+   drift with the kicked velocity, 1; explicit Euler with the old one, 0).
+   Under the soft step a body in contact moves by the substeps' leapfrog
+   whatever the method, exact for a constant force: c = 1/2 (pass "soft"). */
 static double steps_under(const char *method, double a, double h, int n)
 {
-    const double c = strcmp(method, "euler") == 0                                                  ? 0
+    const double c = strcmp(method, "soft") == 0                                                   ? 0.5
+                     : strcmp(method, "euler") == 0                                                ? 0
                      : strcmp(method, "symplectic_euler") == 0 || strcmp(method, "implicit_euler") == 0 ? 1
                                                                                                    : 0.5;
     return a * h * h * (c * n + 0.5 * n * (n - 1.0));
 }
 
 /* A body set on a plane tilted 20 degrees, at rest, 2 s at 60 Hz, down
-   the slope from where it started, under every integrator, against what
-   the method gives under the closed-form acceleration, to 1e-9:
+   the slope from where it started, under every integrator, with the
+   default soft step and with the sweeps (substeps 0), against what each
+   gives under the closed-form acceleration (steps_under), to 1e-9:
    - a unit cube with mu 0.2 (below tan 20 = 0.364) slides with
      g (sin - mu cos): friction a constant force;
    - a ball (r 0.1 m) with mu 0.6 rolls without slipping at 5/7 g sin, and
@@ -243,7 +247,7 @@ static double steps_under(const char *method, double a, double h, int n)
    lifted g h^2 / 2 by its first contact, which then rolls on that gap
    (longer arms), and a kept manifold that carries the contact point along
    the slope while the ball rolls off it. */
-static double down_the_slope(const char *method, double friction, int ball) /* ball: 1, capsule: 2 */
+static double down_the_slope(const char *method, double friction, int ball, int sweeps) /* ball: 1, capsule: 2 */
 {
     const double slope = 20 * 3.14159265358979323846 / 180, r = ball ? 0.1 : 0.5;
     tb_world_def def = tb_default_world_def();
@@ -256,6 +260,11 @@ static double down_the_slope(const char *method, double friction, int ball) /* b
     assert_int_equal(tb_world_create(&def, &w, NULL, 0), TB_OK);
     assert_int_equal(tb_world_set_integrator(w, method), TB_OK);
     awake(w);
+    if (sweeps) {
+        tb_contact_settings cs = tb_world_contact_settings(w);
+        cs.substeps = 0;
+        assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
+    }
     plane.type = TB_SHAPE_PLANE;
     plane.normal[0] = -sin(slope), plane.normal[2] = cos(slope);
     plane.friction = friction;
@@ -294,19 +303,21 @@ static void incline_slides_holds_and_rolls_to_closed_forms(void **state)
     (void)state;
     assert_int_equal(tb_mass_capsule(1000, 0.1, 0.8, &capsule_mass, NULL), TB_OK);
     mass = capsule_mass.mass, axial = capsule_mass.inertia[2];
-    for (m = 0; m < tb_integrator_count(); ++m) {
-        const char *name = tb_integrator_name(m);
-        const double slide = steps_under(name, G * (sin(slope) - 0.2 * cos(slope)), 1.0 / 60, 120);
-        const double roll = steps_under(name, 5.0 / 7 * G * sin(slope), 1.0 / 60, 120);
-        const double capsule = steps_under(name, G * sin(slope) / (1 + axial / (mass * 0.01)), 1.0 / 60, 120);
-        const double slid = down_the_slope(name, 0.2, 0), held = down_the_slope(name, 0.5, 0);
-        const double rolled = down_the_slope(name, 0.6, 1), wheeled = down_the_slope(name, 0.6, 2);
-        print_message("%-16s slid %.9f m (%.9f), held %.2e m, ball rolled %.9f m (%.9f), capsule %.9f m (%.9f)\n",
-                      name, slid, slide, held, rolled, roll, wheeled, capsule);
+    for (m = 0; m < 2 * tb_integrator_count(); ++m) {
+        const int sweeps = m % 2;
+        const char *name = tb_integrator_name(m / 2), *law = sweeps ? name : "soft";
+        const double slide = steps_under(law, G * (sin(slope) - 0.2 * cos(slope)), 1.0 / 60, 120);
+        const double roll = steps_under(law, 5.0 / 7 * G * sin(slope), 1.0 / 60, 120);
+        const double capsule = steps_under(law, G * sin(slope) / (1 + axial / (mass * 0.01)), 1.0 / 60, 120);
+        const double slid = down_the_slope(name, 0.2, 0, sweeps), held = down_the_slope(name, 0.5, 0, sweeps);
+        const double rolled = down_the_slope(name, 0.6, 1, sweeps), wheeled = down_the_slope(name, 0.6, 2, sweeps);
+        print_message("%-16s %-9s slid %.9f m (%.9f), held %.2e m, ball rolled %.9f m (%.9f), capsule %.9f m "
+                      "(%.9f)\n", name, sweeps ? "sweeps" : "soft step", slid, slide, held, rolled, roll, wheeled,
+                      capsule);
         if (!(fabs(slid / slide - 1) < 1e-9 && fabs(held) < 1e-5 && fabs(rolled / roll - 1) < 1e-9 &&
               fabs(wheeled / capsule - 1) < 1e-9))
-            fail_msg("%s: slid %.12g m for %.12g, held %.3g m, ball %.12g m for %.12g, capsule %.12g m for %.12g", name,
-                     slid, slide, held, rolled, roll, wheeled, capsule);
+            fail_msg("%s (%s): slid %.12g m for %.12g, held %.3g m, ball %.12g m for %.12g, capsule %.12g m for %.12g",
+                     name, sweeps ? "sweeps" : "soft step", slid, slide, held, rolled, roll, wheeled, capsule);
     }
 }
 
@@ -316,7 +327,7 @@ static void incline_slides_holds_and_rolls_to_closed_forms(void **state)
    that is at P = m g / 2, when the centre of pressure reaches the edge.
    Just below that it stands: the contacts hold its face flat to far
    within the slop, so under 1e-4 rad (0.1 mm across the face; measured
-   3.8e-6) after 2 s; just above it tips (over 0.1 rad: the net moment
+   3.4e-17) after 2 s; just above it tips (over 0.1 rad: the net moment
    0.05 m g / 2 turns it 0.04 rad in the first second at I = 2/3 kg m^2
    about the edge, faster as it goes). The cube is turned by yaw about the vertical and pushed across a
    face: the threshold is the same whichever way it faces. Returns the

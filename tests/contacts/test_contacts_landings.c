@@ -97,6 +97,7 @@ static void heavy_landing(double ratio, int under, double gap, int sleep, double
     tb_shape_def s = tb_default_shape_def();
     const double size[3] = { 1, 1, 1 }, top = 0.5 + under + 1;
     int i, k, landed = 0;
+    sweeps(w); /* the soft step's: test_contacts_soft.heavy_box_lands_on_light_ones_soft */
     if (!sleep)
         awake(w);
     for (k = 0; k <= under; ++k) {
@@ -132,7 +133,9 @@ static void heavy_landing(double ratio, int under, double gap, int sleep, double
     tb_world_destroy(w);
 }
 
-/* Sequential impulses pass a load between bodies of very different masses
+/* Under the sweeps (substeps 0; the soft step's is
+   test_contacts_soft.heavy_box_lands_on_light_ones_soft). Sequential
+   impulses pass a load between bodies of very different masses
    about one mass ratio's part a sweep: left to them, a box 100 times
    heavier dropped 0.5 m onto a light box on the ground is still falling
    at 0.7 m/s after the landing step, the landing's warm starts then throw
@@ -179,15 +182,17 @@ static void heavy_box_lands_on_light_ones(void **state)
 }
 
 /* A unit box, or a ball of radius 0.5 m, of 1 kg dropped from gap onto a
-   1 kg unit box on the plane, default settings, 5 s at 60 Hz: where it
-   ends against resting on the box (m). */
-static double dropped_on_a_box(double gap, int ball)
+   1 kg unit box on the plane, default settings (with_sweeps: substeps 0),
+   5 s at 60 Hz: where it ends against resting on the box (m). */
+static double dropped_on_a_box(double gap, int ball, int with_sweeps)
 {
     tb_world *w = world_on_plane(0.6, 0);
     const double below[3] = { 0, 0, 0.5 }, above[3] = { 0, 0, 1.5 + gap };
     tb_body_id top;
     double x[3];
     int i;
+    if (with_sweeps)
+        sweeps(w);
     add_box(w, below, 1, 0.6);
     top = ball ? add_ball(w, above, 0.5, 0) : add_box(w, above, 1, 0.6);
     for (i = 0; i < 5 * 60; ++i)
@@ -197,7 +202,10 @@ static double dropped_on_a_box(double gap, int ball)
     return x[2] - 1.5;
 }
 
-/* The landing step leaves a body that lands on another a little above
+/* Boxes and balls dropped on a box come to rest on it: under the default
+   soft step exactly (its touching points solved with their island, rigid:
+   measured 0 m), and under the sweeps (substeps 0) as follows. Their
+   landing step leaves a body that lands on another a little above
    it: the part of the landing impulse that holds it up acts on positions
    over the whole rest of the step, where on the static ground it acts
    for half of it (g h^2 / 16 at most, 1 mm at 60 Hz). A gap of more than
@@ -210,20 +218,22 @@ static void bodies_dropped_on_bodies_rest_on_them(void **state)
 {
     static const double gaps[] = { 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 2 };
     const double slop = tb_default_contact_settings().slop;
-    double most = 0, least = 0;
     size_t i;
-    int ball;
+    int ball, solver;
     (void)state;
-    for (i = 0; i < sizeof gaps / sizeof gaps[0]; ++i)
-        for (ball = 0; ball < 2; ++ball) {
-            const double end = dropped_on_a_box(gaps[i], ball);
-            most = fmax(most, end);
-            least = fmin(least, end);
-        }
-    print_message("boxes and balls dropped 0.05 to 2 m on a box: from %.2e m into it to %.2e m above it\n", -least,
-                  most);
-    assert_below(most, 0.01 * slop);
-    assert_below(-least, slop);
+    for (solver = 0; solver < 2; ++solver) {
+        double most = 0, least = 0;
+        for (i = 0; i < sizeof gaps / sizeof gaps[0]; ++i)
+            for (ball = 0; ball < 2; ++ball) {
+                const double end = dropped_on_a_box(gaps[i], ball, solver);
+                most = fmax(most, end);
+                least = fmin(least, end);
+            }
+        print_message("boxes and balls dropped 0.05 to 2 m on a box (%s): from %.2e m into it to %.2e m above it\n",
+                      solver ? "sweeps" : "soft step", -least, most);
+        assert_below(most, 0.01 * slop);
+        assert_below(-least, slop);
+    }
 }
 
 /* Manifolds that share no moving body are independent: a capsule falling
@@ -315,34 +325,42 @@ static void plank_heights(tb_world *w, tb_body_id id, double *low, double *high)
 /* The plank buried half a metre deep and 5 degrees off level, every
    corner under the surface, default settings: the contact pass pushes it
    out (at most max_push, 3 m/s) and it comes to lie flat on the plane.
-   Speed alone does not show that it rests: the position pass leaves it at
-   zero while it lifts a body, and judged by speed alone the plank falls
+   Speed alone does not show that it rests: a push of overlaps (the soft
+   step's, or the sweeps' position pass) leaves it at zero while it lifts
+   a body, and judged by speed alone the plank falls
    asleep with a corner 6.6 mm deep (a heavier one 0.4 m deep). So it must
    not sleep while any corner is deeper than the slop (5 mm), and after
-   5 s it lies asleep on the surface, within 0.1 mm of flat. */
+   5 s it lies asleep on the surface, within 0.1 mm of flat. Under the
+   default soft step and under the sweeps (substeps 0). */
 static void buried_plank_comes_out_before_it_sleeps(void **state)
 {
-    tb_world *w = world_on_plane(0.6, 0);
-    tb_body_id id = add_plank(w, 0.5, 5 * 3.14159265358979323846 / 180, 0);
-    double low, high;
-    int i, asleep;
+    int solver;
     (void)state;
-    for (i = 0; i < 300; ++i) {
-        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
-        assert_int_equal(tb_body_asleep(w, id, &asleep), TB_OK);
-        plank_heights(w, id, &low, &high);
-        if (asleep && low < -0.005)
-            fail_msg("asleep at step %d with a corner %.4f m deep", i, -low);
+    for (solver = 0; solver < 2; ++solver) {
+        tb_world *w = world_on_plane(0.6, 0);
+        tb_body_id id = add_plank(w, 0.5, 5 * 3.14159265358979323846 / 180, 0);
+        double low, high;
+        int i, asleep;
+        if (solver)
+            sweeps(w);
+        for (i = 0; i < 300; ++i) {
+            assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+            assert_int_equal(tb_body_asleep(w, id, &asleep), TB_OK);
+            plank_heights(w, id, &low, &high);
+            if (asleep && low < -0.005)
+                fail_msg("asleep at step %d with a corner %.4f m deep", i, -low);
+        }
+        print_message("buried plank after 5 s (%s): corners from %.2e to %.5f m, asleep %d\n",
+                      solver ? "sweeps" : "soft step", low, high, asleep);
+        assert_true(asleep);
+        assert_below(fabs(low), 1e-4);
+        assert_below(fabs(high - 0.018), 1e-4);
+        tb_world_destroy(w);
     }
-    print_message("buried plank after 5 s: corners from %.2e to %.5f m, asleep %d\n", low, high, asleep);
-    assert_true(asleep);
-    assert_below(fabs(low), 1e-4);
-    assert_below(fabs(high - 0.018), 1e-4);
-    tb_world_destroy(w);
 }
 
 /* The plank with a heavy core, buried half a metre deep and 5 degrees off
-   level (sleep off): the position pass meets each pair as a patch first,
+   level (sleep off), under the sweeps (substeps 0): their position pass meets each pair as a patch first,
    pushing its centre and turning it toward the plane that levels what its
    points need, so the plank comes out whole, as fast as the push allows
    (max_push, 3 m/s: 10 steps), and lies flat on the surface within 0.1 mm
@@ -357,6 +375,7 @@ static void heavy_plank_comes_out_whole(void **state)
     int i;
     (void)state;
     awake(w);
+    sweeps(w);
     for (i = 0; i < 120; ++i)
         assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
     plank_heights(w, id, &low, &high);
@@ -366,7 +385,10 @@ static void heavy_plank_comes_out_whole(void **state)
     tb_world_destroy(w);
 }
 
-/* Contacts come after each method's free motion, and a resting contact's
+/* A body at rest stays put under every integrator, under the default
+   soft step (its substeps' leapfrog moves a body in contact whatever the
+   method) and under the sweeps. Under the sweeps,
+   contacts come after each method's free motion, and a resting contact's
    impulse moves positions as the method moves them under a constant force
    (tb__method's force_lever), so a body at rest stays put under every
    integrator: a cube set on the plane keeps its height within 0.1 mm and
@@ -381,8 +403,8 @@ static void every_integrator_keeps_a_resting_box_still(void **state)
 {
     int m;
     (void)state;
-    for (m = 0; m < tb_integrator_count(); ++m) {
-        const char *name = tb_integrator_name(m);
+    for (m = 0; m < 2 * tb_integrator_count(); ++m) {
+        const char *name = tb_integrator_name(m / 2), *solver = m % 2 ? "sweeps" : "soft step";
         tb_world *w = world_on_plane(0.6, 0);
         const double at[3] = { 3, 0, 0.5 };
         tb_body_id cube, plank;
@@ -390,6 +412,8 @@ static void every_integrator_keeps_a_resting_box_still(void **state)
         int i;
         assert_int_equal(tb_world_set_integrator(w, name), TB_OK);
         awake(w);
+        if (m % 2)
+            sweeps(w);
         cube = add_box(w, at, 1, 0.6);
         plank = add_plank(w, 0.05, 0, 0);
         for (i = 0; i < 180; ++i) {
@@ -398,13 +422,14 @@ static void every_integrator_keeps_a_resting_box_still(void **state)
                 tb_body_position(w, cube, x);
                 tb_body_velocity(w, cube, v);
                 if (!(fabs(x[2] - 0.5) < 1e-4 && sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) < 1e-3))
-                    fail_msg("%s: the cube at %.6f m, %.3g m/s", name, x[2], sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
+                    fail_msg("%s (%s): the cube at %.6f m, %.3g m/s", name, solver, x[2],
+                             sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
             }
         }
         plank_heights(w, plank, &low, &high);
-        print_message("%-16s cube at %.7f m; plank corners from %.2e to %.7f m\n", name, x[2], low, high);
+        print_message("%-16s %-9s cube at %.7f m; plank corners from %.2e to %.7f m\n", name, solver, x[2], low, high);
         if (!(fabs(low) < 1e-4 && fabs(high - 0.018) < 1e-4))
-            fail_msg("%s: the plank's corners from %.4f to %.4f m", name, low, high);
+            fail_msg("%s (%s): the plank's corners from %.4f to %.4f m", name, solver, low, high);
         tb_world_destroy(w);
     }
 }

@@ -56,7 +56,8 @@ static void resting_box_falls_asleep_and_stays_put(void **state)
 /* A ball dropped on a sleeping box wakes it when its bounds reach the box,
    and lands on it: it must come to rest on the top face (z = 1 + r within
    the 5 mm slop), never inside the box; and rest on it, not on a gap:
-   within 0.1 mm (measured 2.8e-5 m). Then both sleep again. */
+   within 0.1 mm (measured 0 m to the printed 1e-7 m). Then both sleep
+   again. */
 static void sleeping_box_wakes_when_a_ball_lands(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);

@@ -38,7 +38,7 @@ static double horizontal(const double a[3], const double b[3])
    closes, toward e times the speed it strikes at (from the energy over the
    gap), and each substep is a leapfrog (half kick, drift, half kick): both
    exact under gravity alone, so what is left is rounding. Bound: 1e-9
-   relative, as the default solver's (ODE is 6% and 35% off; measured
+   relative, as the sweeps' (ODE is 6% and 35% off; measured
    2.7e-15 and 4.0e-15). */
 static void ball_bounces_near_e_squared(void **state)
 {
@@ -315,7 +315,7 @@ static void soft_step_box_holds_on_an_incline(void **state)
    whose turn brings corners the step's manifold does not hold into the
    slab is taken back to its time of impact (continuous.c). Bound: none
    (without the time of impact 9 of 300 runs pass through at up to 150
-   rad/s, none at up to 80; the default solver: 1 of 100 at up to 40
+   rad/s, none at up to 80; the sweeps: 1 of 100 at up to 40
    rad/s, and 25 of 100 at 20 degrees and 20 rad/s in bench_robustness's
    plate). */
 static void soft_step_spinning_plate_stays_on_the_slab(void **state)
@@ -602,7 +602,7 @@ static void flat_box_lands_flat(void **state)
    light box under a box 3 times heavier is driven 2.5 mm into the
    ground, and a box 100 times heavier goes through it. Bounds: no box
    under it ever below its place by more than a fifth of the slop (1 mm,
-   the default solver's bound; measured at most 6.1e-16 m), the heavy box
+   the sweeps' bound; measured at most 6.1e-16 m), the heavy box
    never rising faster than the sleep speed (0.05 m/s; measured at most
    1.5e-14 m/s), and ending on the column within that too (measured at
    most 4.4e-15 m). */

