@@ -1360,7 +1360,7 @@ static int world_shape(lua_State *L)
    stack_iterations, particle_radius, particle_friction,
    particle_restitution, sleep_speed, sleep_time, substeps }:
    change the contact settings (sleep_time = math.huge: never sleep;
-   substeps > 0: the soft-step solver) */
+   substeps > 0: the soft-step solver, the default 4; 0: the sweeps) */
 static const char *const contact_options[] = { "hertz", "damping_ratio", "max_push", "restitution_threshold",
                                                "slop", "velocity_iterations", "velocity_tolerance",
                                                "position_iterations", "stack_iterations",
