@@ -1,8 +1,9 @@
 /* contacts.h: shapes in a world and the contacts between them (not
-   public): the shapes' API and storage (shapes.c), finding and solving
-   contacts (contact.c, with the sweeps' lanes in contact_lanes.c and the
-   conjugate-gradient solves in cold_start.c; the opt-in soft step in
-   soft_step.c and stack_solve.c, soft_step.h), and sleep (sleep.c). The
+   public): the shapes' API and storage (shapes.c), finding contacts and
+   solving them by the sweeps, substeps 0 (contact.c, with the sweeps'
+   lanes in contact_lanes.c and the conjugate-gradient solves in
+   cold_start.c), the soft step, the default (soft_step.c, stack_solve.c
+   and continuous.c, soft_step.h), and sleep (sleep.c). The
    model is described in docs/contacts.md.
    A world holds a pointer to one tb__contacts, allocated with its first
    shape or contact settings: a world without shapes pays nothing. */
