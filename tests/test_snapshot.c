@@ -575,8 +575,7 @@ static void empty_worlds_snapshot_and_restore(void **unused)
    commit. It held when recorded in the RelWithDebInfo build (gcc 12, -O2),
    the ASan + UBSan Debug build (./dev.sh asan, -O0) and a clang 14 Release
    build (-O3), with the widest contact sweeps (AVX-512) and the portable
-   ones. The soft step's (the default since it became one) held in the
-   first two. */
+   ones. The soft step's holds in the first two. */
 #define RECORDED_HASH 0x598ca061642bdbe9ull
 #define RECORDED_SOFT_HASH 0x1acd1960ae4a78ddull
 
