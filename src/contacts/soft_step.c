@@ -101,18 +101,13 @@ static void apply(tb__contacts *c, int32_t i, double lambda, const double d[3], 
                   const double spin[3])
 {
     tb__soft_body *s = &c->soft_bodies[i];
-    const double im = c->bodies[i].inv_mass * lambda;
-    int k;
-    for (k = 0; k < 3; ++k) {
-        s->P[k] += lambda * d[k];
-        s->v[k] += im * d[k];
-    }
-    if (c->bodies[i].tier != TB__BODIES)
+    const double im = s->inv_mass * lambda;
+    s->P[0] += lambda * d[0], s->P[1] += lambda * d[1], s->P[2] += lambda * d[2];
+    s->v[0] += im * d[0], s->v[1] += im * d[1], s->v[2] += im * d[2];
+    if (!s->rotates)
         return;
-    for (k = 0; k < 3; ++k) {
-        s->L[k] += lambda * arm[k];
-        s->w[k] += lambda * spin[k];
-    }
+    s->L[0] += lambda * arm[0], s->L[1] += lambda * arm[1], s->L[2] += lambda * arm[2];
+    s->w[0] += lambda * spin[0], s->w[1] += lambda * spin[1], s->w[2] += lambda * spin[2];
 }
 
 void tb__soft_pair(tb__contacts *c, int32_t a, int32_t b, double lambda, const double d[3], const double arm_a[3],
@@ -223,7 +218,7 @@ typedef struct soft {
 
 static soft softness(double hertz, double zeta, double hs)
 {
-    const double f = fmin(hertz, 0.25 / hs), omega = 2 * 3.14159265358979323846 * f;
+    const double f = tb__least(hertz, 0.25 / hs), omega = 2 * 3.14159265358979323846 * f;
     const double a1 = 2 * zeta + hs * omega, a2 = hs * omega * a1, a3 = 1 / (1 + a2);
     soft s;
     s.bias_rate = omega / a1;
@@ -238,16 +233,15 @@ static soft softness(double hertz, double zeta, double hs)
 static void turn_patch(tb__contacts *c, const tb__soft_patch *p, const double d[3], const double spin_a[3],
                        const double spin_b[3], double lambda)
 {
-    int k;
-    if (p->b >= 0 && c->bodies[p->b].tier == TB__BODIES) {
+    if (p->b >= 0 && c->soft_bodies[p->b].rotates) {
         tb__soft_body *s = &c->soft_bodies[p->b];
-        for (k = 0; k < 3; ++k)
-            s->L[k] += lambda * d[k], s->w[k] += lambda * spin_b[k];
+        s->L[0] += lambda * d[0], s->L[1] += lambda * d[1], s->L[2] += lambda * d[2];
+        s->w[0] += lambda * spin_b[0], s->w[1] += lambda * spin_b[1], s->w[2] += lambda * spin_b[2];
     }
-    if (p->a >= 0 && c->bodies[p->a].tier == TB__BODIES) {
+    if (p->a >= 0 && c->soft_bodies[p->a].rotates) {
         tb__soft_body *s = &c->soft_bodies[p->a];
-        for (k = 0; k < 3; ++k)
-            s->L[k] -= lambda * d[k], s->w[k] -= lambda * spin_a[k];
+        s->L[0] -= lambda * d[0], s->L[1] -= lambda * d[1], s->L[2] -= lambda * d[2];
+        s->w[0] -= lambda * spin_a[0], s->w[1] -= lambda * spin_a[1], s->w[2] -= lambda * spin_a[2];
     }
 }
 
@@ -294,7 +288,7 @@ static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const so
     } else if (s > 0) {
         return o->impulse;
     } else if (bias) {
-        target = fmax(sf->bias_rate * s, -max_push);
+        target = tb__most(sf->bias_rate * s, -max_push);
         if (!stacked) {
             mass_scale = sf->mass_scale;
             impulse_scale = sf->impulse_scale;
@@ -303,7 +297,7 @@ static double solve_normal(tb__contacts *c, tb__soft_row *o, double hs, const so
         target = 0;
     }
     lambda = -o->mass * mass_scale * (vn + target) - impulse_scale * o->impulse;
-    total = fmax(o->impulse + lambda, 0);
+    total = tb__most(o->impulse + lambda, 0);
     lambda = total - o->impulse;
     o->impulse = total;
     tb__soft_push(c, o, lambda);
@@ -321,13 +315,13 @@ void tb__soft_note(tb__contacts *c, tb__soft_row *o, double vn, double s, double
         const double kick = kick_rate(c, o), u = vn - 0.5 * kick, a = kick / hs;
         double approach = vn;
         if (s > 0) {
-            const double fastest = fmin(u, u + kick);
-            approach = fmax(-sqrt(fmax(u * u - 2 * a * s, 0)), fastest);
+            const double fastest = tb__least(u, u + kick);
+            approach = tb__most(-sqrt(tb__most(u * u - 2 * a * s, 0)), fastest);
         }
         o->struck = 1;
-        o->approach = fmin(approach, 0);
+        o->approach = tb__least(approach, 0);
     }
-    o->most = fmax(o->most, o->impulse);
+    o->most = tb__most(o->most, o->impulse);
 }
 
 /* A pair of rows that share a disc: the accumulated impulse (acc) less
@@ -423,7 +417,7 @@ static int solve_impact(tb__contacts *c, tb__soft_patch *p, double hs, const sof
         sep[i] = tb__soft_separation(c, o), vn[i] = tb__soft_rate(c, o);
         if (p->stacked && sep[i] <= TB__TOUCHING * c->settings.slop)
             return 0; /* its touching points are its island's */
-        target = sep[i] > 0 ? sep[i] / hs : fmax(sf->bias_rate * sep[i], -c->settings.max_push);
+        target = sep[i] > 0 ? sep[i] / hs : tb__most(sf->bias_rate * sep[i], -c->settings.max_push);
         for (j = 0; j < n; ++j)
             a[i][j] = row_coupling(c, o, &c->soft_rows[p->first + j]);
         a[i][i] *= 1 + TB__IMPACT_COMPLIANCE;
@@ -478,7 +472,7 @@ static int solve_patch(tb__contacts *c, tb__soft_patch *p, double hs, const soft
            a roll, up to rho times the normal impulse
            (soft_step_spinning_ball_keeps_its_spin: to the closed form) */
         const double old = p->twist_impulse, most = p->friction * twist_limit + p->rolling * total;
-        const double next = fmin(fmax(old - p->twist_mass * spin(c, p, n), -most), most);
+        const double next = tb__least(tb__most(old - p->twist_mass * spin(c, p, n), -most), most);
         p->twist_impulse = next;
         turn_patch(c, p, n, p->turn_a[0], p->turn_b[0], next - old);
     }
@@ -557,6 +551,8 @@ static void load(tb_world *w, tb__contacts *c, int n)
         const tb__solver_body *b = &c->bodies[i];
         tb__soft_body *s = &c->soft_bodies[i];
         int k;
+        s->inv_mass = b->inv_mass;
+        s->rotates = b->tier == TB__BODIES;
         memcpy(s->x, b->x0, sizeof s->x);
         memcpy(s->q, b->q0, sizeof s->q);
         memset(s->shift, 0, sizeof s->shift);
@@ -897,7 +893,7 @@ static void drift(tb__contacts *c, double hs)
    a negative t: never. */
 static double impact_time(double s, double u, double a, double *speed)
 {
-    const double disc = u * u - 2 * a * s, root = sqrt(fmax(disc, 0));
+    const double disc = u * u - 2 * a * s, root = sqrt(tb__most(disc, 0));
     *speed = root;
     return disc >= 0 && root - u > 0 ? 2 * s / (root - u) : -1;
 }
@@ -906,7 +902,7 @@ static int impacts(tb__contacts *c, double hs)
 {
     /* with a threshold of 0, a point must still approach by more than
        rounding to be met again, or the passes would not end */
-    const double threshold = fmax(c->settings.restitution_threshold, 1e-9);
+    const double threshold = tb__most(c->settings.restitution_threshold, 1e-9);
     size_t i;
     int round, any = 0, changed = 1;
     for (i = 0; i < c->body_count; ++i)
@@ -941,7 +937,7 @@ static int impacts(tb__contacts *c, double hs)
                 const double tb = o->b >= 0 ? c->soft_bodies[o->b].struck_at : -1;
                 if (ta < 0 && tb < 0)
                     continue;
-                tau = fmax(ta, tb);
+                tau = tb__most(ta, tb);
                 target = -o->restitution * vn;
                 speed = -vn;
             }
@@ -1009,7 +1005,7 @@ static void restitution(tb__contacts *c)
         if (o->restitution == 0 || o->bounced || !o->struck || o->approach > -threshold || o->most == 0)
             continue;
         lambda = -o->mass * (tb__soft_rate(c, o) + o->restitution * o->approach);
-        total = fmax(o->impulse + lambda, 0);
+        total = tb__most(o->impulse + lambda, 0);
         tb__soft_push(c, o, total - o->impulse);
         o->impulse = total;
     }
@@ -1040,7 +1036,7 @@ static void store(tb_world *w, tb__contacts *c, int n)
     }
     memset(c->motion, 0, TB__MOTION * (c->body_count + 1) * sizeof *c->motion);
     /* the impulses of the step, for the next one's warm start (+ 0.0: a
-       zero kept as +0, whichever sign the clamps' fmax gave it, which a
+       zero kept as +0, whichever sign the clamps (tb__most) gave it, which a
        compiler may choose either way: the state hash reads the bits,
        test_snapshot.contact_scene_hash_is_recorded); a point touches if
        its normal row pushed in some substep */
@@ -1048,7 +1044,7 @@ static void store(tb_world *w, tb__contacts *c, int n)
         const tb__soft_row *o = &c->soft_rows[i];
         tb__point *p = o->point;
         int k;
-        p->normal_impulse = n * fmax(o->impulse - o->settled, 0) + 0.0;
+        p->normal_impulse = n * tb__most(o->impulse - o->settled, 0) + 0.0;
         for (k = 0; k < 3; ++k)
             p->friction_impulse[k] = 0;
         p->active = o->most > 0 || o->bounced; /* a bounce alone touched too */

@@ -7,10 +7,29 @@
 
 #include "contacts/contacts.h"
 
+/* The larger and the smaller of a and b, b when they compare equal (so
+   the sign of a zero is b's), a NaN never chosen over a number: fmax and
+   fmin as the solver's loops use them, inlined (a library call each
+   otherwise). */
+static inline double tb__most(double a, double b)
+{
+    return a > b || b != b ? a : b;
+}
+
+static inline double tb__least(double a, double b)
+{
+    return a < b || b != b ? a : b;
+}
+
+/* The fields every row's impulse reads and writes come first, together
+   (apply in soft_step.c; an impulse read the inverse mass from
+   tb__solver_body before, a second struct of 312 bytes). */
 typedef struct tb__soft_body {
-    double x[3], q[4];          /* m: pose now */
-    double P[3], L[3];          /* N s, N m s: momenta now (particles: P only) */
     double v[3], w[3];          /* m/s, rad/s: velocities now */
+    double P[3], L[3];          /* N s, N m s: momenta now (particles: P only) */
+    double inv_mass;            /* 1/kg: the solver body's */
+    int rotates;                /* a body (not a particle): it has L and w */
+    double x[3], q[4];          /* m: pose now */
     double kick_p[3], kick_l[3];/* N s, N m s: external change of P, L per substep */
     double inv_world[9];        /* R diag(invI) R^T at q (0 for particles) */
     double shift[3];            /* m: x - x0 */

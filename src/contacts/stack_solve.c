@@ -55,6 +55,16 @@
 #define TB__STACK_COMPLIANCE 1e-3
 #define TB__NONE ((size_t)-1)
 
+/* A row of the band, by its code: a point's normal row (code < the soft
+   rows' count), or one of a patch's two friction rows at its centre
+   (2 codes a patch after them) */
+typedef struct band_row {
+    int32_t a, b;
+    const double *dir, *arm_a, *arm_b, *spin_a, *spin_b;
+    double *impulse;
+    tb__soft_patch *patch;      /* a friction row's patch; NULL: a normal row */
+} band_row;
+
 struct tb__stacks {
     size_t island_count;
     size_t *island_start;      /* [island_count + 1]: island k's rows are at
@@ -67,6 +77,7 @@ struct tb__stacks {
     double *res, *dir, *pre, *image; /* conjugate gradients (solve_rigid): residual, direction,
                                         preconditioned residual, the matrix times the direction */
     double *before;            /* the impulses a solve started from */
+    band_row *views;           /* each position's row (view), found once a step */
     size_t *member_start;      /* [island_count + 1]: island k's bodies are members[member_start[k]
                                   .. member_start[k + 1]) */
     int32_t *members;
@@ -107,10 +118,10 @@ static void groups(struct tb__stacks *s, group g[TB__GROUPS])
                            sizeof(double), sizeof(double), sizeof(double), 1, 1, 1, 1 },
                          12, &s->row_cap };
     const group scratch = { { (void **)&s->res, (void **)&s->dir, (void **)&s->pre, (void **)&s->image,
-                              (void **)&s->before, (void **)&s->member_start },
+                              (void **)&s->before, (void **)&s->member_start, (void **)&s->views },
                             { sizeof(double), sizeof(double), sizeof(double), sizeof(double), sizeof(double),
-                              sizeof(size_t) },
-                            6, &s->scratch_cap };
+                              sizeof(size_t), sizeof(band_row) },
+                            7, &s->scratch_cap };
     const group bodies = { { (void **)&s->body_start, (void **)&s->body_order, (void **)&s->queue,
                              (void **)&s->members },
                            { sizeof(size_t), sizeof(int32_t), sizeof(int32_t), sizeof(int32_t) }, 4, &s->body_cap };
@@ -134,16 +145,6 @@ static tb_status reserve(tb_world *w, struct tb__stacks *s, size_t rows, size_t 
         }
     return tb__reserve(w, (void **)&s->body_rows, &s->link_cap, 2 * rows, sizeof *s->body_rows);
 }
-
-/* A row of the band, by its code: a point's normal row (code < the soft
-   rows' count), or one of a patch's two friction rows at its centre
-   (2 codes a patch after them) */
-typedef struct band_row {
-    int32_t a, b;
-    const double *dir, *arm_a, *arm_b, *spin_a, *spin_b;
-    double *impulse;
-    tb__soft_patch *patch;      /* a friction row's patch; NULL: a normal row */
-} band_row;
 
 static band_row view(const tb__contacts *c, size_t code)
 {
@@ -218,7 +219,7 @@ static void assemble(tb__contacts *c, struct tb__stacks *s, size_t k)
     for (i = from; i < to; ++i)
         memset(s->a + s->offset[i], 0, (i - s->first[i] + 1) * sizeof *s->a);
     for (i = from; i < to; ++i) {
-        const band_row o = view(c, s->order[i]);
+        const band_row o = s->views[i];
         int side;
         for (side = 0; side < 2; ++side) {
             const int32_t b = side ? o.b : o.a;
@@ -227,7 +228,7 @@ static void assemble(tb__contacts *c, struct tb__stacks *s, size_t k)
             for (m = s->body_start[b]; m < s->body_start[b + 1]; ++m) {
                 n = s->position[s->body_rows[m]];
                 if (n <= i) {
-                    const band_row q = view(c, s->order[n]);
+                    const band_row q = s->views[n];
                     s->a[s->offset[i] + n - s->first[i]] += coupling(c, &o, &q, b);
                 }
             }
@@ -450,6 +451,8 @@ tb_status tb__stacks_set_up(tb_world *w, tb__contacts *c)
         s->island_count = 0;
         return st;
     }
+    for (i = 0; i < placed; ++i)
+        s->views[i] = view(c, s->order[i]);
     for (k = 0; k < s->island_count; ++k)
         assemble(c, s, k);
     for (i = 0; i < c->soft_patch_count; ++i) {
@@ -569,7 +572,7 @@ static double patch_press(const tb__contacts *c, const struct tb__stacks *s, con
     for (k = 0; k < p->count; ++k) {
         const tb__soft_row *o = &c->soft_rows[p->first + k];
         const size_t at = s->position[p->first + k];
-        n += (at != TB__NONE && s->solved[at] ? fmax(s->x[at], 0) : o->impulse) + o->bounce;
+        n += (at != TB__NONE && s->solved[at] ? tb__most(s->x[at], 0) : o->impulse) + o->bounce;
     }
     return n;
 }
@@ -629,17 +632,17 @@ static void solve_rigid(struct tb__stacks *s, size_t k)
     int it;
     for (i = from; i < to; ++i) {
         s->res[i] = s->x[i];
-        scale = fmax(scale, fabs(s->x[i]));
+        scale = tb__most(scale, fabs(s->x[i]));
     }
     substitute(s, k);
     band_times(s, k, s->x, s->image);
     for (i = from; i < to; ++i) {
         s->res[i] = s->solved[i] ? s->res[i] - s->image[i] : 0;
         s->pre[i] = s->res[i];
-        least = fmax(least, fabs(s->res[i]));
+        least = tb__most(least, fabs(s->res[i]));
     }
     /* met to a nanometre a second, or to rounding */
-    enough = fmax(1e-9, 1e-13 * scale);
+    enough = tb__most(1e-9, 1e-13 * scale);
     if (least <= enough)
         return;
     substitute_into(s, k, s->pre);
@@ -660,7 +663,7 @@ static void solve_rigid(struct tb__stacks *s, size_t k)
             break;
         alpha = rz / pq;
         for (i = from; i < to; ++i)
-            most = fmax(most, fabs(s->res[i] - alpha * s->image[i]));
+            most = tb__most(most, fabs(s->res[i] - alpha * s->image[i]));
         /* a step that does not halve the residual has met what the rows
            cannot be given (rounding beyond what a motion can meet):
            the iterate stands, as along the rows' redundant directions
@@ -703,7 +706,7 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
     size_t i, round;
     int changed = 1, closing = 0;
     for (i = from; i < to; ++i) {
-        const band_row v = view(c, s->order[i]);
+        const band_row v = s->views[i];
         s->vn0[i] = band_rate(c, &v);
         s->solved[i] = v.patch ? sticks(c, v.patch) : closes(c, s, i, hs, touch, 1, bias);
     }
@@ -715,7 +718,7 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
             return closing;
         }
         for (i = from; i < to; ++i) {
-            const band_row v = view(c, s->order[i]);
+            const band_row v = s->views[i];
             const double gap = s->solved[i] ? allowed(c, s, i, hs, bias) : 0;
             s->x[i] = s->solved[i] ? -band_rate(c, &v) - gap : 0;
             closing |= gap > 0;
@@ -731,12 +734,12 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
         solve_rigid(s, k);
         for (i = from; i < to; ++i)
             if (s->solved[i])
-                s->x[i] += *view(c, s->order[i]).impulse;
+                s->x[i] += *s->views[i].impulse;
         /* a point solved to pull lets go; in the last round the solve
            stands, cut at no pull (the next solve of the substep starts
            from it) */
         for (i = from; i < to && !last; ++i) {
-            const band_row v = view(c, s->order[i]);
+            const band_row v = s->views[i];
             if (!v.patch && s->solved[i] && s->x[i] < -tiny * (c->soft_rows[s->order[i]].mass + 1)) {
                 s->solved[i] = 0;
                 changed = 1;
@@ -748,7 +751,7 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
             continue;
         /* friction beyond its cone slides, held at the cone's edge */
         for (i = from; i + 1 < to; ++i) {
-            const band_row v = view(c, s->order[i]);
+            const band_row v = s->views[i];
             tb__soft_patch *p = v.patch;
             double f, most, cut;
             int d;
@@ -762,7 +765,7 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
                 continue;
             cut = f > 0 ? most / f : 0;
             for (d = 0; d < 2; ++d) {
-                const band_row w = view(c, s->order[i + d]);
+                const band_row w = s->views[i + d];
                 const double held = s->x[i + d] * cut;
                 band_push(c, &w, held - *w.impulse);
                 *w.impulse = held;
@@ -773,8 +776,8 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
         if (changed)
             continue;
         for (i = from; i < to; ++i) {
-            const band_row v = view(c, s->order[i]);
-            const double total = v.patch ? s->x[i] : fmax(s->x[i], 0);
+            const band_row v = s->views[i];
+            const double total = v.patch ? s->x[i] : tb__most(s->x[i], 0);
             if (!s->solved[i])
                 continue;
             band_push(c, &v, total - *v.impulse);
@@ -782,7 +785,7 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
         }
         /* a touching point let go that now approaches is taken in */
         for (i = from; i < to; ++i) {
-            const band_row v = view(c, s->order[i]);
+            const band_row v = s->views[i];
             if (s->solved[i] || v.patch)
                 continue;
             if (closes(c, s, i, hs, touch, 0, bias)) {
@@ -826,11 +829,11 @@ static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double
     if (bias) {
         const double energy = island_energy(c, s, k);
         for (i = from; i < to; ++i)
-            s->before[i] = *view(c, s->order[i]).impulse;
+            s->before[i] = *s->views[i].impulse;
         if (solve_island_once(c, s, k, hs, 1) && !s->given_up[k] &&
             island_energy(c, s, k) > energy * (1 + 1e-9) + 1e-14) {
             for (i = from; i < to; ++i) {
-                const band_row v = view(c, s->order[i]);
+                const band_row v = s->views[i];
                 band_push(c, &v, s->before[i] - *v.impulse);
                 *v.impulse = s->before[i];
             }
@@ -882,21 +885,21 @@ void tb__stacks_push(tb__contacts *c, double bias_rate, int sign)
         if (sign < 0) {
             for (i = from; i < to; ++i)
                 if (s->push[i] != 0) {
-                    const band_row v = view(c, s->order[i]);
+                    const band_row v = s->views[i];
                     band_push(c, &v, -s->push[i]);
                 }
             continue;
         }
         for (i = from; i < to; ++i) {
             const double sep = s->order[i] < c->soft_row_count ? tb__soft_separation(c, &c->soft_rows[s->order[i]]) : 0;
-            s->x[i] = s->solved[i] && sep < touch ? -fmax(bias_rate * sep, -max_push) : 0;
+            s->x[i] = s->solved[i] && sep < touch ? -tb__most(bias_rate * sep, -max_push) : 0;
         }
         level_patches(c, s, k);
         substitute(s, k);
         for (i = from; i < to; ++i) {
             s->push[i] = s->solved[i] ? s->x[i] : 0;
             if (s->push[i] != 0) {
-                const band_row v = view(c, s->order[i]);
+                const band_row v = s->views[i];
                 band_push(c, &v, s->push[i]);
             }
         }
