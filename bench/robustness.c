@@ -35,13 +35,20 @@
      capsules with rolling resistance 0.05 of their radius, onto the ground:
      when the last body falls asleep (target: within 20 s), the fastest
      body and any centre below the floor.
+   - bridge: three boxes from the heap as they lay at 19 s (poses to the
+     last digit), a 113 kg box laid across two others on one corner of
+     each, all three on the ground, kept awake 20 s: how often the top
+     box's rest is reset (|v| + |w| times its half diagonal rising past
+     the sleep speed after it was below) and when it last was, and the
+     boxes' largest kinetic energy after 10 s (target: at rest within
+     a second or two, as it falls onto a third corner; no reset after).
    - cradle: 5 touching balls (1 kg, r = 0.1 m, restitution 1, no gravity,
      no friction) struck end-on at 1 m/s: the last ball's speed and the
      energy after 1 s, as shares of the striker's (target: >= 95% and
      within 5%, never above).
 
    Each scene prints its mean milliseconds per step too. Scene names
-   (wall, tallwall, tower, lever, plate, cradle, heap) on the command line run only
+   (wall, tallwall, tower, lever, plate, bridge, cradle, heap) on the command line run only
    those; --substeps=N runs them under the soft-step solver with N
    substeps (the default settings: 4; 0: the sweeps), and --hertz=F sets its contact stiffness (F = 0: a quarter of
    the substep rate, the stiffest it allows). */
@@ -466,6 +473,58 @@ static void heap(int count)
     tb_world_destroy(w);
 }
 
+/* ---------------------------------------------------------------- bridge -- */
+
+/* The heap's box 304 of 500 (docs/notes.md, "A box rocking on two
+   corners") on its two supports, 56 and 184: position, orientation (w, x,
+   y, z), half extents */
+static const double BRIDGE[3][10] = {
+    { -3.4511684436423731, 2.4798052644161608, 0.57810428672741243, -0.60525992118936112, 0.41329601418254786,
+      -0.56067537968134917, -0.3853439386857444, 0.27103454111600134, 0.2486964318183551, 0.21014597811792565 },
+    { -2.9811100232981085, 2.4023306555676807, 0.16432440522538311, 0.0093560484185105947, 0.012660970887329592,
+      -0.70763700997492196, -0.70640075473341113, 0.18996807681507222, 0.16467683148478443, 0.27162024693041942 },
+    { -3.9071323742333011, 2.4919471796091224, 0.14258862969679842, 0.56916542335438469, -0.41899061134116666,
+      0.5694697441683324, 0.41976398004430227, 0.14321479440194843, 0.26542033862712555, 0.18640004763695872 }
+};
+
+static void bridge(void)
+{
+    tb_world *w = new_world(G);
+    tb_body_id ids[3];
+    double ms = 0, rest = 0, reach, most = 0, last_reset = 0;
+    long steps = 0;
+    int i, resets = 0;
+    add_ground(w);
+    set_awake(w, 0);
+    for (i = 0; i < 3; ++i) {
+        const double size[3] = { 2 * BRIDGE[i][7], 2 * BRIDGE[i][8], 2 * BRIDGE[i][9] };
+        ids[i] = add_box(w, size, 1000 * size[0] * size[1] * size[2], BRIDGE[i], BRIDGE[i] + 3, 0);
+    }
+    reach = norm3(BRIDGE[0] + 7);
+    for (i = 1; i <= 20 * 60; ++i) {
+        double v[3], om[3], speed;
+        run(w, 1, &ms, &steps);
+        check(tb_body_velocity(w, ids[0], v), w, "top box");
+        check(tb_body_angular_velocity(w, ids[0], om), w, "top box");
+        speed = norm3(v) + norm3(om) * reach;
+        if (speed < tb_default_contact_settings().sleep_speed) {
+            rest += H;
+        } else {
+            if (rest > 0)
+                ++resets, last_reset = i * H;
+            rest = 0;
+        }
+        if (i > 10 * 60) {
+            const tb_energy e = tb_world_energy(w);
+            most = fmax(most, e.kinetic + e.rotational);
+        }
+    }
+    printf("bridge    a box across two on one corner each, awake: its rest reset %d times, the last at %.2f s, "
+           "the boxes' largest kinetic energy after 10 s %.4f J, %.3f ms/step\n",
+           resets, last_reset, most, ms / (double)steps);
+    tb_world_destroy(w);
+}
+
 /* ---------------------------------------------------------------- cradle -- */
 
 static void cradle(int balls)
@@ -549,6 +608,8 @@ int main(int argc, char **argv)
     }
     if (wanted(argc, argv, "plate"))
         plate(100);
+    if (wanted(argc, argv, "bridge"))
+        bridge();
     if (wanted(argc, argv, "cradle")) {
         cradle(2);
         cradle(5);
