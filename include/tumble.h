@@ -451,11 +451,15 @@ TB_API double tb_world_deepest_overlap(const tb_world *world);
    sleep_time falls asleep: it keeps its pose with zero velocity, costs no
    narrowphase and no solver work (the integrator still passes over it),
    and is static ground for slow particles. It
-   wakes, whole, when an awake body's bounds (or a particle faster than
-   sleep_speed) reach it, when any of its state is set or a force or torque
-   applied, when one of its bodies is removed, and when gravity, shapes or
-   contact settings change (test_contacts_sleep.every_listed_trigger_wakes_an_island,
-   resting_box_falls_asleep_and_stays_put, islands_wake_together). Worlds
+   wakes, whole, when the bounds of an awake body that is not resting (it
+   was not slower than sleep_speed last step, or was just added, set or
+   woken) or of a particle faster than sleep_speed reach it, when any of
+   its state is set or a force or torque applied, when one of its bodies
+   is removed, and when gravity, shapes or contact settings change
+   (test_contacts_sleep.every_listed_trigger_wakes_an_island,
+   resting_box_falls_asleep_and_stays_put, islands_wake_together); an
+   awake body at rest beside it does not wake it
+   (test_contacts_sleep.resting_neighbours_let_an_island_sleep). Worlds
    with force callbacks never sleep: a callback's force is unknown to the
    rest test (test_contacts_sleep.sleep_settings). */
 TB_API tb_status tb_body_asleep(const tb_world *world, tb_body_id id, int *asleep);

@@ -88,12 +88,16 @@ static double clampd(double x, double lo, double hi) { return x < lo ? lo : x > 
 static double sign_of(double x) { return x < 0 ? -1.0 : 1.0; }
 
 /* The separating axis tests keep a face axis unless another axis is clearly
-   better, so that rounding noise in a resting stack does not flip the
-   reference face (and the features with it) from step to step
-   (test_collide.small_moves_keep_the_features). */
-static int clearly_better(double sep, double than, double size)
+   better: by more than the tolerance (a length), a share of the depth and
+   a share of the size. So rounding noise in a resting stack does not flip
+   the reference face (and the features with it) from step to step
+   (test_collide.small_moves_keep_the_features), and an edge lying along a
+   face within the tolerance meets it as a face, the points at both ends
+   of the line, not as one edge point that jumps from end to end as the
+   bodies rock (test_collide.edge_along_a_face_is_a_line_of_points). */
+static int clearly_better(double sep, double than, double size, double tolerance)
 {
-    return sep > than + 0.05 * fabs(than) + 1e-5 * size;
+    return sep > than + 0.05 * fabs(than) + 1e-5 * size + tolerance;
 }
 
 /* Column j of a row-major rotation: the shape's axis j in the world. */
@@ -278,16 +282,18 @@ static void reduce(const tb__candidate *c, int n, const double normal[3], double
 
 /* ------------------------------------------------------- round shapes -- */
 
-static void sphere_sphere(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
+static void sphere_sphere(const tb__geom *a, const tb__geom *b, double margin, double tolerance, tb__manifold *m)
 {
+    (void)tolerance;
     static const double up[3] = { 0, 0, 1 };
     double pos[3], sep;
     round_pair(a->pos, a->radius, b->pos, b->radius, up, m->normal, &sep, pos);
     add_point(m, margin, pos, sep, 0);
 }
 
-static void sphere_capsule(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
+static void sphere_capsule(const tb__geom *a, const tb__geom *b, double margin, double tolerance, tb__manifold *m)
 {
+    (void)tolerance;
     double p0[3], d[3], q[3], r[3], perp[3], pos[3], sep;
     segment(b, p0, d);
     closest_on_segment(p0, d, a->pos, q);
@@ -297,8 +303,9 @@ static void sphere_capsule(const tb__geom *a, const tb__geom *b, double margin, 
     add_point(m, margin, pos, sep, 0);
 }
 
-static void capsule_capsule(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
+static void capsule_capsule(const tb__geom *a, const tb__geom *b, double margin, double tolerance, tb__manifold *m)
 {
+    (void)tolerance;
     double pa[3], da[3], pb[3], db[3], ua[3], ub[3], c[3], ab[3], p[3], q[3], pos[3], sep, s, t;
     segment(a, pa, da);
     segment(b, pb, db);
@@ -354,8 +361,9 @@ static void point_plane(const double p[3], double r, const tb__geom *b, double m
     add_point(m, margin, pos, dist - r, feature);
 }
 
-static void round_plane(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
+static void round_plane(const tb__geom *a, const tb__geom *b, double margin, double tolerance, tb__manifold *m)
 {
+    (void)tolerance;
     scale(b->normal, -1, m->normal);
     if (a->kind == TB__SHAPE_SPHERE) {
         point_plane(a->pos, a->radius, b, margin, 0, m);
@@ -382,8 +390,9 @@ static void box_corner(const tb__geom *g, int i, double out[3])
    (every corner below it) keeps both its ends. The 4 deepest of all 8
    corners can be one end of such a box, top and bottom, and a push there
    only turns it (test_collide.buried_plank_keeps_both_ends). */
-static void box_plane(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
+static void box_plane(const tb__geom *a, const tb__geom *b, double margin, double tolerance, tb__manifold *m)
 {
+    (void)tolerance;
     tb__candidate c[4];
     double along[3];
     int i, j, k = 0, n = 0, side;
@@ -418,8 +427,9 @@ static void box_plane(const tb__geom *a, const tb__geom *b, double margin, tb__m
 
 /* Sphere centre outside the box: to its closest point; inside: out through
    the face it is least deep behind. */
-static void sphere_box(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
+static void sphere_box(const tb__geom *a, const tb__geom *b, double margin, double tolerance, tb__manifold *m)
 {
+    (void)tolerance;
     const double *h = b->half;
     double l[3], q[3], d[3], n[3], sa[3], pos[3], sep;
     int i, k = 0;
@@ -545,7 +555,7 @@ static double closest_segment_box(const double p0[3], const double d[3], const d
    Minkowski sum, so the least penetration is exact). A face gives the core
    clipped to it; an edge, one point between the core and the edge. */
 static void capsule_in_box(const double p0[3], const double d[3], double r, const tb__geom *b, double margin,
-                           tb__manifold *m)
+                           double tolerance, tb__manifold *m)
 {
     const double *h = b->half;
     double c[3], u[3], L[3], n[3], p[3], q[3], diff[3], pos[3];
@@ -567,7 +577,7 @@ static void capsule_in_box(const double p0[3], const double d[3], double r, cons
         if (se > edge_sep)
             edge_sep = se, edge = i, scale(L, -sign_of(dot(c, L)), edge_n);
     }
-    if (edge < 0 || !clearly_better(edge_sep, face_sep, h[0] + h[1] + h[2] + hl)) {
+    if (edge < 0 || !clearly_better(edge_sep, face_sep, h[0] + h[1] + h[2] + hl, tolerance)) {
         memset(n, 0, sizeof n);
         n[face] = -sign_of(c[face]);
         to_world(b, n, 0, m->normal);
@@ -592,7 +602,7 @@ static void capsule_in_box(const double p0[3], const double d[3], double r, cons
 
 /* Capsule core clear of the box: its exact closest points, or two points
    when it lies over a face; core inside: capsule_in_box. */
-static void capsule_box(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
+static void capsule_box(const tb__geom *a, const tb__geom *b, double margin, double tolerance, tb__manifold *m)
 {
     const double *h = b->half, r = a->radius;
     double p0[3], d[3], p[3], q[3], diff[3], n[3], pos[3];
@@ -620,7 +630,7 @@ static void capsule_box(const tb__geom *a, const tb__geom *b, double margin, tb_
         to_world(b, n, 0, m->normal);
         return;
     }
-    capsule_in_box(p0, d, r, b, margin, m);
+    capsule_in_box(p0, d, r, b, margin, tolerance, m);
 }
 
 /* ------------------------------------------------------- box and box -- */
@@ -767,7 +777,7 @@ static void box_edge(const tb__box *a, const tb__box *b, int i, int j, const dou
 /* Separating axes: 3 face normals of each box and the 9 cross products of
    their edges; a face of a is kept unless a face of b or an edge pair is
    clearly better. */
-static void box_box(const tb__geom *ga, const tb__geom *gb, double margin, tb__manifold *m)
+static void box_box(const tb__geom *ga, const tb__geom *gb, double margin, double tolerance, tb__manifold *m)
 {
     tb__box a, b;
     double d[3], L[3], edge_L[3] = { 0, 0, 0 };
@@ -800,8 +810,8 @@ static void box_box(const tb__geom *ga, const tb__geom *gb, double margin, tb__m
     if (!(sep_a < margin && sep_b < margin && sep_e < margin))
         return;
     const double size = a.h[0] + a.h[1] + a.h[2] + b.h[0] + b.h[1] + b.h[2];
-    const int use_b = clearly_better(sep_b, sep_a, size);
-    if (ea < 0 || !clearly_better(sep_e, use_b ? sep_b : sep_a, size)) {
+    const int use_b = clearly_better(sep_b, sep_a, size, tolerance);
+    if (ea < 0 || !clearly_better(sep_e, use_b ? sep_b : sep_a, size, tolerance)) {
         if (use_b)
             box_face(&b, &a, fb, 1, margin, m);
         else
@@ -817,7 +827,7 @@ static void box_box(const tb__geom *ga, const tb__geom *gb, double margin, tb__m
 
 /* ----------------------------------------------------------- dispatch -- */
 
-typedef void tb__pair_fn(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m);
+typedef void tb__pair_fn(const tb__geom *a, const tb__geom *b, double margin, double tolerance, tb__manifold *m);
 
 /* By the kinds of a and b, a's kind not after b's; plane and plane: none. */
 static tb__pair_fn *const pair_fns[TB__SHAPE_KINDS][TB__SHAPE_KINDS] = {
@@ -849,7 +859,7 @@ static double bounding_radius(const tb__geom *g)
     }
 }
 
-int tb__collide(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m)
+int tb__collide(const tb__geom *a, const tb__geom *b, double margin, double tolerance, tb__manifold *m)
 {
     const double reach = bounding_radius(a) + bounding_radius(b) + margin;
     tb__geom ca, cb;
@@ -864,9 +874,9 @@ int tb__collide(const tb__geom *a, const tb__geom *b, double margin, tb__manifol
     b = as_sphere(b, &cb);
     if (a->kind <= b->kind) {
         if (pair_fns[a->kind][b->kind])
-            pair_fns[a->kind][b->kind](a, b, margin, m);
+            pair_fns[a->kind][b->kind](a, b, margin, tolerance, m);
     } else if (pair_fns[b->kind][a->kind]) {
-        pair_fns[b->kind][a->kind](b, a, margin, m);
+        pair_fns[b->kind][a->kind](b, a, margin, tolerance, m);
         scale(m->normal, -1, m->normal);
     }
     return m->count;

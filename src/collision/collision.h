@@ -57,8 +57,10 @@ typedef struct tb__manifold {
 
 /* Fill m with the contact points of a and b closer than margin (m >= 0);
    returns m->count (m->normal means nothing when it is 0). Plane against
-   plane gives 0. */
-int tb__collide(const tb__geom *a, const tb__geom *b, double margin, tb__manifold *m);
+   plane gives 0. A face is the reference unless another axis separates
+   the shapes by more than tolerance (m >= 0) beyond it: an edge lying
+   along a face within it gives the points of the line, not one. */
+int tb__collide(const tb__geom *a, const tb__geom *b, double margin, double tolerance, tb__manifold *m);
 
 /* The axis-aligned box around g, tight for every kind but the plane, which
    gets all of space (+-HUGE_VAL). */

@@ -547,7 +547,7 @@ static tb_status collide_pair(tb_world *w, tb__contacts *c, const tb__geom *a, c
         old = previous_entry(c, key_a, key_b);
         kept = old && old->cached && reuse(c, a, b, pb, old, &m);
     }
-    if (!kept && !tb__collide(a, b, margin, &m))
+    if (!kept && !tb__collide(a, b, margin, TB__FACE_TOLERANCE * c->settings.slop, &m))
         return TB_OK;
     if ((st = add_entry(w, c, pa, pb, &m, old, shapes)) != TB_OK || c->entry_count == before)
         return st;

@@ -57,7 +57,7 @@ static double distance(const tb__shape *moving, const double x[3], const double 
     double deepest = -margin;
     int k;
     tb__place_shape(moving, x, q, &g);
-    if (tb__collide(&g, fixed, margin, &m) == 0)
+    if (tb__collide(&g, fixed, margin, 0, &m) == 0) /* no face tolerance: the best axis */
         return margin;
     for (k = 0; k < m.count; ++k)
         deepest = fmax(deepest, m.point[k].depth);

@@ -36,15 +36,21 @@ uint32_t tb__proxy_island(const tb_world *w, const tb__contacts *c, size_t k)
     return c->owner[k] ? w->body_island[c->owner[k] - 1] : 0;
 }
 
-/* Does proxy k move this step (an awake body, or a particle faster than
-   the sleep speed)? */
+/* Does proxy k move this step: an awake body that is not resting (its
+   rest time is 0: it was not slower than the sleep speed last step, or it
+   was just added, set or woken), or a particle faster than the sleep
+   speed? An awake body at rest beside a sleeping island does not wake it:
+   in a heap of separate islands a few millimetres apart, each island
+   falling asleep was woken by a resting neighbour not yet asleep, and
+   that one in turn, so the heap never slept all at once
+   (test_contacts_sleep.resting_neighbours_let_an_island_sleep). */
 static int moving(const tb_world *w, const tb__contacts *c, size_t k)
 {
     if (c->proxy[k] & TB__PARTICLE_KEY) {
         const double *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * (c->proxy[k] & ~TB__PARTICLE_KEY);
         return tb__norm3(v) > c->settings.sleep_speed;
     }
-    return c->owner[k] && !w->body_island[c->owner[k] - 1];
+    return c->owner[k] && !w->body_island[c->owner[k] - 1] && w->body_rest[c->owner[k] - 1] == 0;
 }
 
 int tb__sleep_wakes(const tb_world *w, const tb__contacts *c)

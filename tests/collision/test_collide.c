@@ -255,7 +255,7 @@ static void sphere_sphere_exact(void **state)
     const tb__geom a = sphere(0.1, -0.2, 0.3, 1), b = sphere(1.2, 0.5, 0.1, 0.7);
     tb__manifold m;
     const double d[3] = { 1.1, 0.7, -0.2 }, L = norm3(d);
-    assert_int_equal(tb__collide(&a, &b, 0, &m), 1);
+    assert_int_equal(tb__collide(&a, &b, 0, 0, &m), 1);
     assert_vec(m.normal, d[0] / L, d[1] / L, d[2] / L, TOL);
     assert_rel(m.point[0].depth, 1.7 - L, TOL);
     /* Midway between the surfaces: a's surface at ra along n, b's at L - rb. */
@@ -273,21 +273,21 @@ static void coincident_centres_give_a_fixed_axis(void **state)
     for (i = 0; i < 3; ++i)
         for (j = 0; j < 3; ++j) {
             tb__manifold m, m2;
-            assert_true(tb__collide(&shapes[i], &shapes[j], 0, &m) >= 1);
+            assert_true(tb__collide(&shapes[i], &shapes[j], 0, 0, &m) >= 1);
             assert_true(finite_manifold(&m));
             assert_rel(norm3(m.normal), 1, TOL);
             assert_true(deepest(&m) > 0);
             /* A fixed axis: the same answer again. */
-            tb__collide(&shapes[i], &shapes[j], 0, &m2);
+            tb__collide(&shapes[i], &shapes[j], 0, 0, &m2);
             assert_memory_equal(&m, &m2, sizeof m);
         }
     tb__manifold m;
     const tb__geom a = sphere(0, 0, 0, 1), b = sphere(0, 0, 0, 2);
-    tb__collide(&a, &b, 0, &m);
+    tb__collide(&a, &b, 0, 0, &m);
     assert_rel(m.point[0].depth, 3, TOL);
     /* A sphere at the centre of a box leaves through the nearest face. */
     const tb__geom s = sphere(1, 2, 3, 0.1), bx = box(1, 2, 3, ID, 0.5, 0.3, 0.4);
-    tb__collide(&s, &bx, 0, &m);
+    tb__collide(&s, &bx, 0, 0, &m);
     assert_rel(m.point[0].depth, 0.4, TOL);
     assert_rel(fabs(m.normal[1]), 1, TOL);
 }
@@ -297,7 +297,7 @@ static void sphere_rests_on_plane(void **state)
     (void)state;
     const tb__geom s = sphere(0.3, 0.4, 0.99, 1), p = plane(0, 0, 1, 0);
     tb__manifold m;
-    assert_int_equal(tb__collide(&s, &p, 0, &m), 1);
+    assert_int_equal(tb__collide(&s, &p, 0, 0, &m), 1);
     assert_vec(m.normal, 0, 0, -1, 0);
     assert_rel(m.point[0].depth, 0.01, 1e-12);
     assert_vec(m.point[0].pos, 0.3, 0.4, -0.005, TOL);
@@ -306,7 +306,7 @@ static void sphere_rests_on_plane(void **state)
     const tb__geom t = plane(1, 1, 1, 2 / sqrt(3.0));
     const double n = 1 / sqrt(3.0);
     const tb__geom s2 = sphere(0.5 * n, 0.5 * n, 2 + 0.5 * n, 1);
-    assert_int_equal(tb__collide(&s2, &t, 0, &m), 1);
+    assert_int_equal(tb__collide(&s2, &t, 0, 0, &m), 1);
     assert_rel(m.point[0].depth, 0.5, 1e-12);
     assert_vec(m.point[0].pos, -0.25 * n, -0.25 * n, 2 - 0.25 * n, TOL);
 }
@@ -316,27 +316,27 @@ static void margin_gives_speculative_points(void **state)
     (void)state;
     tb__manifold m;
     const tb__geom a = sphere(0, 0, 0, 1), b = sphere(2.01, 0, 0, 1);
-    assert_int_equal(tb__collide(&a, &b, 0.02, &m), 1);
+    assert_int_equal(tb__collide(&a, &b, 0.02, 0, &m), 1);
     assert_rel(m.point[0].depth, -0.01, 1e-12);
-    assert_int_equal(tb__collide(&a, &b, 0.005, &m), 0);
-    assert_int_equal(tb__collide(&a, &b, 0, &m), 0);
+    assert_int_equal(tb__collide(&a, &b, 0.005, 0, &m), 0);
+    assert_int_equal(tb__collide(&a, &b, 0, 0, &m), 0);
 
     const tb__geom bx = box(0, 0, 0.51, ID, 1, 1, 0.5), p = plane(0, 0, 1, 0);
-    assert_int_equal(tb__collide(&bx, &p, 0.02, &m), 4);
+    assert_int_equal(tb__collide(&bx, &p, 0.02, 0, &m), 4);
     assert_rel(m.point[3].depth, -0.01, 1e-12);
-    assert_int_equal(tb__collide(&bx, &p, 0.005, &m), 0);
+    assert_int_equal(tb__collide(&bx, &p, 0.005, 0, &m), 0);
 
     const tb__geom lower = box(0, 0, 0, ID, 1, 1, 1), upper = box(0.2, 0.1, 2.01, ID, 0.5, 0.5, 1);
-    assert_int_equal(tb__collide(&lower, &upper, 0.02, &m), 4);
+    assert_int_equal(tb__collide(&lower, &upper, 0.02, 0, &m), 4);
     assert_rel(m.point[2].depth, -0.01, 1e-12);
-    assert_int_equal(tb__collide(&lower, &upper, 0.005, &m), 0);
+    assert_int_equal(tb__collide(&lower, &upper, 0.005, 0, &m), 0);
 
     double R[9];
     along_x(R);
     const tb__geom c = capsule(0, 0, 0.51, R, 1, 0.5);
-    assert_int_equal(tb__collide(&c, &p, 0.02, &m), 2);
+    assert_int_equal(tb__collide(&c, &p, 0.02, 0, &m), 2);
     assert_rel(m.point[1].depth, -0.01, 1e-12);
-    assert_int_equal(tb__collide(&c, &p, 0.005, &m), 0);
+    assert_int_equal(tb__collide(&c, &p, 0.005, 0, &m), 0);
 }
 
 static void sphere_against_capsule(void **state)
@@ -348,18 +348,18 @@ static void sphere_against_capsule(void **state)
     const tb__geom c = capsule(0, 0, 0, R, 1, 0.5);
     /* Beside the core: straight across. */
     const tb__geom s = sphere(0.4, 0, 0.7, 0.3);
-    assert_int_equal(tb__collide(&s, &c, 0, &m), 1);
+    assert_int_equal(tb__collide(&s, &c, 0, 0, &m), 1);
     assert_vec(m.normal, 0, 0, -1, TOL);
     assert_rel(m.point[0].depth, 0.1, 1e-12);
     assert_vec(m.point[0].pos, 0.4, 0, 0.45, TOL);
     /* Beyond an end: towards the end of the core. */
     const tb__geom e = sphere(1.3, 0.4, 0, 0.3);
-    assert_int_equal(tb__collide(&c, &e, 0, &m), 1);
+    assert_int_equal(tb__collide(&c, &e, 0, 0, &m), 1);
     assert_vec(m.normal, 0.6, 0.8, 0, TOL);
     assert_rel(m.point[0].depth, 0.3, 1e-12);
     /* Centre on the core: out sideways, never along the core. */
     const tb__geom in = sphere(0.5, 0, 0, 0.3);
-    assert_int_equal(tb__collide(&in, &c, 0, &m), 1);
+    assert_int_equal(tb__collide(&in, &c, 0, 0, &m), 1);
     assert_true(fabs(m.normal[0]) < TOL);
     assert_rel(m.point[0].depth, 0.8, 1e-12);
 }
@@ -381,7 +381,7 @@ static void sphere_against_box(void **state)
         int k;
         world(&b, at[i], c);
         const tb__geom s = sphere(c[0], c[1], c[2], 0.6);
-        assert_int_equal(tb__collide(&s, &b, 0, &m), 1);
+        assert_int_equal(tb__collide(&s, &b, 0, 0, &m), 1);
         assert_rel(m.point[0].depth, 0.6 - gap[i], 1e-12);
         /* The normal runs from the centre to the box's closest point. */
         for (k = 0; k < 3; ++k)
@@ -401,12 +401,12 @@ static void sphere_inside_box_leaves_by_nearest_face(void **state)
     const tb__geom b = box(0, 0, 0, ID, 1, 2, 3);
     /* 0.3 behind +y, 0.5 behind +x: out through +y. */
     const tb__geom s = sphere(0.5, 1.7, -1, 0.2);
-    assert_int_equal(tb__collide(&s, &b, 0, &m), 1);
+    assert_int_equal(tb__collide(&s, &b, 0, 0, &m), 1);
     assert_vec(m.normal, 0, -1, 0, 0);
     assert_rel(m.point[0].depth, 0.5, 1e-12);
     /* Midway between the box face (y = 2) and the sphere's far side (y = 1.5). */
     assert_vec(m.point[0].pos, 0.5, 1.75, -1, TOL);
-    assert_int_equal(tb__collide(&b, &s, 0, &m), 1);
+    assert_int_equal(tb__collide(&b, &s, 0, 0, &m), 1);
     assert_vec(m.normal, 0, 1, 0, 0);
 }
 
@@ -420,17 +420,17 @@ static void capsule_lying_on_plane_gives_two_points(void **state)
     const tb__geom p = plane(0, 0, 1, 0);
     along_x(R);
     const tb__geom c = capsule(0.5, 0.2, 0.49, R, 1, 0.5);
-    assert_int_equal(tb__collide(&c, &p, 0, &m), 2);
+    assert_int_equal(tb__collide(&c, &p, 0, 0, &m), 2);
     assert_vec(m.normal, 0, 0, -1, 0);
     assert_rel(point_at(&m, -0.5, 0.2, -0.005, TOL)->depth, 0.01, 1e-12);
     assert_rel(point_at(&m, 1.5, 0.2, -0.005, TOL)->depth, 0.01, 1e-12);
     /* Standing on an end, or tilted: one end only. */
     const tb__geom up = capsule(0, 0, 1.49, ID, 1, 0.5);
-    assert_int_equal(tb__collide(&up, &p, 0, &m), 1);
+    assert_int_equal(tb__collide(&up, &p, 0, 0, &m), 1);
     assert_vec(m.point[0].pos, 0, 0, -0.005, TOL);
     rot_axis(0, 1, 0, 1.0, T);
     const tb__geom tilt = capsule(0, 0, 0.5 + cos(1.0) - 0.01, T, 1, 0.5);
-    assert_int_equal(tb__collide(&tilt, &p, 0, &m), 1);
+    assert_int_equal(tb__collide(&tilt, &p, 0, 0, &m), 1);
     assert_rel(m.point[0].depth, 0.01, 1e-9);
 }
 
@@ -441,14 +441,14 @@ static void capsules_parallel_give_two_points(void **state)
     tb__manifold m;
     along_x(R);
     const tb__geom a = capsule(0, 0, 0, R, 1, 0.5), b = capsule(0.6, 0, 0.79, R, 1.5, 0.3);
-    assert_int_equal(tb__collide(&a, &b, 0, &m), 2);
+    assert_int_equal(tb__collide(&a, &b, 0, 0, &m), 2);
     assert_vec(m.normal, 0, 0, 1, TOL);
     /* The cores overlap from x = -0.9 to 1; a's surface at 0.5, b's at 0.49. */
     assert_rel(point_at(&m, -0.9, 0, 0.495, TOL)->depth, 0.01, 1e-12);
     assert_rel(point_at(&m, 1, 0, 0.495, TOL)->depth, 0.01, 1e-12);
     /* Collinear, end to end: one point. */
     const tb__geom c = capsule(2.9, 0, 0, R, 1, 0.5);
-    assert_int_equal(tb__collide(&a, &c, 0, &m), 1);
+    assert_int_equal(tb__collide(&a, &c, 0, 0, &m), 1);
     assert_vec(m.normal, 1, 0, 0, TOL);
     assert_rel(m.point[0].depth, 0.1, 1e-12);
     assert_vec(m.point[0].pos, 1.45, 0, 0, TOL);
@@ -464,7 +464,7 @@ static void capsules_crossed_give_one_point(void **state)
     /* a along x, b along y above it at x = 0.3: the cores' closest points
        are (0.3, 0, 0) and (0.3, 0, 0.75). */
     const tb__geom a = capsule(0, 0, 0, Rx, 1, 0.5), b = capsule(0.3, 0.2, 0.75, Ry, 1, 0.3);
-    assert_int_equal(tb__collide(&a, &b, 0, &m), 1);
+    assert_int_equal(tb__collide(&a, &b, 0, 0, &m), 1);
     assert_vec(m.normal, 0, 0, 1, TOL);
     assert_rel(m.point[0].depth, 0.05, 1e-12);
     assert_vec(m.point[0].pos, 0.3, 0, 0.475, TOL);
@@ -473,7 +473,7 @@ static void capsules_crossed_give_one_point(void **state)
     rot_axis(0, 0, 1, PI / 3, R60);
     rot_mul(R60, Rx, R60);
     const tb__geom c = capsule(-0.2, 0, 0.7, R60, 0.5, 0.3);
-    assert_int_equal(tb__collide(&a, &c, 0, &m), 1);
+    assert_int_equal(tb__collide(&a, &c, 0, 0, &m), 1);
     assert_vec(m.normal, 0, 0, 1, TOL);
     assert_rel(m.point[0].depth, 0.1, 1e-12);
     assert_vec(m.point[0].pos, -0.2, 0, 0.45, TOL);
@@ -490,7 +490,7 @@ static void degenerate_capsule_is_a_sphere(void **state)
     size_t i;
     for (i = 0; i < sizeof others / sizeof others[0]; ++i) {
         tb__manifold mc, ms;
-        assert_int_equal(tb__collide(&c, &others[i], 0, &mc), tb__collide(&s, &others[i], 0, &ms));
+        assert_int_equal(tb__collide(&c, &others[i], 0, 0, &mc), tb__collide(&s, &others[i], 0, 0, &ms));
         assert_true(mc.count >= 1);
         assert_memory_equal(&mc, &ms, sizeof mc);
     }
@@ -505,20 +505,20 @@ static void capsule_against_box(void **state)
     const tb__geom b = box(0, 0, 0, ID, 2, 1, 0.5);
     /* Lying on the top face, overhanging it at x = 2: clipped there. */
     const tb__geom c = capsule(1.5, 0.3, 0.79, R, 1, 0.3);
-    assert_int_equal(tb__collide(&c, &b, 0, &m), 2);
+    assert_int_equal(tb__collide(&c, &b, 0, 0, &m), 2);
     assert_vec(m.normal, 0, 0, -1, 0);
     assert_rel(point_at(&m, 0.5, 0.3, 0.495, TOL)->depth, 0.01, 1e-12);
     assert_rel(point_at(&m, 2, 0.3, 0.495, TOL)->depth, 0.01, 1e-12);
     /* Sunk below its radius (core inside the box): the same two points. */
     const tb__geom deep = capsule(1.5, 0.3, 0.4, R, 1, 0.3);
-    assert_int_equal(tb__collide(&deep, &b, 0, &m), 2);
+    assert_int_equal(tb__collide(&deep, &b, 0, 0, &m), 2);
     assert_vec(m.normal, 0, 0, -1, 0);
     assert_rel(point_at(&m, 0.5, 0.3, 0.3, TOL)->depth, 0.4, 1e-12);
     assert_rel(point_at(&m, 2, 0.3, 0.3, TOL)->depth, 0.4, 1e-12);
     /* Standing on its end, tilted: the lower end. */
     rot_axis(0, 1, 0, 0.5, T);
     const tb__geom up = capsule(0.5 * sin(0.5), 0, 0.5 + 0.3 + 0.5 * cos(0.5) - 0.02, T, 0.5, 0.3);
-    assert_int_equal(tb__collide(&up, &b, 0, &m), 1);
+    assert_int_equal(tb__collide(&up, &b, 0, 0, &m), 1);
     assert_rel(m.point[0].depth, 0.02, 1e-12);
     assert_vec(m.point[0].pos, 0, 0, 0.49, TOL);
     /* Across the edge x = 2, z = 0.5 at 45 degrees to both faces, the core
@@ -527,12 +527,12 @@ static void capsule_against_box(void **state)
     rot_axis(0, 1, 0, -PI / 4, D); /* core along (-1, 0, 1) / sqrt 2 */
     const double k = 0.25 / sqrt(2.0), w = sqrt(0.5);
     const tb__geom e = capsule(2 + k, 0, 0.5 + k, D, 1, 0.3);
-    assert_int_equal(tb__collide(&e, &b, 0, &m), 1);
+    assert_int_equal(tb__collide(&e, &b, 0, 0, &m), 1);
     assert_vec(m.normal, -w, 0, -w, TOL);
     assert_rel(m.point[0].depth, 0.05, 1e-12);
     assert_vec(m.point[0].pos, 2 - 0.025 * w, 0, 0.5 - 0.025 * w, 1e-12);
     const tb__geom e2 = capsule(2 - k, 0, 0.5 - k, D, 1, 0.3);
-    assert_int_equal(tb__collide(&e2, &b, 0, &m), 1);
+    assert_int_equal(tb__collide(&e2, &b, 0, 0, &m), 1);
     assert_vec(m.normal, -w, 0, -w, TOL);
     assert_rel(m.point[0].depth, 0.55, 1e-12);
 }
@@ -546,7 +546,7 @@ static void box_lying_on_plane_gives_four_corners(void **state)
     tb__manifold m;
     rot_axis(0, 0, 1, 0.4, R);
     const tb__geom b = box(1, 2, 0.49, R, 1, 0.5, 0.5), p = plane(0, 0, 1, 0);
-    assert_int_equal(tb__collide(&b, &p, 0, &m), 4);
+    assert_int_equal(tb__collide(&b, &p, 0, 0, &m), 4);
     int i, sx, sy;
     for (i = 0; i < 4; ++i)
         assert_rel(m.point[i].depth, 0.01, 1e-12);
@@ -559,7 +559,7 @@ static void box_lying_on_plane_gives_four_corners(void **state)
         }
     /* Thinner than the margin: still the bottom four. */
     const tb__geom thin = box(0, 0, 0.0009, ID, 1, 1, 0.001);
-    assert_int_equal(tb__collide(&thin, &p, 0.1, &m), 4);
+    assert_int_equal(tb__collide(&thin, &p, 0.1, 0, &m), 4);
     for (i = 0; i < 4; ++i)
         assert_rel(m.point[i].depth, 0.0001, 1e-9);
     /* On a corner: one point. */
@@ -568,7 +568,7 @@ static void box_lying_on_plane_gives_four_corners(void **state)
     rot_axis(0, 1, 0, atan(1 / sqrt(2.0)), R);
     rot_mul(R, C, C);
     const tb__geom corner = box(0, 0, sqrt(3.0) - 0.02, C, 1, 1, 1);
-    assert_int_equal(tb__collide(&corner, &p, 0, &m), 1);
+    assert_int_equal(tb__collide(&corner, &p, 0, 0, &m), 1);
     assert_rel(m.point[0].depth, 0.02, 1e-9);
 }
 
@@ -584,7 +584,7 @@ static void buried_plank_keeps_both_ends(void **state)
     tb__manifold m;
     rot_axis(0, 1, 0, 5 * PI / 180, R);
     const tb__geom plank = box(0, 0, -0.5, R, 2.03, 0.27, 0.009), p = plane(0, 0, 1, 0);
-    int i, j, count = tb__collide(&plank, &p, 0, &m);
+    int i, j, count = tb__collide(&plank, &p, 0, 0, &m);
     double corner[4][3], span = 0;
     assert_int_equal(count, 4);
     for (i = 0; i < count; ++i) { /* the point is halfway up from its corner */
@@ -606,7 +606,7 @@ static void box_on_box_face_contact(void **state)
     rot_axis(0, 0, 1, 0.3, R);
     /* A small box turned 0.3 rad on a big one, 0.01 into it. */
     const tb__geom big = box(0, 0, 0, ID, 2, 2, 1), small = box(0.4, -0.3, 1.49, R, 0.5, 0.4, 0.5);
-    assert_int_equal(tb__collide(&big, &small, 0, &m), 4);
+    assert_int_equal(tb__collide(&big, &small, 0, 0, &m), 4);
     assert_vec(m.normal, 0, 0, 1, 0);
     int sx, sy;
     for (sx = -1; sx <= 1; sx += 2)
@@ -626,7 +626,7 @@ static void box_on_box_turned_45_degrees(void **state)
     rot_axis(0, 0, 1, PI / 4, R);
     const tb__geom a = box(0, 0, 0, ID, 1, 1, 1), b = box(0, 0, 1.99, R, 1, 1, 1);
     /* The faces overlap in a regular octagon; four of its corners are kept. */
-    assert_int_equal(tb__collide(&a, &b, 0, &m), 4);
+    assert_int_equal(tb__collide(&a, &b, 0, 0, &m), 4);
     assert_vec(m.normal, 0, 0, 1, 0);
     int i, j;
     double area = 0;
@@ -660,7 +660,7 @@ static void boxes_crossing_edge_to_edge(void **state)
     rot_axis(0, 1, 0, PI / 4, Rb);
     const double r2 = sqrt(2.0), depth = 0.03;
     const tb__geom a = box(0, 0, 0, Ra, 1, 1, 1), b = box(0.1, -0.2, 2 * r2 - depth, Rb, 1, 1, 1);
-    assert_int_equal(tb__collide(&a, &b, 0, &m), 1);
+    assert_int_equal(tb__collide(&a, &b, 0, 0, &m), 1);
     assert_vec(m.normal, 0, 0, 1, 1e-12);
     assert_rel(m.point[0].depth, depth, 1e-12);
     assert_vec(m.point[0].pos, 0.1, 0, r2 - depth / 2, 1e-12); /* edges at y = 0, x = 0.1 */
@@ -691,7 +691,7 @@ static void random_box_on_box_matches_corners(void **state)
         const double depth = uniform(-0.05, 0.1), margin = 0.1;
         b.pos[2] -= low + depth;
         tb__manifold m;
-        assert_true(tb__collide(&big, &b, margin, &m) >= 1);
+        assert_true(tb__collide(&big, &b, margin, 0, &m) >= 1);
         assert_vec(m.normal, 0, 0, 1, 0);
         assert_rel(deepest(&m), depth, 1e-9);
         for (i = 0; i < m.count; ++i) {
@@ -715,7 +715,7 @@ static void flush_stack_keeps_four_corners(void **state)
     tb__manifold m0, m1;
     double T[9];
     int j, trial;
-    assert_int_equal(tb__collide(&lower, &upper, 0, &m0), 4);
+    assert_int_equal(tb__collide(&lower, &upper, 0, 0, &m0), 4);
     for (j = 0; j < 4; ++j)
         assert_rel(m0.point[j].depth, 0.001, 1e-9);
     for (trial = 0; trial < 50; ++trial) {
@@ -723,7 +723,7 @@ static void flush_stack_keeps_four_corners(void **state)
         u.pos[0] += uniform(-3e-5, 3e-5), u.pos[1] += uniform(-3e-5, 3e-5);
         rot_axis(0, 0, 1, uniform(-3e-5, 3e-5), T);
         rot_mul(T, u.rot, u.rot);
-        assert_int_equal(tb__collide(&lower, &u, 0, &m1), 4);
+        assert_int_equal(tb__collide(&lower, &u, 0, 0, &m1), 4);
         for (j = 0; j < 4; ++j)
             assert_true(has_feature(&m1, m0.point[j].feature));
     }
@@ -743,8 +743,8 @@ static void touching_boxes_give_the_patch_or_nothing(void **state)
     rot_axis(1, 0, 0, 4 * PI / 4, Ra);
     rot_axis(0, 1, 0, 6 * PI / 4, Rb);
     const tb__geom a = box(0.25, -0.75, 0.5, Ra, 0.75, 0.25, 0.25), b = box(1, 0, 0.5, Rb, 0.5, 0.5, 0.25);
-    assert_int_equal(tb__collide(&a, &b, 0, &m), 0);
-    assert_int_equal(tb__collide(&a, &b, 0.01, &m), 4);
+    assert_int_equal(tb__collide(&a, &b, 0, 0, &m), 0);
+    assert_int_equal(tb__collide(&a, &b, 0.01, 0, &m), 4);
     assert_vec(m.normal, 0, 1, 0, 1e-12);
     for (sx = 0; sx < 2; ++sx)
         for (sz = 0; sz < 2; ++sz)
@@ -756,7 +756,7 @@ static void plane_against_plane_is_empty(void **state)
     (void)state;
     tb__manifold m;
     const tb__geom a = plane(0, 0, 1, 0), b = plane(0, 0, -1, 1);
-    assert_int_equal(tb__collide(&a, &b, 1, &m), 0);
+    assert_int_equal(tb__collide(&a, &b, 1, 0, &m), 0);
 }
 
 /* ------------------------------------------------------- symmetries -- */
@@ -793,8 +793,8 @@ static void swapping_flips_the_normal_only(void **state)
     int i, j;
     for (i = 0; i < n; ++i) {
         tb__manifold ab, ba;
-        assert_true(tb__collide(&a[i], &b[i], 0.01, &ab) > 0);
-        assert_int_equal(tb__collide(&b[i], &a[i], 0.01, &ba), ab.count);
+        assert_true(tb__collide(&a[i], &b[i], 0.01, 0, &ab) > 0);
+        assert_int_equal(tb__collide(&b[i], &a[i], 0.01, 0, &ba), ab.count);
         assert_vec(ba.normal, -ab.normal[0], -ab.normal[1], -ab.normal[2], 1e-14);
         for (j = 0; j < ab.count; ++j) {
             const double *p = ab.point[j].pos;
@@ -814,10 +814,10 @@ static void small_moves_keep_the_features(void **state)
     for (i = 0; i < n; ++i) {
         tb__manifold m0, m1;
         tb__geom c = a[i]; /* never a plane */
-        tb__collide(&a[i], &b[i], 0.01, &m0);
+        tb__collide(&a[i], &b[i], 0.01, 0, &m0);
         c.pos[0] += 1e-4, c.pos[1] -= 2e-4, c.pos[2] += 1e-5;
         rot_mul(T, c.rot, c.rot);
-        tb__collide(&c, &b[i], 0.01, &m1);
+        tb__collide(&c, &b[i], 0.01, 0, &m1);
         if (m1.count != m0.count)
             fail_msg("configuration %d: %d points, then %d", i, m0.count, m1.count);
         for (j = 0; j < m0.count; ++j)
@@ -830,11 +830,44 @@ static void small_moves_keep_the_features(void **state)
     for (i = 0; i < n; ++i) {
         tb__manifold m;
         int k;
-        tb__collide(&a[i], &b[i], 0.01, &m);
+        tb__collide(&a[i], &b[i], 0.01, 0, &m);
         for (j = 0; j < m.count; ++j)
             for (k = 0; k < j; ++k)
                 assert_true(m.point[j].feature != m.point[k].feature);
     }
+}
+
+/* A box laid across another's top edge, its bottom face tilted 4 degrees
+   about the edge's direction and turned 1 mrad about its own long axis, so
+   that the edge lies along the face to 0.4 mm over the face's 0.4 m
+   width: with the contact layer's tolerance (a tenth of the 5 mm slop)
+   the face is the reference and the manifold is the line of contact, a
+   point at each end, not one edge point (which, as the box rocked, jumped
+   from end to end: bench_robustness bridge). */
+static void edge_along_a_face_is_a_line_of_points(void **state)
+{
+    (void)state;
+    const tb__geom a = box(0, 0, 0, ID, 0.5, 0.5, 0.5);
+    double tilt[9], turn[9], R[9];
+    tb__geom b;
+    tb__manifold m;
+    int k;
+    rot_axis(0, 1, 0, 4 * PI / 180, tilt);
+    rot_axis(1, 0, 0, 1e-3, turn);
+    rot_mul(tilt, turn, R);
+    b = box(0, 0, 0, R, 0.5, 0.2, 0.1);
+    /* its bottom face 20 um into the edge's middle, (0.5, 0, 0.5) */
+    for (k = 0; k < 3; ++k)
+        b.pos[k] = (k == 1 ? 0 : 0.5) + R[3 * k + 2] * (0.1 - 2e-5);
+    assert_int_equal(tb__collide(&a, &b, 0.01, 5e-4, &m), 2);
+    assert_true(dot3(m.normal, (const double[3]){ R[2], R[5], R[8] }) > 1 - 1e-12); /* b's bottom face */
+    for (k = 0; k < 2; ++k) {
+        assert_true(fabs(m.point[k].pos[0] - 0.5) < 1e-3 && fabs(m.point[k].pos[2] - 0.5) < 1e-3); /* on the edge */
+    }
+    /* the ends 20 um in, +- 0.2 m times the 1 mrad turn */
+    assert_true(fabs(fmax(m.point[0].depth, m.point[1].depth) - 2.2e-4) < 2e-6);
+    assert_true(fabs(fmin(m.point[0].depth, m.point[1].depth) + 1.8e-4) < 2e-6);
+    assert_true(fabs(m.point[0].pos[1] - m.point[1].pos[1]) > 0.39); /* the face's width, 0.4 m */
 }
 
 /* ------------------------------------------------------------- random -- */
@@ -934,7 +967,7 @@ static void random_pairs_agree_with_brute_force(void **state)
                 const double margin = trial % 2 ? 0.1 : 0;
                 tb__manifold m, s;
                 int i;
-                tb__collide(&a, &b, margin, &m);
+                tb__collide(&a, &b, margin, 0, &m);
                 assert_true(m.count >= 0 && m.count <= TB__MANIFOLD_POINTS);
                 assert_true(finite_manifold(&m));
                 if (ka == TB__SHAPE_PLANE && kb == TB__SHAPE_PLANE) {
@@ -985,7 +1018,7 @@ static void random_pairs_agree_with_brute_force(void **state)
                    Two boxes may take the other's reference face, so only
                    single points of round shapes with apart cores are
                    compared. */
-                tb__collide(&b, &a, margin, &s);
+                tb__collide(&b, &a, margin, 0, &s);
                 if (kind_of(&a) != kind_of(&b)) {
                     assert_int_equal(s.count, m.count);
                     assert_vec(s.normal, -m.normal[0], -m.normal[1], -m.normal[2], 0);
@@ -1022,7 +1055,7 @@ static void random_overlapping_boxes_touch(void **state)
             inside = fabs(l2[0]) < o->half[0] - 1e-9 && fabs(l2[1]) < o->half[1] - 1e-9
                      && fabs(l2[2]) < o->half[2] - 1e-9;
         }
-        tb__collide(&a, &b, 0, &m);
+        tb__collide(&a, &b, 0, 0, &m);
         assert_true(finite_manifold(&m));
         if (inside) {
             ++overlapping;
@@ -1091,6 +1124,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(plane_against_plane_is_empty),
     cmocka_unit_test(swapping_flips_the_normal_only),
     cmocka_unit_test(small_moves_keep_the_features),
+    cmocka_unit_test(edge_along_a_face_is_a_line_of_points),
     cmocka_unit_test(random_pairs_agree_with_brute_force),
     cmocka_unit_test(random_overlapping_boxes_touch),
     cmocka_unit_test(bounds_contain_the_shape),

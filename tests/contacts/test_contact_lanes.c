@@ -147,7 +147,7 @@ static size_t compare_reused(const tb_world *w, double *separation, double *poin
             continue;
         ++reused;
         margin = geom_of(c, e->key_a, &a) + geom_of(c, e->key_b, &b);
-        tb__collide(&a, &b, margin, &fresh);
+        tb__collide(&a, &b, margin, 0, &fresh);
         for (j = 0; j < fresh.count; ++j) {
             const tb__contact_point *f = &fresh.point[j];
             int match = -1;

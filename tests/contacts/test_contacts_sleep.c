@@ -115,6 +115,38 @@ static void islands_wake_together(void **state)
     tb_world_destroy(w);
 }
 
+/* Two boxes 3 mm apart (within each other's bounds, not touching: two
+   islands), the second dropped from 10 cm, so it comes to rest later.
+   The first falls asleep while the second still rests awake beside it;
+   the second then falls asleep too, and both stay asleep. Truth: nothing
+   moves, nothing wakes. When any awake body's bounds woke a sleeping
+   island, the second woke the first, then the first the second, for
+   ever (a heap of 2000 never slept, bench_robustness heap). */
+static void resting_neighbours_let_an_island_sleep(void **state)
+{
+    tb_world *w = world_on_plane(0.6, 0);
+    const double at0[3] = { 0, 0, 0.5 }, at1[3] = { 1.003, 0, 0.6 };
+    tb_body_id first = add_box(w, at0, 1, 0.6), second = add_box(w, at1, 1, 0.6);
+    int i, asleep0 = 0, asleep1 = 0, first_at = -1, both_at = -1;
+    (void)state;
+    for (i = 1; i <= 300; ++i) {
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        assert_int_equal(tb_body_asleep(w, first, &asleep0), TB_OK);
+        assert_int_equal(tb_body_asleep(w, second, &asleep1), TB_OK);
+        if (asleep0 && first_at < 0)
+            first_at = i;
+        if (asleep0 && asleep1 && both_at < 0)
+            both_at = i;
+        if (first_at > 0)
+            assert_true(asleep0); /* never woken */
+        if (both_at > 0)
+            assert_true(asleep1);
+    }
+    print_message("the first box asleep from step %d, both from step %d\n", first_at, both_at);
+    assert_true(first_at > 0 && both_at > first_at && both_at <= 90);
+    tb_world_destroy(w);
+}
+
 /* A column of three boxes asleep: its pairs are parked (contact.c), not
    carried step by step, yet they are the same contacts throughout. Asleep,
    its 12 points are still counted and no event comes, also at another step
@@ -357,6 +389,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(resting_box_falls_asleep_and_stays_put),
     cmocka_unit_test(sleeping_box_wakes_when_a_ball_lands),
     cmocka_unit_test(islands_wake_together),
+    cmocka_unit_test(resting_neighbours_let_an_island_sleep),
     cmocka_unit_test(sleeping_pairs_are_kept_and_come_back),
     cmocka_unit_test(sleeping_blocks_stay_put),
     cmocka_unit_test(woken_world_moves_again),
