@@ -75,7 +75,10 @@
      upper bound on the contacts' own cost; a solver whose cost grows with
      the points alone draws a flat line. One run of each; writes
      OUT/contact_scaling.csv, drawn by bench/contact_scaling.gp into
-     docs/charts/contact_scaling.png.
+     docs/charts/contact_scaling.png. Then 16 copies of the 1000-shape
+     pile side by side (ode_pile_copy_offset: 15 m apart, none meets
+     another) in tumble and in ODE's QuickStep(20), 300 steps each: ns per
+     contact point in both and ODE/tumble (issue 18: at least 5).
 
    The machine may be shared: runs alternate tumble and ODE, BENCH_RUNS
    times each, and the figures are medians over those runs, so that a
@@ -355,8 +358,9 @@ static int tumble_pile(const ode_pile_def *d, const ode_shape *shapes, int sleep
     int i, below = 0;
     set_sleep(w, tb_default_contact_settings().velocity_iterations, -1, sleep);
     add_plane(w, d->mu);
-    for (i = 0; i < d->count; ++i) {
-        const ode_shape *o = &shapes[i];
+    for (i = 0; i < d->count * d->copies; ++i) {
+        const ode_shape *o = &shapes[i % d->count];
+        double offset[2];
         tb_body_def b = tb_default_body_def();
         tb_shape_def s = tb_default_shape_def();
         tb_body_id id;
@@ -368,6 +372,8 @@ static int tumble_pile(const ode_pile_def *d, const ode_shape *shapes, int sleep
         b.mass.centre[0] = b.mass.centre[1] = b.mass.centre[2] = 0;
         b.mass.frame[0] = 1, b.mass.frame[1] = b.mass.frame[2] = b.mass.frame[3] = 0;
         memcpy(b.position, o->position, sizeof b.position);
+        ode_pile_copy_offset(d, i / d->count, offset); /* (the copies: ODE's places) */
+        b.position[0] += offset[0], b.position[1] += offset[1];
         memcpy(b.orientation, o->orientation, sizeof b.orientation);
         check(tb_world_add_body(w, &b, &id), w, "pile body");
         s.body = id;
@@ -391,7 +397,7 @@ static int tumble_pile(const ode_pile_def *d, const ode_shape *shapes, int sleep
     }
     run_timed(w, 1 / d->hz, d->steps, t, NULL, NULL, NULL);
     x = tb_world_body_positions(w);
-    for (i = 0; i < d->count; ++i)
+    for (i = 0; i < d->count * d->copies; ++i)
         below += x[3 * i + 2] < 0;
     tb_world_destroy(w);
     return below;
@@ -405,6 +411,37 @@ static const char *met(int ok)
 }
 
 /* -------------------------------------------------------------- scaling -- */
+
+/* 16 separate copies of the 1000-shape pile side by side (15 m apart: no
+   copy meets another), beside ODE's QuickStep(20) on the same 16 (sleep
+   off, 300 steps, one run each): cost per contact point against the
+   single pile's, and the ratio to ODE. Non-zero if a run failed. */
+static int copies(void)
+{
+    ode_pile_def d = ode_default_pile_def();
+    ode_pile_result r;
+    ode_shape *shapes = xmalloc((size_t)d.count * sizeof *shapes);
+    timing t;
+    int below;
+    d.copies = 16, d.steps = 300;
+    if (ode_pile_scene(&d, shapes) != d.count) {
+        fprintf(stderr, BENCH_NAME ": pile scene refused\n");
+        free(shapes);
+        return 1;
+    }
+    below = tumble_pile(&d, shapes, 0, &t);
+    free(shapes);
+    if (!ode_pile(&d, &r)) {
+        fprintf(stderr, BENCH_NAME ": ODE's copies did not run\n");
+        return 1;
+    }
+    printf("copies    16 piles of %d shapes side by side: tumble %.2f ms/step, %.0f contact points per step, %.0f ns "
+           "per contact point, centres below the plane %d | ODE %.2f ms/step, %.0f contacts, %.0f ns per contact | "
+           "ODE/tumble %.2f (target >= 5)\n",
+           d.count, t.ms_mean, t.contacts_mean, 1e6 * t.ms_mean / t.contacts_mean, below, r.timing.ms_mean,
+           r.timing.contacts_mean, 1e6 * r.timing.ms_mean / r.timing.contacts_mean, r.timing.ms_mean / t.ms_mean);
+    return 0;
+}
 
 static int scaling(const char *folder)
 {
@@ -446,7 +483,7 @@ static int scaling(const char *folder)
         return EXIT_FAILURE;
     }
     printf("wrote %s\n", path);
-    return EXIT_SUCCESS;
+    return copies() ? EXIT_FAILURE : EXIT_SUCCESS;
 }
 
 /* The asleep lines: the ms per step once every body sleeps, one run each

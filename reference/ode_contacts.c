@@ -506,12 +506,23 @@ ode_pile_def ode_default_pile_def(void)
     d.max_contacts = 4;
     d.gravity = 9.81;
     d.steps = 600;
+    d.copies = 1;
+    d.copy_pitch = 15;
     return d;
+}
+
+void ode_pile_copy_offset(const ode_pile_def *def, int k, double offset[2])
+{
+    const int side = (int)ceil(sqrt((double)def->copies));
+    offset[0] = (k % side - 0.5 * (side - 1)) * def->copy_pitch;
+    offset[1] = (k / side - 0.5 * (side - 1)) * def->copy_pitch;
 }
 
 static int pile_def_ok(const ode_pile_def *d)
 {
-    return d->count > 0 && d->count <= 10000000 && d->grid > 0 && d->grid <= 100000 &&
+    return d->copies >= 1 && d->copies <= 1024 && isfinite(d->copy_pitch) && d->copy_pitch >= 0 &&
+           d->count <= 10000000 / d->copies &&
+           d->count > 0 && d->count <= 10000000 && d->grid > 0 && d->grid <= 100000 &&
            finite_positive(d->spacing) && isfinite(d->base) && finite_positive(d->density) &&
            finite_positive(d->hz) && d->iterations > 0 && isfinite(d->mu) && d->mu >= 0 &&
            d->max_contacts > 0 && d->max_contacts <= NEAR_MAX && isfinite(d->gravity) &&
@@ -597,7 +608,7 @@ int ode_pile(const ode_pile_def *def, ode_pile_result *out)
     if (!pile_def_ok(def))
         return 0;
     shapes = malloc((size_t)def->count * sizeof *shapes);
-    bodies = malloc((size_t)def->count * sizeof *bodies);
+    bodies = malloc((size_t)def->count * (size_t)def->copies * sizeof *bodies);
     step_ms = malloc((size_t)def->steps * sizeof *step_ms);
     if (!shapes || !bodies || !step_ms || !ode_open()) {
         free(shapes);
@@ -609,11 +620,13 @@ int ode_pile(const ode_pile_def *def, ode_pile_result *out)
 
     h = 1 / def->hz;
     world = quick_world(def->gravity, def->iterations, &space);
-    for (i = 0; i < def->count; ++i) {
-        const ode_shape *s = &shapes[i];
+    for (i = 0; i < def->count * def->copies; ++i) {
+        const ode_shape *s = &shapes[i % def->count];
+        double offset[2];
         dGeomID g;
         dMass mass;
         dQuaternion q;
+        ode_pile_copy_offset(def, i / def->count, offset);
         if (s->kind == ODE_SHAPE_SPHERE)
             g = dCreateSphere(space, s->radius);
         else if (s->kind == ODE_SHAPE_BOX)
@@ -625,7 +638,7 @@ int ode_pile(const ode_pile_def *def, ode_pile_result *out)
                            s->inertia[2], 0, 0, 0);
         dBodySetMass(bodies[i], &mass);
         dGeomSetBody(g, bodies[i]);
-        dBodySetPosition(bodies[i], s->position[0], s->position[1], s->position[2]);
+        dBodySetPosition(bodies[i], s->position[0] + offset[0], s->position[1] + offset[1], s->position[2]);
         q[0] = s->orientation[0];
         q[1] = s->orientation[1];
         q[2] = s->orientation[2];
@@ -635,7 +648,7 @@ int ode_pile(const ode_pile_def *def, ode_pile_result *out)
     run_quick(world, space, def->mu, def->max_contacts, h, def->steps, step_ms, &out->timing);
 
     out->final_top = -INFINITY;
-    for (i = 0; i < def->count; ++i) {
+    for (i = 0; i < def->count * def->copies; ++i) {
         const dReal *p = dBodyGetPosition(bodies[i]), *v = dBodyGetLinearVel(bodies[i]);
         const double speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         if (speed > out->final_max_speed)

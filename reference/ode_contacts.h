@@ -263,6 +263,9 @@ typedef struct ode_pile_def {
     int max_contacts; /* per pair: 4 */
     double gravity;   /* m/s^2: 9.81 */
     int steps;        /* steps to run and time: 600 (10 s) */
+    int copies;       /* separate piles side by side, each the scene above: 1 */
+    double copy_pitch;/* m between the copies' centres, on a square grid: 15 (a
+                         pile of grid 10 spans 11 m, so copies never meet) */
 } ode_pile_def;
 
 typedef struct ode_pile_result {
@@ -280,8 +283,13 @@ ode_pile_def ode_default_pile_def(void);
    the count, 0 if def was refused. */
 int ode_pile_scene(const ode_pile_def *def, ode_shape *shapes);
 
-/* Builds the scene from ode_pile_scene, steps it def->steps times, times the
-   steps. Returns 1 if the run happened, 0 if def was refused, memory ran out
+/* Where copy k (0 .. copies - 1) of the pile sits: added to every shape's x
+   and y. The copies make a square grid of copy_pitch, centred on the
+   origin. Pure C. */
+void ode_pile_copy_offset(const ode_pile_def *def, int k, double offset[2]);
+
+/* Builds the scene from ode_pile_scene (def->copies of it, placed by
+   ode_pile_copy_offset), steps it def->steps times, times the steps. Returns 1 if the run happened, 0 if def was refused, memory ran out
    or ODE did not initialise. */
 int ode_pile(const ode_pile_def *def, ode_pile_result *out);
 
