@@ -521,8 +521,7 @@ void ode_pile_copy_offset(const ode_pile_def *def, int k, double offset[2])
 static int pile_def_ok(const ode_pile_def *d)
 {
     return d->copies >= 1 && d->copies <= 1024 && isfinite(d->copy_pitch) && d->copy_pitch >= 0 &&
-           d->count <= 10000000 / d->copies &&
-           d->count > 0 && d->count <= 10000000 && d->grid > 0 && d->grid <= 100000 &&
+           d->count > 0 && d->count <= 10000000 / d->copies && d->grid > 0 && d->grid <= 100000 &&
            finite_positive(d->spacing) && isfinite(d->base) && finite_positive(d->density) &&
            finite_positive(d->hz) && d->iterations > 0 && isfinite(d->mu) && d->mu >= 0 &&
            d->max_contacts > 0 && d->max_contacts <= NEAR_MAX && isfinite(d->gravity) &&

@@ -289,8 +289,9 @@ int ode_pile_scene(const ode_pile_def *def, ode_shape *shapes);
 void ode_pile_copy_offset(const ode_pile_def *def, int k, double offset[2]);
 
 /* Builds the scene from ode_pile_scene (def->copies of it, placed by
-   ode_pile_copy_offset), steps it def->steps times, times the steps. Returns 1 if the run happened, 0 if def was refused, memory ran out
-   or ODE did not initialise. */
+   ode_pile_copy_offset), steps it def->steps times, times the steps.
+   Returns 1 if the run happened, 0 if def was refused, memory ran out or
+   ODE did not initialise. */
 int ode_pile(const ode_pile_def *def, ode_pile_result *out);
 
 /* ------------------------------------------------------- heavy landing

@@ -255,14 +255,12 @@ typedef struct tb__entry {
 #define TB__FOUND_PLANE(i, k) ((uint64_t)(i) << 31 | (uint64_t)(k))
 #define TB__FOUND_PAIR(a, b) ((uint64_t)1 << 62 | (uint64_t)(a) << 31 | (uint64_t)(b))
 
-/* Collision's face tolerance, as a share of the slop: an edge lying along
-   a face within a tenth of the slop touches it along a line, both ends
-   points (tb__collide; Box2D prefers its reference face by the same
-   tenth of its linear slop). Met as one edge point, a box laid across
-   another's edge rocked about the line for 14 s and more, the point
-   jumping from end to end and each new end's overlap pushed out as
-   energy (bench_robustness bridge; notes.md, "A box rocking on two
-   corners"). */
+/* Collision's face tolerance, as a share of the slop (tb__collide; Box2D
+   keeps its reference face by the same tenth of its linear slop): an edge
+   lying along a face within it touches the face along a line, a point at
+   each end. One edge point would jump from end to end as the bodies
+   rock, and each jump's new overlap, pushed out, adds energy
+   (test_contacts_heaps.box_across_two_rests). */
 #define TB__FACE_TOLERANCE 0.1
 
 #define TB__PARTICLE_KEY 0x80000000u

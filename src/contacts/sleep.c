@@ -39,11 +39,9 @@ uint32_t tb__proxy_island(const tb_world *w, const tb__contacts *c, size_t k)
 /* Does proxy k move this step: an awake body that is not resting (its
    rest time is 0: it was not slower than the sleep speed last step, or it
    was just added, set or woken), or a particle faster than the sleep
-   speed? An awake body at rest beside a sleeping island does not wake it:
-   in a heap of separate islands a few millimetres apart, each island
-   falling asleep was woken by a resting neighbour not yet asleep, and
-   that one in turn, so the heap never slept all at once
-   (test_contacts_sleep.resting_neighbours_let_an_island_sleep). */
+   speed? A resting body wakes nothing, or neighbouring islands within
+   each other's bounds, falling asleep at different times, would wake
+   each other for ever (test_contacts_sleep.resting_neighbours_let_an_island_sleep). */
 static int moving(const tb_world *w, const tb__contacts *c, size_t k)
 {
     if (c->proxy[k] & TB__PARTICLE_KEY) {

@@ -21,9 +21,9 @@ static inline double tb__least(double a, double b)
     return a < b || b != b ? a : b;
 }
 
-/* The fields every row's impulse reads and writes come first, together
-   (apply in soft_step.c; an impulse read the inverse mass from
-   tb__solver_body before, a second struct of 312 bytes). */
+/* The fields every row's impulse reads and writes come first, together,
+   with the inverse mass, so that an impulse (apply in soft_step.c)
+   touches this struct alone. */
 typedef struct tb__soft_body {
     double v[3], w[3];          /* m/s, rad/s: velocities now */
     double P[3], L[3];          /* N s, N m s: momenta now (particles: P only) */

@@ -219,17 +219,17 @@ static void assemble(tb__contacts *c, struct tb__stacks *s, size_t k)
     for (i = from; i < to; ++i)
         memset(s->a + s->offset[i], 0, (i - s->first[i] + 1) * sizeof *s->a);
     for (i = from; i < to; ++i) {
-        const band_row o = s->views[i];
+        const band_row *o = &s->views[i];
         int side;
         for (side = 0; side < 2; ++side) {
-            const int32_t b = side ? o.b : o.a;
+            const int32_t b = side ? o->b : o->a;
             if (b < 0)
                 continue;
             for (m = s->body_start[b]; m < s->body_start[b + 1]; ++m) {
                 n = s->position[s->body_rows[m]];
                 if (n <= i) {
-                    const band_row q = s->views[n];
-                    s->a[s->offset[i] + n - s->first[i]] += coupling(c, &o, &q, b);
+                    const band_row *q = &s->views[n];
+                    s->a[s->offset[i] + n - s->first[i]] += coupling(c, o, q, b);
                 }
             }
         }
@@ -706,9 +706,9 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
     size_t i, round;
     int changed = 1, closing = 0;
     for (i = from; i < to; ++i) {
-        const band_row v = s->views[i];
-        s->vn0[i] = band_rate(c, &v);
-        s->solved[i] = v.patch ? sticks(c, v.patch) : closes(c, s, i, hs, touch, 1, bias);
+        const band_row *v = &s->views[i];
+        s->vn0[i] = band_rate(c, v);
+        s->solved[i] = v->patch ? sticks(c, v->patch) : closes(c, s, i, hs, touch, 1, bias);
     }
     for (round = 0; round < TB__STACK_ROUNDS && changed; ++round) {
         const int last = round + 1 == TB__STACK_ROUNDS;
@@ -718,9 +718,9 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
             return closing;
         }
         for (i = from; i < to; ++i) {
-            const band_row v = s->views[i];
+            const band_row *v = &s->views[i];
             const double gap = s->solved[i] ? allowed(c, s, i, hs, bias) : 0;
-            s->x[i] = s->solved[i] ? -band_rate(c, &v) - gap : 0;
+            s->x[i] = s->solved[i] ? -band_rate(c, v) - gap : 0;
             closing |= gap > 0;
         }
         /* what a patch's points closing their gaps ask, levelled: a
@@ -739,20 +739,20 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
            stands, cut at no pull (the next solve of the substep starts
            from it) */
         for (i = from; i < to && !last; ++i) {
-            const band_row v = s->views[i];
-            if (!v.patch && s->solved[i] && s->x[i] < -tiny * (c->soft_rows[s->order[i]].mass + 1)) {
+            const band_row *v = &s->views[i];
+            if (!v->patch && s->solved[i] && s->x[i] < -tiny * (c->soft_rows[s->order[i]].mass + 1)) {
                 s->solved[i] = 0;
                 changed = 1;
-                band_push(c, &v, -*v.impulse);
-                *v.impulse = 0;
+                band_push(c, v, -*v->impulse);
+                *v->impulse = 0;
             }
         }
         if (changed)
             continue;
         /* friction beyond its cone slides, held at the cone's edge */
         for (i = from; i + 1 < to; ++i) {
-            const band_row v = s->views[i];
-            tb__soft_patch *p = v.patch;
+            const band_row *v = &s->views[i];
+            tb__soft_patch *p = v->patch;
             double f, most, cut;
             int d;
             /* the pair of a patch: its first row, then its second */
@@ -765,10 +765,10 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
                 continue;
             cut = f > 0 ? most / f : 0;
             for (d = 0; d < 2; ++d) {
-                const band_row w = s->views[i + d];
+                const band_row *w = &s->views[i + d];
                 const double held = s->x[i + d] * cut;
-                band_push(c, &w, held - *w.impulse);
-                *w.impulse = held;
+                band_push(c, w, held - *w->impulse);
+                *w->impulse = held;
                 s->solved[i + d] = 0;
             }
             changed = !last;
@@ -776,17 +776,17 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
         if (changed)
             continue;
         for (i = from; i < to; ++i) {
-            const band_row v = s->views[i];
-            const double total = v.patch ? s->x[i] : tb__most(s->x[i], 0);
+            const band_row *v = &s->views[i];
+            const double total = v->patch ? s->x[i] : tb__most(s->x[i], 0);
             if (!s->solved[i])
                 continue;
-            band_push(c, &v, total - *v.impulse);
-            *v.impulse = total;
+            band_push(c, v, total - *v->impulse);
+            *v->impulse = total;
         }
         /* a touching point let go that now approaches is taken in */
         for (i = from; i < to; ++i) {
-            const band_row v = s->views[i];
-            if (s->solved[i] || v.patch)
+            const band_row *v = &s->views[i];
+            if (s->solved[i] || v->patch)
                 continue;
             if (closes(c, s, i, hs, touch, 0, bias)) {
                 s->solved[i] = 1;
@@ -833,9 +833,9 @@ static void solve_island(tb__contacts *c, struct tb__stacks *s, size_t k, double
         if (solve_island_once(c, s, k, hs, 1) && !s->given_up[k] &&
             island_energy(c, s, k) > energy * (1 + 1e-9) + 1e-14) {
             for (i = from; i < to; ++i) {
-                const band_row v = s->views[i];
-                band_push(c, &v, s->before[i] - *v.impulse);
-                *v.impulse = s->before[i];
+                const band_row *v = &s->views[i];
+                band_push(c, v, s->before[i] - *v->impulse);
+                *v->impulse = s->before[i];
             }
             solve_island_once(c, s, k, hs, 0);
         }
@@ -885,8 +885,8 @@ void tb__stacks_push(tb__contacts *c, double bias_rate, int sign)
         if (sign < 0) {
             for (i = from; i < to; ++i)
                 if (s->push[i] != 0) {
-                    const band_row v = s->views[i];
-                    band_push(c, &v, -s->push[i]);
+                    const band_row *v = &s->views[i];
+                    band_push(c, v, -s->push[i]);
                 }
             continue;
         }
@@ -899,8 +899,8 @@ void tb__stacks_push(tb__contacts *c, double bias_rate, int sign)
         for (i = from; i < to; ++i) {
             s->push[i] = s->solved[i] ? s->x[i] : 0;
             if (s->push[i] != 0) {
-                const band_row v = s->views[i];
-                band_push(c, &v, s->push[i]);
+                const band_row *v = &s->views[i];
+                band_push(c, v, s->push[i]);
             }
         }
     }

@@ -137,12 +137,10 @@ static void dense_heaps_never_gain_energy(void **state)
    placements), kept awake 10 s under each solver, is at rest after a
    second: never again faster than the sleep speed (|v| + |w| times its half diagonal). Truth: the edge
    under it along its face (a line, both ends) and a corner on the other
-   box hold it on three points, still. Met as one edge point that jumped
-   from end to end of the line, the edge let it rock about the line, each
-   new end's overlap pushed out as energy: for 0.9 to 20 s in 11 of 12
-   placements, still rocking at 20 s in 5 (the soft step; the sweeps too:
-   bench_robustness bridge, notes.md "A box rocking on two corners").
-   Measured: at rest from 0.02 s, at most 4.6e-5 m/s after 1 s. */
+   box hold it on three points, still. The edge met as one point that
+   jumps from end to end of the line lets it rock (bench_robustness
+   bridge; notes.md, "A box rocking on two corners"). Measured: at rest
+   from 0.02 s, at most 4.6e-5 m/s after 1 s. */
 static void box_across_two_rests(void **state)
 {
     int shift, substeps;
