@@ -45,8 +45,6 @@ build = {
             "src/collision/collide.c",
             "src/contacts/shapes.c",
             "src/contacts/contact.c",
-            "src/contacts/contact_lanes.c",
-            "src/contacts/cold_start.c",
             "src/contacts/sleep.c",
             "src/contacts/soft_step.c", "src/contacts/stack_solve.c",
             "src/contacts/continuous.c",

@@ -6,7 +6,7 @@
      a static plane, mu 0.6 on every shape (a pair uses sqrt(mu_a mu_b), so
      0.6 as in ODE), tumble's default contact settings and integrator, 60 Hz,
      10 s. Wall time of each tb_world_step (the whole step: broadphase,
-     narrowphase, integrator, velocity and position passes, events), median
+     narrowphase, integrator, contact solve, events), median
      over the steps, beside ODE's dSpaceCollide + dWorldQuickStep(20) +
      emptying the contact group, timed the same way inside ode_pyramid().
      Then the top cube's sink (z drop) and drift (horizontal) after 10 s,
@@ -22,21 +22,10 @@
      against ODE's contact joints, means over the steps. Then how many of
      tumble's centres end below the plane: none should, and a count there
      means the timing is of a broken run.
-   - every sweep: the velocity pass stops early once a pair of sweeps
-     changes no enforced velocity by more than velocity_tolerance (1e-6
-     m/s by default), which a resting pyramid reaches in 6.6 sweeps on
-     average. The pyramid is run again with that off (velocity_tolerance
-     0: every one of the velocity_iterations sweeps), at 20 and at 40
-     iterations: their cost, and how close the top box stays with every
-     sweep done.
-   - ns per contact point per velocity iteration, from those two runs: the
-     median step at 20 over (mean touching points x 20). This charges the
-     whole step to the solver's sweeps, so it is an upper bound on the
-     sweep alone; the sweep's own cost is the difference of the two
-     medians over the difference in point-iterations, which needs no hook
-     in the library. The solver sweeps on in a step where many points
-     start cold (the pyramid's first); the median leaves such rare steps
-     out.
+   - ns per contact point per substep: the median step over (mean
+     touching points x substeps), for the pile and the pyramid. This
+     charges the whole step to the contacts (collision, integration,
+     solve, events), so it is an upper bound on the solver alone.
 
    - heavy: a unit box 10, 100, 1000 and 10000 times as heavy as the 1 kg
      unit boxes under it dropped 0.5 m onto one of them, and 100 and 1000
@@ -133,9 +122,8 @@ static void add_plane(tb_world *w, double friction)
     check(tb_world_add_shape(w, &plane, NULL), w, "plane");
 }
 
-/* --substeps=N: every scene's contacts by the soft-step solver with N
-   substeps (0: the sweeps; -1, without the option: the default settings,
-   the soft step with 4) */
+/* --substeps=N: every scene's contacts with N substeps (-1, without the
+   option: the default settings, 4) */
 static int substeps = -1;
 
 /* ode_heavy_landing's scene in tumble (the default settings, but for
@@ -147,7 +135,7 @@ static void tumble_heavy(const ode_heavy_def *d, ode_heavy_result *out)
     const double top = 1.5 + d->under, size[3] = { 1, 1, 1 };
     int i, k, landed = 0;
     memset(out, 0, sizeof *out);
-    if (substeps >= 0) {
+    if (substeps > 0) {
         tb_contact_settings cs = tb_world_contact_settings(w);
         cs.substeps = substeps;
         check(tb_world_set_contact_settings(w, &cs), w, "heavy settings");
@@ -287,18 +275,12 @@ typedef struct pyramid_run {
                            during the run (it sways: the end catches one phase) */
 } pyramid_run;
 
-/* Sleep on (the default) or off (every body solved every step); the
-   velocity pass's most sweeps and early stop (tolerance < 0: the
-   default's). */
-
-static void set_sleep(tb_world *w, int velocity_iterations, double tolerance, int sleep)
+/* Sleep on (the default) or off (every body solved every step). */
+static void set_sleep(tb_world *w, int sleep)
 {
     tb_contact_settings cs = tb_default_contact_settings();
-    if (substeps >= 0)
+    if (substeps > 0)
         cs.substeps = substeps;
-    cs.velocity_iterations = velocity_iterations;
-    if (tolerance >= 0)
-        cs.velocity_tolerance = tolerance;
     if (!sleep)
         cs.sleep_time = INFINITY;
     check(tb_world_set_contact_settings(w, &cs), w, "contact settings");
@@ -306,8 +288,7 @@ static void set_sleep(tb_world *w, int velocity_iterations, double tolerance, in
 
 /* asleep (or NULL): after the run, the ms per step once every body sleeps
    (asleep_ms), -1 if they never all did. */
-static void tumble_pyramid(const ode_pyramid_def *d, int velocity_iterations, double tolerance, int sleep,
-                           pyramid_run *out, double *asleep)
+static void tumble_pyramid(const ode_pyramid_def *d, int sleep, pyramid_run *out, double *asleep)
 {
     const int count = ode_pyramid_boxes(d->levels);
     const int steps = (int)ceil(d->duration * d->hz);
@@ -324,7 +305,7 @@ static void tumble_pyramid(const ode_pyramid_def *d, int velocity_iterations, do
         fprintf(stderr, BENCH_NAME ": pyramid refused\n");
         exit(EXIT_FAILURE);
     }
-    set_sleep(w, velocity_iterations, tolerance, sleep);
+    set_sleep(w, sleep);
     add_plane(w, d->mu);
     check(tb_mass_box(d->mass / (d->edge * d->edge * d->edge), size, &b.mass, NULL), NULL, "box mass");
     s.type = TB_SHAPE_BOX;
@@ -356,7 +337,7 @@ static int tumble_pile(const ode_pile_def *d, const ode_shape *shapes, int sleep
     tb_world *w = new_world(d->gravity, "pile");
     const double *x;
     int i, below = 0;
-    set_sleep(w, tb_default_contact_settings().velocity_iterations, -1, sleep);
+    set_sleep(w, sleep);
     add_plane(w, d->mu);
     for (i = 0; i < d->count * d->copies; ++i) {
         const ode_shape *o = &shapes[i % d->count];
@@ -500,7 +481,7 @@ static void asleep_lines(void)
     pyramid_run pyr;
     double ms, each[2];
     int k;
-    tumble_pyramid(&pd, tb_default_contact_settings().velocity_iterations, -1, 1, &pyr, &ms);
+    tumble_pyramid(&pd, 1, &pyr, &ms);
     printf("asleep    pyramid %d boxes, every body asleep: %.4f ms/step (median of %d steps after all slept at step "
            "%d; -1: not asleep) | Bullet 0.041, MuJoCo 0.033 (issue 18's figures)\n",
            ode_pyramid_boxes(pd.levels), ms, ASLEEP_STEPS, pyr.t.asleep_after);
@@ -521,26 +502,28 @@ int main(int argc, char **argv)
 {
     const ode_pyramid_def pd = ode_default_pyramid_def();
     const ode_pile_def ld = ode_default_pile_def();
-    const int iterations = tb_default_contact_settings().velocity_iterations;
     ode_shape *shapes = xmalloc((size_t)ld.count * sizeof *shapes);
-    /* per run: tumble, tumble with every sweep at the default iterations
-       and at twice them, ODE; medians of steps for the pyramid, means for
+    /* per run: tumble, ODE; medians of steps for the pyramid, means for
        the pile */
-    double pyr_ms[BENCH_RUNS], pyr1_ms[BENCH_RUNS], pyr2_ms[BENCH_RUNS], pyr_ode_ms[BENCH_RUNS],
-        pyr_ode_mean[BENCH_RUNS];
+    double pyr_ms[BENCH_RUNS], pyr_ode_ms[BENCH_RUNS], pyr_ode_mean[BENCH_RUNS];
     double pyr_sleep_ms[BENCH_RUNS], pile_sleep_ms[BENCH_RUNS], pyr_ode_sleep_ms[BENCH_RUNS];
     double pile_ms[BENCH_RUNS], pile_median_ms[BENCH_RUNS], pile_ode_ms[BENCH_RUNS], pile_ode_median_ms[BENCH_RUNS];
-    pyramid_run pyr, pyr1, pyr2, pyr_sleep;
+    pyramid_run pyr, pyr_sleep;
     ode_pyramid_result pyr_ode, pyr_ode_sleep;
     ode_pyramid_def pd_sleep = pd;
     timing pile, pile_sleep;
     ode_pile_result pile_ode;
-    double t_ms, t1_ms, t2_ms, o_ms, ratio;
+    double t_ms, o_ms, ratio;
     int r, below = 0;
 
     if (argc >= 2 && !strncmp(argv[argc - 1], "--substeps=", 11)) {
         substeps = atoi(argv[argc - 1] + 11);
         --argc;
+        if (substeps < 1) {
+            fprintf(stderr, BENCH_NAME ": --substeps must be 1 or more\n");
+            free(shapes);
+            return 2;
+        }
     }
     if (argc == 3 && !strcmp(argv[1], "--scaling")) {
         free(shapes);
@@ -561,29 +544,19 @@ int main(int argc, char **argv)
            BENCH_RUNS);
     bench_print_build();
     bench_print_asserts();
-    if (substeps != 0)
-        printf("soft-step solver (the default): %d substeps\n",
-               substeps > 0 ? substeps : tb_default_contact_settings().substeps);
-    else
-        printf("the sweeps (substeps 0)\n");
+    printf("soft-step solver: %d substeps\n", substeps > 0 ? substeps : tb_default_contact_settings().substeps);
     printf("\n");
     fflush(stdout);
 
     /* The scenes are deterministic: sink, drift and contact counts are the
        same in every run, so the last run's are printed. */
     for (r = 0; r < BENCH_RUNS; ++r) {
-        tumble_pyramid(&pd, iterations, -1, 0, &pyr, NULL);
+        tumble_pyramid(&pd, 0, &pyr, NULL);
         if (!ode_pyramid(&pd, &pyr_ode)) {
             fprintf(stderr, BENCH_NAME ": ODE pyramid refused or failed\n");
             return EXIT_FAILURE;
         }
-        if (substeps == 0) { /* the sweeps' every-sweep runs (the soft step has no sweeps) */
-            tumble_pyramid(&pd, iterations, 0, 0, &pyr1, NULL);
-            tumble_pyramid(&pd, 2 * iterations, 0, 0, &pyr2, NULL);
-        } else {
-            pyr1 = pyr2 = pyr;
-        }
-        tumble_pyramid(&pd, iterations, -1, 1, &pyr_sleep, NULL);
+        tumble_pyramid(&pd, 1, &pyr_sleep, NULL);
         pd_sleep.auto_disable = 1;
         if (!ode_pyramid(&pd_sleep, &pyr_ode_sleep)) {
             fprintf(stderr, BENCH_NAME ": ODE pyramid with auto-disable refused or failed\n");
@@ -591,15 +564,11 @@ int main(int argc, char **argv)
         }
         pyr_ode_sleep_ms[r] = pyr_ode_sleep.timing.ms_mean;
         pyr_ms[r] = pyr.t.ms_median;
-        pyr1_ms[r] = pyr1.t.ms_median;
-        pyr2_ms[r] = pyr2.t.ms_median;
         pyr_sleep_ms[r] = pyr_sleep.t.ms_mean;
         pyr_ode_ms[r] = pyr_ode.timing.ms_median;
         pyr_ode_mean[r] = pyr_ode.timing.ms_mean;
     }
     t_ms = median_of(pyr_ms, BENCH_RUNS);
-    t1_ms = median_of(pyr1_ms, BENCH_RUNS);
-    t2_ms = median_of(pyr2_ms, BENCH_RUNS);
     o_ms = median_of(pyr_ode_ms, BENCH_RUNS);
     ratio = o_ms / t_ms;
     printf("pyramid   %d boxes  awake (sleep off) tumble %5.2f ms/step (median of steps over %g s)  top box sink %.3f m drift %.3f m | "
@@ -607,10 +576,6 @@ int main(int argc, char **argv)
            "top box within 1 cm throughout (farthest %.3f m): %s\n",
            ode_pyramid_boxes(pd.levels), t_ms, pd.duration, pyr.sink, pyr.drift, pd.iterations, o_ms,
            pyr_ode.top_sink, pyr_ode.top_drift, ratio, met(ratio >= 5), pyr.farthest, met(pyr.farthest <= 0.01));
-    if (substeps == 0)
-        printf("pyramid   %d boxes  awake, every sweep (velocity_tolerance 0): at %d iterations %5.2f ms/step, top box "
-               "farthest %.3f m; at %d iterations %5.2f ms/step, farthest %.3f m\n",
-               ode_pyramid_boxes(pd.levels), iterations, t1_ms, pyr1.farthest, 2 * iterations, t2_ms, pyr2.farthest);
     t_ms = median_of(pyr_sleep_ms, BENCH_RUNS);
     o_ms = median_of(pyr_ode_sleep_ms, BENCH_RUNS);
     printf("pyramid   %d boxes  default (sleep on) tumble %5.2f ms/step (mean over %g s; median %.3f), all asleep after "
@@ -656,10 +621,8 @@ int main(int argc, char **argv)
     asleep_lines();
     fflush(stdout);
 
-    /* the soft step: the whole step's time over its points and substeps;
-       the sweeps: t = fixed + k points iterations, at two iteration
-       counts, every sweep done */
-    if (substeps != 0) {
+    /* the whole step's time over its points and substeps */
+    {
         const int n = substeps > 0 ? substeps : tb_default_contact_settings().substeps;
         printf("contacts  ns per contact point per substep, for the whole step (collision, integration, solve, "
                "events): pile %.1f (%.0f points x %d substeps), pyramid %.1f (%.0f points) (Box2D v3 publishes about "
@@ -667,13 +630,6 @@ int main(int argc, char **argv)
                1e6 * median_of(pile_ms, BENCH_RUNS) / (pile.contacts_mean * n), pile.contacts_mean, n,
                1e6 * median_of(pyr_ms, BENCH_RUNS) / (pyr.t.contacts_mean * n), pyr.t.contacts_mean,
                BOX2D_NS_PER_CONTACT);
-    } else {
-        printf("contacts  ns per contact point per velocity iteration: %.1f for the whole step (pyramid, %.0f points x %d "
-               "iterations, every sweep; collision, integration, both passes, events), %.1f for the velocity sweep alone "
-               "(from the rerun at %d iterations) (Box2D v3 publishes about %d ns per contact per substep, 2D float)\n",
-               1e6 * t1_ms / (pyr1.t.contacts_mean * iterations), pyr1.t.contacts_mean, iterations,
-               1e6 * (t2_ms - t1_ms) / (pyr2.t.contacts_mean * 2 * iterations - pyr1.t.contacts_mean * iterations),
-               2 * iterations, BOX2D_NS_PER_CONTACT);
     }
     {
         static const struct {

@@ -19,7 +19,7 @@
    - tower: 30 cubes (0.5 m, 1 kg), each placed up to 1 cm off the one below
      and turned up to 3 degrees about the vertical (reproducible draws),
      kept awake 20 s: the top box's horizontal drift at 5, 10 and 20 s
-     (target: under 1 cm at 20 s), with stack_iterations 0 and 8.
+     (target: under 1 cm at 20 s).
    - lever: a beam (3 x 0.3 x 0.1 m) of 100 or 1000 kg laid across a 1 kg
      plank (1 x 0.2 x 0.05 m) on the ground at one end and a static block
      at the other, both tops at the same height: how deep the plank's lowest
@@ -51,9 +51,9 @@
 
    Each scene prints its mean milliseconds per step too. Scene names
    (wall, tallwall, tower, lever, plate, bridge, cradle, heap, boxheap) on the command line run only
-   those; --substeps=N runs them under the soft-step solver with N
-   substeps (the default settings: 4; 0: the sweeps), and --hertz=F sets its contact stiffness (F = 0: a quarter of
-   the substep rate, the stiffest it allows). */
+   those; --substeps=N runs them with N substeps (the default: 4), and
+   --hertz=F sets the contact stiffness (F = 0: a quarter of the substep
+   rate, the stiffest it allows). */
 #define _POSIX_C_SOURCE 199309L
 #define BENCH_NAME "bench_robustness"
 #include "bench.h"
@@ -68,9 +68,8 @@
 #define G 9.81
 #define PI 3.14159265358979323846
 
-/* --substeps and --hertz: the contact settings for every scene (0
-   substeps: the sweeps; -1, without the option: the default, the soft
-   step with 4) */
+/* --substeps and --hertz: the contact settings for every scene (-1,
+   without the option: the default) */
 static int substeps = -1;
 static double hertz = -1;
 
@@ -84,9 +83,9 @@ static tb_world *new_world(double gravity)
         fprintf(stderr, BENCH_NAME ": %s\n", message);
         exit(EXIT_FAILURE);
     }
-    if (substeps >= 0 || hertz >= 0) {
+    if (substeps > 0 || hertz >= 0) {
         tb_contact_settings cs = tb_world_contact_settings(w);
-        if (substeps >= 0)
+        if (substeps > 0)
             cs.substeps = substeps;
         if (hertz >= 0)
             cs.hertz = hertz > 0 ? hertz : 0.25 * cs.substeps / H;
@@ -160,11 +159,10 @@ static tb_body_id add_ball(tb_world *w, double r, double m, const double x[3], c
     return id;
 }
 
-static void set_awake(tb_world *w, int stack_iterations)
+static void set_awake(tb_world *w)
 {
     tb_contact_settings c = tb_world_contact_settings(w);
     c.sleep_time = INFINITY;
-    c.stack_iterations = stack_iterations;
     check(tb_world_set_contact_settings(w, &c), w, "settings");
 }
 
@@ -254,7 +252,7 @@ static void tall_wall(void)
     tb_world *w = new_world(G);
     int k, second;
     add_ground(w);
-    set_awake(w, 0);
+    set_awake(w);
     build_wall(w, TALL_COURSES, TALL_PER_COURSE, bricks, start);
     printf("tallwall  150 bricks in 15 courses of 10, awake: the top course moved");
     for (second = 1; second <= 20; ++second) {
@@ -276,7 +274,7 @@ static void tall_wall(void)
 
 /* ----------------------------------------------------------------- tower -- */
 
-static void tower(int stack_iterations)
+static void tower(void)
 {
     static const double cube[3] = { 0.5, 0.5, 0.5 };
     unsigned long long seed = 30;
@@ -286,7 +284,7 @@ static void tower(int stack_iterations)
     tb_world *w = new_world(G);
     int i, second;
     add_ground(w);
-    set_awake(w, stack_iterations);
+    set_awake(w);
     for (i = 0; i < 30; ++i) {
         const double r = 0.01 * sqrt(uniform(&seed)), a = 2 * PI * uniform(&seed);
         const double yaw = (2 * uniform(&seed) - 1) * 3 * PI / 180, up[3] = { 0, 0, 1 };
@@ -297,7 +295,7 @@ static void tower(int stack_iterations)
         axis_turn(up, yaw, q);
         top = add_box(w, cube, 1, placed, q, 0);
     }
-    printf("tower     30 cubes offset up to 1 cm and 3 deg, awake, stack_iterations %d: top drift", stack_iterations);
+    printf("tower     30 cubes offset up to 1 cm and 3 deg, awake: top drift");
     for (second = 1; second <= 20; ++second) {
         run(w, 60, &ms, &steps);
         if (second == 5 || second == 10 || second == 20) {
@@ -487,7 +485,7 @@ static void bridge(void)
     long steps = 0;
     int i, resets = 0;
     add_ground(w);
-    set_awake(w, 0);
+    set_awake(w);
     for (i = 0; i < 3; ++i) {
         const double size[3] = { 2 * HEAP_BRIDGE[i][7], 2 * HEAP_BRIDGE[i][8], 2 * HEAP_BRIDGE[i][9] };
         ids[i] = add_box(w, size, 1000 * size[0] * size[1] * size[2], HEAP_BRIDGE[i], HEAP_BRIDGE[i] + 3, 0);
@@ -563,8 +561,13 @@ int main(int argc, char **argv)
 {
     int i;
     for (i = 1; i < argc; ++i) {
-        if (strncmp(argv[i], "--substeps=", 11) == 0)
+        if (strncmp(argv[i], "--substeps=", 11) == 0) {
             substeps = atoi(argv[i] + 11);
+            if (substeps < 1) {
+                fprintf(stderr, BENCH_NAME ": --substeps must be 1 or more\n");
+                return 2;
+            }
+        }
         else if (strncmp(argv[i], "--hertz=", 8) == 0)
             hertz = atof(argv[i] + 8);
         else if (strncmp(argv[i], "--", 2) == 0) {
@@ -574,10 +577,8 @@ int main(int argc, char **argv)
     }
     printf("bench_robustness: contact scenes at 60 Hz, default settings (targets in the source's header)\n");
     {
-        const int n = substeps >= 0 ? substeps : tb_default_contact_settings().substeps;
-        if (n == 0)
-            printf("the sweeps (substeps 0)\n");
-        else if (hertz < 0)
+        const int n = substeps > 0 ? substeps : tb_default_contact_settings().substeps;
+        if (hertz < 0)
             printf("soft-step solver: %d substeps, contact stiffness the default\n", n);
         else
             printf("soft-step solver: %d substeps, contact stiffness %g Hz\n", n, hertz > 0 ? hertz : 0.25 * n / H);
@@ -590,9 +591,7 @@ int main(int argc, char **argv)
     if (wanted(argc, argv, "tallwall"))
         tall_wall();
     if (wanted(argc, argv, "tower")) {
-        tower(0);
-        if (substeps == 0) /* the sweeps' stack iterations (the soft step has none) */
-            tower(8);
+        tower();
     }
     if (wanted(argc, argv, "lever")) {
         lever(100);

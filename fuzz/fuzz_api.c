@@ -172,7 +172,6 @@ static void set_contacts(tb_world *w, fuzz_input *in)
     s.particle_radius = fuzz_below(in, 2) ? fuzz_double(in) : s.particle_radius;
     s.sleep_time = fuzz_below(in, 2) ? fuzz_double(in) : s.sleep_time;
     s.hertz = fuzz_below(in, 4) == 0 ? fuzz_double(in) : s.hertz;
-    s.stack_iterations = (int)fuzz_below(in, 3);
     (void)tb_world_set_contact_settings(w, &s);
 }
 

@@ -432,7 +432,7 @@ TB_API tb_status tb_shape_definition(const tb_world *world, tb_shape_id id, tb_s
 
 TB_API tb_contact_settings tb_default_contact_settings(void);
 /* Refused: values outside the ranges tb_contact_settings gives or the
-   input rule, and more than 1000000 iterations of any kind. */
+   input rule, and substeps outside 1 to 1000000. */
 TB_API tb_status tb_world_set_contact_settings(tb_world *world, const tb_contact_settings *settings);
 TB_API tb_contact_settings tb_world_contact_settings(const tb_world *world);
 

@@ -1356,22 +1356,18 @@ static int world_shape(lua_State *L)
 }
 
 /* world:contacts{ hertz, damping_ratio, max_push, restitution_threshold,
-   slop, velocity_iterations, velocity_tolerance, position_iterations,
-   stack_iterations, particle_radius, particle_friction,
-   particle_restitution, sleep_speed, sleep_time, substeps }:
-   change the contact settings (sleep_time = math.huge: never sleep;
-   substeps > 0: the soft-step solver, the default 4; 0: the sweeps) */
+   slop, particle_radius, particle_friction, particle_restitution,
+   sleep_speed, sleep_time, substeps }: change the contact settings
+   (sleep_time = math.huge: never sleep; substeps: the soft step's, >= 1,
+   the default 4) */
 static const char *const contact_options[] = { "hertz", "damping_ratio", "max_push", "restitution_threshold",
-                                               "slop", "velocity_iterations", "velocity_tolerance",
-                                               "position_iterations", "stack_iterations",
-                                               "particle_radius", "particle_friction", "particle_restitution",
+                                               "slop", "particle_radius", "particle_friction", "particle_restitution",
                                                "sleep_speed", "sleep_time", "substeps", NULL };
 
 static int world_contacts(lua_State *L)
 {
     tl_world *lw = check_world(L, 1);
     tb_contact_settings cs = tb_world_contact_settings(lw->world);
-    double vi = cs.velocity_iterations, pi = cs.position_iterations, si = cs.stack_iterations;
     double ss = cs.substeps;
     check_options(L, 2, "world:contacts", contact_options);
     opt_number(L, 2, "hertz", "world:contacts", &cs.hertz);
@@ -1379,20 +1375,15 @@ static int world_contacts(lua_State *L)
     opt_number(L, 2, "max_push", "world:contacts", &cs.max_push);
     opt_number(L, 2, "restitution_threshold", "world:contacts", &cs.restitution_threshold);
     opt_number(L, 2, "slop", "world:contacts", &cs.slop);
-    opt_number(L, 2, "velocity_iterations", "world:contacts", &vi);
-    opt_number(L, 2, "velocity_tolerance", "world:contacts", &cs.velocity_tolerance);
-    opt_number(L, 2, "position_iterations", "world:contacts", &pi);
-    opt_number(L, 2, "stack_iterations", "world:contacts", &si);
     opt_number(L, 2, "particle_radius", "world:contacts", &cs.particle_radius);
     opt_number(L, 2, "particle_friction", "world:contacts", &cs.particle_friction);
     opt_number(L, 2, "particle_restitution", "world:contacts", &cs.particle_restitution);
     opt_number(L, 2, "sleep_speed", "world:contacts", &cs.sleep_speed);
     opt_number(L, 2, "sleep_time", "world:contacts", &cs.sleep_time);
     opt_number(L, 2, "substeps", "world:contacts", &ss);
-    cs.velocity_iterations = vi >= 0 && vi < 1e6 ? (int)vi : 0;
-    cs.position_iterations = pi >= 0 && pi < 1e6 ? (int)pi : -1;
-    cs.stack_iterations = si >= 0 && si < 1e6 ? (int)si : -1;
-    cs.substeps = ss >= 0 && ss < 1e6 ? (int)ss : -1;
+    if (!(ss >= 1 && ss <= 1e6 && ss == floor(ss)))
+        return luaL_error(L, "world:contacts: substeps must be a whole number from 1 to 1000000 (got %f)", ss);
+    cs.substeps = (int)ss;
     if (tb_world_set_contact_settings(lw->world, &cs) != TB_OK)
         return raise_world_error(L, lw, "world:contacts");
     return 0;

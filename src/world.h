@@ -54,14 +54,6 @@ typedef struct tb__method {
     /* chooses another method and its substeps for a step h (auto.c), NULL
        for a method that steps by itself */
     tb_status (*plan)(tb_world *w, double h);
-    /* how far a constant force moves positions in one step, as a share s
-       of h: x gains s h (F h / m) beside the velocity's h v. 1/2 for the
-       methods exact on a constant force, 1 for symplectic (and implicit)
-       Euler, which drift with the kicked velocity, 0 for explicit Euler,
-       which drifts with the old one. The step hands it to the contact
-       solve, which moves positions by a resting contact's impulse this
-       way, so a body at rest stays put under every method */
-    double force_lever;
 } tb__method;
 
 typedef struct tb__contacts tb__contacts;

@@ -75,7 +75,7 @@ static size_t look(const tb_world *w, double out[SEEN])
     out[n++] = (double)tb_world_shape_count(w);
     {
         const tb_contact_settings cs = tb_world_contact_settings(w);
-        out[n++] = cs.hertz, out[n++] = cs.sleep_time, out[n++] = (double)cs.velocity_iterations;
+        out[n++] = cs.hertz, out[n++] = cs.sleep_time, out[n++] = (double)cs.substeps;
         out[n++] = tb_world_tolerance(w);
     }
     for (i = 0; i < tb_world_particle_count(w) && n + 7 <= SEEN; ++i) {
@@ -412,10 +412,10 @@ static tb_status hertz(scene *s, double hz)
     return tb_world_set_contact_settings(s->w, &c);
 }
 
-static tb_status iterations(scene *s, double n)
+static tb_status substeps(scene *s, double n)
 {
     tb_contact_settings c = tb_default_contact_settings();
-    c.velocity_iterations = (int)n;
+    c.substeps = (int)n;
     return tb_world_set_contact_settings(s->w, &c);
 }
 
@@ -507,7 +507,8 @@ static const probe probes[] = {
     { "step 1e-300", step, 1e-300, "step", NULL },
     { "step 1e300", step, 1e300, "step", NULL },
     { "contact hertz 1e300", hertz, 1e300, "hertz", NULL },
-    { "contact velocity iterations INT_MAX", iterations, (double)INT_MAX, "velocity iterations", NULL },
+    { "contact substeps INT_MAX", substeps, (double)INT_MAX, "substeps", NULL },
+    { "contact substeps 0", substeps, 0, "substeps", NULL },
     { "sleep time 1e300", sleep_time, 1e300, "sleep_time", NULL },
     { "uniform field 1e308", uniform_field, 1e308, "uniform field", NULL },
     { "vortex field 1e200 rad/s", vortex_field, 1e200, "vortex field", NULL },

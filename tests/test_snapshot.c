@@ -512,20 +512,11 @@ static void smaller_step_retry_equals_that_step_from_the_snapshot(void **unused)
 
 /* ---- determinism ------------------------------------------------------------------- */
 
-/* The hash of the contact scene after 3 s at 60 Hz, under the default
-   soft step (isa -2) or the contact sweeps (substeps 0) of instruction set
-   isa (-1: the widest this processor runs). */
-static uint64_t scene_hash(int isa)
+/* The hash of the contact scene after 3 s at 60 Hz. */
+static uint64_t scene_hash(void)
 {
     tb_world *w = default_scene(NULL);
     uint64_t h;
-    if (isa > -2) {
-        tb_contact_settings cs = tb_world_contact_settings(w);
-        cs.substeps = 0;
-        assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
-    }
-    if (isa >= 0)
-        w->contacts->isa = isa;
     steps(w, 180, H);
     assert_true(tb_world_sleeping_count(w) >= 3);
     h = tb_world_hash(w);
@@ -574,25 +565,18 @@ static void empty_worlds_snapshot_and_restore(void **unused)
 /* Recorded; a change that alters results must update it and say so in its
    commit. It held when recorded in the RelWithDebInfo build (gcc 12, -O2),
    the ASan + UBSan Debug build (./dev.sh asan, -O0) and a clang 14 Release
-   build (-O3), with the widest contact sweeps (AVX-512) and the portable
-   ones. The soft step's holds in the first two. */
-#define RECORDED_HASH 0x33b491b523624541ull
-#define RECORDED_SOFT_HASH 0x3a2512561164dfc7ull
+   build (-O3). */
+#define RECORDED_HASH 0x46ace808c4b65bc7ull
 
 static void contact_scene_hash_is_recorded(void **unused)
 {
-    const uint64_t h = scene_hash(-1), soft = scene_hash(-2);
+    const uint64_t h = scene_hash();
     (void)unused;
-    assert_true(scene_hash(-1) == h); /* a world rebuilt in the same process */
-    assert_true(scene_hash(-2) == soft);
-    if (scene_hash(TB__ISA_PORTABLE) != h)
-        fail_msg("the portable sweeps give another hash than the widest");
-    print_message("contact scene hash 0x%016llx (sweeps), 0x%016llx (soft step, the default)\n",
-                  (unsigned long long)h, (unsigned long long)soft);
-    if (h != RECORDED_HASH || soft != RECORDED_SOFT_HASH)
-        fail_msg("the contact scene's hashes are 0x%016llx and 0x%016llx, recorded 0x%016llx and 0x%016llx",
-                 (unsigned long long)h, (unsigned long long)soft, (unsigned long long)RECORDED_HASH,
-                 (unsigned long long)RECORDED_SOFT_HASH);
+    assert_true(scene_hash() == h); /* a world rebuilt in the same process */
+    print_message("contact scene hash 0x%016llx\n", (unsigned long long)h);
+    if (h != RECORDED_HASH)
+        fail_msg("the contact scene's hash is 0x%016llx, recorded 0x%016llx", (unsigned long long)h,
+                 (unsigned long long)RECORDED_HASH);
 }
 
 static const struct CMUnitTest tests[] = {

@@ -166,37 +166,18 @@ typedef struct tb_contact_settings {
     double max_push;              /* m/s: the fastest it separates overlaps; default 3 */
     double restitution_threshold; /* m/s: slower impacts do not bounce; default 1 */
     double slop;                  /* m: overlap left alone, against jitter; default 0.005 */
-    int velocity_iterations;      /* the most sweeps of the velocity pass; default 20 (a
-                                     step where many contacts start touching without last
-                                     step's impulses sweeps on, up to 16 times as many,
-                                     until their total normal impulse settles) */
-    double velocity_tolerance;    /* m/s (rad/s for turns): the velocity pass stops early,
-                                     after 4 sweeps or more, once a pair of sweeps changed
-                                     no velocity it enforces by more than this; default
-                                     1e-6; 0: always velocity_iterations sweeps */
-    int position_iterations;      /* sweeps of the position pass (each pair as a patch,
-                                     then its points); default 3 */
-    int stack_iterations;         /* conjugate-gradient iterations on the normal force and
-                                     tilts of every pair at rest, together, before the
-                                     sweeps of each step. They keep upright stacks whose
-                                     boxes are offset from the one below and that stay
-                                     awake, which the sweeps alone let lean and fall; 8
-                                     cost about 40% of an awake pyramid's step; default 0
-                                     (none) */
     double particle_radius;       /* m: particles collide with shapes as spheres of this
                                      radius (0: points); < 0 (default -1): they do not */
     double particle_friction;     /* default 0.6 */
     double particle_restitution;  /* default 0 */
     double sleep_speed;           /* m/s: a body slower than this (|v| + |w| times its
                                      shapes' reach), and that moved less than this times
-                                     the step in it (the position pass lifts a buried body
-                                     without giving it speed), is resting; default 0.05 */
+                                     the step in it (a push out of an overlap moves a
+                                     body without giving it speed), is resting; default 0.05 */
     double sleep_time;            /* s: an island of touching bodies that all rest this
                                      long falls asleep; default 0.5, INFINITY: never */
-    int substeps;                 /* > 0: the soft-step solver with that many substeps a
-                                     step (docs/contacts.md); default 4; 0: the sweeps
-                                     and the position pass, whose settings are
-                                     velocity_iterations to stack_iterations */
+    int substeps;                 /* the soft-step solver's substeps a step
+                                     (docs/contacts.md); default 4; >= 1 */
 } tb_contact_settings;
 
 typedef enum tb_contact_event_type { TB_CONTACT_BEGIN, TB_CONTACT_END } tb_contact_event_type;

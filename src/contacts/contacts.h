@@ -1,9 +1,7 @@
 /* contacts.h: shapes in a world and the contacts between them (not
    public): the shapes' API and storage (shapes.c), finding contacts and
-   solving them by the sweeps, substeps 0 (contact.c, with the sweeps'
-   lanes in contact_lanes.c and the conjugate-gradient solves in
-   cold_start.c), the soft step, the default (soft_step.c, stack_solve.c
-   and continuous.c, soft_step.h), and sleep (sleep.c). The
+   their events (contact.c), solving them by the soft step (soft_step.c,
+   stack_solve.c and continuous.c, soft_step.h), and sleep (sleep.c). The
    model is described in docs/contacts.md.
    A world holds a pointer to one tb__contacts, allocated with its first
    shape or contact settings: a world without shapes pays nothing. */
@@ -44,179 +42,7 @@ typedef struct tb__point {
     double separation0;        /* its separation, when the shapes last collided */
     int active;                /* touching after the free motion: solved */
     int matched;               /* it touched last step too (warm started) */
-    double friction_impulse[3];/* always 0: both solvers keep friction per patch
-                                  (tb__entry.friction_impulse); the state hash reads it */
 } tb__point;
-
-/* The solver works on batches of up to TB__BATCH_LANES manifolds that
-   share no moving body (a colouring of the step's manifolds), laid out
-   lane by lane so that one instruction serves every lane
-   (contact_lanes.c). A manifold is a lane, solved as one patch at the
-   centre of its touching points, in six rows:
-   - the normal: a force row (>= 0) where last step's normal force was
-     centred (shift), and a tilt about each tangent (the first along a
-     side of the points), within that force times the range of the
-     points' levers about that point (the centre of pressure stays within
-     the points' bounding rectangle along the tangents: their own
-     rectangle for a box's face);
-   - friction (as Bepu and PhysX's patch friction): two tangent rows within
-     the circle mu times the normal force, and a twist about the normal
-     within that times the points' mean distance from the centre.
-   The patch shares a tall stack's weight between a pair's points within
-   the sweeps, where rows per point, met in turn, leave that share
-   unconverged (stack_of_ten_stands). The position pass meets the patch
-   too (the press and tilts toward the plane that best levels what the
-   points need), then each point's own normal row for what is left. A row
-   holds r x d at each anchor and I^-1 (r x d).
-   Bodies are indices into the velocity arrays, where 0 is the static
-   world (no motion, no inverse mass), so the sweeps never branch on which
-   side moves; an empty lane, or a lane without a given point, is all zeros
-   on the static world. */
-#define TB__BATCH_LANES 8
-#define TB__COLOURS 64 /* one bit each in a uint64_t */
-
-/* The patch's rows, in a batch's arrays */
-enum { TB__ROW_TANGENT1, TB__ROW_TANGENT2, TB__ROW_TWIST, TB__ROW_TILT1, TB__ROW_TILT2, TB__ROW_PRESS, TB__PATCH_ROWS };
-
-typedef struct tb__lane_point {
-    double arm_a[3][TB__BATCH_LANES], arm_b[3][TB__BATCH_LANES]; /* [axis][lane]: its normal row */
-    double turn_a[3][TB__BATCH_LANES], turn_b[3][TB__BATCH_LANES];
-    double mass[TB__BATCH_LANES];       /* 1 / (J M^-1 J^T) */
-    double predicted[TB__BATCH_LANES];  /* m: separation after the free motion */
-    double push_target[TB__BATCH_LANES];/* m: the separation the position pass aims for */
-    double position_impulse[TB__BATCH_LANES];
-    struct tb__point *source[TB__BATCH_LANES]; /* where the impulse goes back to; NULL: none */
-} tb__lane_point;
-
-typedef struct tb__batch {
-    int32_t a[TB__BATCH_LANES], b[TB__BATCH_LANES];
-    int points;                         /* the most points of any lane */
-    int one_sided;                      /* every lane's a is the static world: the sweeps
-                                           skip side a (a plane's contacts) */
-    int tilting;                        /* some lane resists tilts: its points have a range
-                                           across a tangent, or it resists rolling */
-    double dir[3][3][TB__BATCH_LANES];  /* [row][axis][lane]: the manifold's normal, tangents */
-    double friction[TB__BATCH_LANES];
-    /* the patch, TB__PATCH_ROWS rows: the tangent and press rows at the
-       centre; the twist and tilts turn about the normal and the tangents
-       (their arms are those directions themselves) */
-    double arm_a[TB__PATCH_ROWS][3][TB__BATCH_LANES], arm_b[TB__PATCH_ROWS][3][TB__BATCH_LANES]; /* [row][axis][lane] */
-    double turn_a[TB__PATCH_ROWS][3][TB__BATCH_LANES], turn_b[TB__PATCH_ROWS][3][TB__BATCH_LANES];
-    double mass[TB__PATCH_ROWS][TB__BATCH_LANES];
-    double impulse[TB__PATCH_ROWS][TB__BATCH_LANES]; /* N s (twist, tilts: N m s), accumulated */
-    double press_target[TB__BATCH_LANES];/* m/s: the normal velocity to reach at the centre */
-    double bounce[TB__BATCH_LANES];     /* m/s: for a lane that bounces (> 0), the normal
-                                           velocity its press reaches after the sweeps */
-    int bouncing;                       /* some lane bounces */
-    double tilt_low[2][TB__BATCH_LANES], tilt_high[2][TB__BATCH_LANES]; /* m: the range of the
-                                           points' levers for each tilt (a unit normal force's
-                                           moment about tangent d, from the centre), widened by
-                                           the rolling resistance on both sides */
-    double twist_reach[TB__BATCH_LANES];/* m: mean distance of the points from the centre */
-    double shift[2][TB__BATCH_LANES];   /* m: where the press acts, as levers from the centre
-                                           (the tilts' ranges are then from there): last
-                                           step's centre of pressure */
-    double lever[TB__BATCH_LANES];      /* s: how long the patch's normal rows (press, tilts) act
-                                           on positions */
-    double side_lever[TB__BATCH_LANES]; /* s: ... and its friction rows (tangents, twist) */
-    double keep[TB__BATCH_LANES];       /* the share of its normal impulses to start the next
-                                           step from */
-    int resting[TB__BATCH_LANES];       /* every point at rest: none struck this step or is
-                                           deeper than the slop, and the new ones' sides move
-                                           slower than the sleep speed (cold_start.c) */
-    int landing[TB__BATCH_LANES];       /* every point at rest or struck this step, none deeper
-                                           than the slop */
-    int heavy[TB__BATCH_LANES];         /* landing, between two bodies whose masses differ
-                                           TB__MASS_RATIO-fold or more where a point of it struck
-                                           this step or the last, TB__MASS_RATIO_RESTING-fold
-                                           where none did (cold_start.c) */
-    int in_solve;                       /* some lane's normal rows are in the cold start's
-                                           solve (its kernels pass over the other batches) */
-    /* the position pass's patch, met before the points' own rows: what the
-       centre's normal displacement must reach (m), then the turns about
-       the tangents (rad) of the least-squares plane through what each
-       point needs; and their accumulated position impulses */
-    double patch_push[3][TB__BATCH_LANES], patch_impulse[3][TB__BATCH_LANES];
-    struct tb__entry *source[TB__BATCH_LANES]; /* NULL: an empty lane */
-    const double *inv_world_a[TB__BATCH_LANES], *inv_world_b[TB__BATCH_LANES]; /* I^-1, 9 each */
-    tb__lane_point point[TB__MANIFOLD_POINTS];
-} tb__batch;
-
-/* contact_lanes.c: a sweep over the batches on the velocity array m, and
-   a position sweep (normal rows only) on the position-change array;
-   backwards: the batches last to first, each one's rows reversed (the
-   position sweep: its points, after the patch). isa: tb__isa() or below,
-   the same bits each. */
-void tb__sweep_velocities(tb__batch *batches, size_t n, double *m, int backwards, int isa);
-void tb__sweep_positions(tb__batch *batches, size_t n, double *m, int backwards, int isa);
-
-/* Restitution, after the velocity sweeps: the press row of every lane
-   that bounces, once, toward its bounce target, with friction and tilts
-   left as the sweeps left them (as Box2D v3 bounces after its solve).
-   Bounced within the sweeps, a sticking friction row would carry part of
-   the bounce through the body's turn into its motion and give it energy
-   (spinning_plate_bounces_without_gaining_energy). */
-void tb__bounce(tb__batch *batches, size_t n, double *m, int isa);
-
-/* The rows of every batch from its lanes' anchors: on entry each point's
-   arm_a, arm_b hold its r from each centre, the patch's row 0 the
-   centre's; I^-1 from inv_world_a, _b, inverse masses from slot 6 of m.
-   Fills every arm, turn and mass. */
-void tb__set_up_rows(tb__batch *batches, size_t n, const double *m, int isa);
-
-/* Every row's accumulated impulse pushed once into m, batch by batch:
-   TB__PUSH_VELOCITY, on the velocities (the warm start);
-   TB__PUSH_MOTION, on the position changes, times each row's lever time;
-   TB__PUSH_MOMENTA, on the momenta (P, L; slot 6 holds 1 for a moving
-   body), by the rows' arms. */
-enum { TB__PUSH_VELOCITY, TB__PUSH_MOTION, TB__PUSH_MOMENTA };
-void tb__push_impulses(tb__batch *batches, size_t n, double *m, int what, int isa);
-
-/* For the cold start's conjugate gradients (cold_start.c), the normal
-   rows of every batch (its press, then its two tilts) as [batch][row][lane]
-   arrays of TB__NORMAL_ROWS * TB__BATCH_LANES doubles: the impulses given
-   pushed on the velocities m, as TB__PUSH_VELOCITY pushes the batches'
-   own; and each row's rate on m (the relative velocity the sweeps hold it
-   to), into out. */
-#define TB__NORMAL_ROWS 3
-void tb__push_normal_rows(const tb__batch *batches, size_t n, double *m, const double *rows, int isa);
-void tb__normal_rates(const tb__batch *batches, size_t n, const double *m, double *out, int isa);
-
-/* contact.c: the turns (phi_1, phi_2) that best level a patch, the
-   least-squares solution of S phi = b with S = [s00 s01; s01 s11] the
-   sums of the points' lever products: by S's pseudo-inverse, a direction
-   whose spread is under 1e-9 of the largest left unturned. (A test of
-   det against s00 s11 would let points all but on a line, their levers
-   across it of a rounding's size, be turned by millions of radians:
-   patch_turns_are_least_squares.) */
-void tb__level_turns(double s00, double s01, double s11, double b0, double b1, double turn[2]);
-
-/* cold_start.c: the normal rows of the lanes at rest solved as
-   equalities by conjugate gradients from the warm starts, up to most
-   iterations or until every row is within tolerance of stopping, clamped
-   and pushed on c->velocity, before the sweeps: where the result leaves
-   no row much further from what it may do than the warm starts did, and
-   (whole) where it met them. Returns the iterations taken (negated: the
-   guess was not taken). */
-int tb__cold_start(tb__contacts *c, int most, double tolerance, int whole);
-
-/* The same for the lanes landing near the heavy ones (tb__batch), where
-   their solve met every row, leaves none further off and takes no
-   kinetic energy into the step: a heavy body landing on a light one, and
-   the step after. */
-int tb__heavy_landings(tb__contacts *c, int most, double tolerance);
-
-/* Sequential impulses pass a load between bodies of very different masses
-   slowly: a light body under a heavy one needs about as many sweeps as
-   the ratio of their masses to carry it. A landing between bodies this
-   many times apart in mass is solved with the lanes near it (cold_start.c,
-   heavy_box_lands_on_light_ones). */
-#define TB__MASS_RATIO 10
-/* ... and resting, from this ratio on: where a step's sweeps take out
-   less than a fifth of what knocked the pair off, and a heavy body left
-   to them sinks through a light one (heavy_box_lands_on_light_ones, its
-   10000 times heavier box with sleep off). */
-#define TB__MASS_RATIO_RESTING 100
 
 /* The points between two shapes (or a shape and a particle). */
 typedef struct tb__entry {
@@ -229,13 +55,10 @@ typedef struct tb__entry {
                                   sphere's centre, a capsule's segment; 0: box, plane) */
     double friction_impulse[3];/* N s, world: the patch's, kept from step to step */
     double twist_impulse;      /* N m s, about the normal */
-    double tilt_impulse[3];    /* N m s, world, in the contact plane: the tilts', kept from
-                                  step to step */
     double rolling_impulse[3]; /* N m s, world: the soft step's rolling resistance, kept */
     int count;
     int touching;
     int asleep;                /* carried over unsolved: both sides sleep or are static */
-    int colour;                /* its batches' colour, TB__COLOURS: a batch of its own */
     int cached;                /* the fields below hold the last collision */
     int struck, struck_before; /* a point of it struck this step, last step */
     int reused;                /* this step's manifold is the last collision's, moved */
@@ -271,20 +94,13 @@ typedef struct tb__solver_body {
     uint32_t slot;
     double inv_mass;
     double inv_inertia[3];     /* principal moments' inverses (0 for particles) */
-    double inv_world[9];       /* R diag(inv_inertia) R^T, after the free motion */
     double x0[3], q0[4];       /* pose at the start of the step */
     double v0[3], w0[3];       /* velocities at the start of the step */
     double p0[3], l0[3];       /* N s, N m s: a body's momenta at the start of the step */
-    double x[3];               /* position after the free motion */
-    double turn[3];            /* the free motion's rotation over the step (vector) */
+    double x[3];               /* position at the end of the step */
+    double turn[3];            /* its rotation over the step (vector: 2 sin(angle/2) n), for
+                                  the events' points */
 } tb__solver_body;
-
-/* The sweeps' per-body arrays: TB__MOTION doubles per solver body + 1 (0 is
-   the static world): a velocity (v, w) or position change (dp, dtheta),
-   then the inverse mass; one cache line each. */
-#define TB__MOTION 8
-/* the three arrays' block, with room to start them on a 64-byte line */
-#define TB__MOTION_BYTES(cap) (3 * TB__MOTION * (cap) * sizeof(double) + 64)
 
 /* A sleeping body's pose, put back after the free motion. */
 typedef struct tb__pose {
@@ -333,33 +149,9 @@ struct tb__contacts {
     uint32_t *starts, *previous_starts; /* [key_a]: where key_a's entries start in (previous_)order */
     size_t starts_cap, previous_starts_cap, starts_count, previous_starts_count;
 
-    tb__batch *batches;        /* the touching manifolds of this step */
-    size_t batch_count, batch_cap;
-    double *settle;            /* [batch_cap * TB__PATCH_ROWS * TB__BATCH_LANES]: the batches'
-                                  impulses before a pair of sweeps */
-    size_t settle_cap;
-    double *cold_rows;         /* [7 * batch_cap * TB__NORMAL_ROWS * TB__BATCH_LANES]: the cold
-                                  start's vectors (cold_start.c) */
-    size_t cold_rows_cap;
-    uint64_t *colours;         /* [body_count + 1]: the colours a solver body's manifolds
-                                  took; in the solve, the cold start's rings (cold_start.c) */
-    size_t colours_cap;
-    uint32_t *bucket;          /* [entry_cap]: entries by colour, then points */
-    size_t bucket_cap;
-    int isa;                   /* the sweeps' instruction set (tb__isa) */
-    int sweeps;                /* velocity sweeps the last step took (for tests; of a cold
-                                  step's extra sweeps, the pair that settled is not counted) */
-    size_t heavy_lanes;        /* lanes of this step that are heavy (tb__batch) */
-    size_t bounces;            /* lanes of this step that bounce */
+    uint32_t *park_index;      /* [entry_count + 1]: park's scratch */
+    size_t park_index_cap;
     double kept_h;             /* s: the step the kept impulses were solved for (0: none) */
-    double gravity[3];         /* m/s^2: the world's, this step */
-    double rest_lever;         /* s: how long a resting contact's impulse acts on positions
-                                  this step, as a constant force would under the world's
-                                  method (tb__force_lever times h) */
-    double *velocity, *motion, *momenta; /* [TB__MOTION * motion_cap] each, one block: see
-                                  TB__MOTION (momenta: P, L, then 1 or 0 for the static world) */
-    double *motion_block;      /* the block as allocated: TB__MOTION_BYTES(motion_cap) */
-    size_t motion_cap;
 
     tb__solver_body *bodies;
     size_t body_count, body_cap;
@@ -403,12 +195,9 @@ struct tb__contacts {
 int tb__contacts_active(const tb_world *w);
 /* Before the integrator: find this step's contacts at the start positions. */
 tb_status tb__contacts_prepare(tb_world *w, double h);
-/* After the integrator's free motion: solve the contacts. force_lever is
-   how far the step's method moves positions under a constant force, as a
-   share of h (tb__force_lever, stepping/stepping.h; tb__method in
-   world.h): a resting contact's impulse moves positions by that lever, so
-   a body at rest stays put under every method. */
-void tb__contacts_solve(tb_world *w, double h, double force_lever);
+/* After the integrator's free motion: solve the contacts (the soft
+   step), then events and sleep. */
+void tb__contacts_solve(tb_world *w, double h);
 /* The energy (J) of what the solve may change: the prepared step's
    bodies and particles in contact, and with a particle among them the
    springs' (springs join particles). Its change over the solve is the
@@ -420,10 +209,10 @@ double tb__contacts_energy(const tb_world *w);
 void tb__place_shape(const tb__shape *s, const double x[3], const double q[4], tb__geom *g);
 void tb__contacts_free(tb_world *w);
 
-/* soft_step.c: the step's contacts solved by the soft-step solver
-   (settings.substeps > 0) instead of the sweeps: the bodies and particles
-   in them moved again from the start of the step in substeps, then
-   stored. Events and sleep stay with tb__contacts_solve. */
+/* soft_step.c: the step's contacts solved by the soft-step solver: the
+   bodies and particles in them moved again from the start of the step in
+   settings.substeps substeps, then stored. Events and sleep stay with
+   tb__contacts_solve. */
 tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h);
 void tb__soft_free(tb_world *w, tb__contacts *c);
 

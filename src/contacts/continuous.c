@@ -14,7 +14,7 @@
    neighbours and a dropped heap's capsule went 13 cm into the plane).
    Its velocities stay, scaled down by what gravity gives back of the fall
    it is taken back up: the pass never adds energy
-   (test_contacts_stress.heaps_built_overlapping_soft_step,
+   (test_contacts_stress.heaps_built_overlapping,
    test_contacts_soft.soft_step_spinning_plate_stays_on_the_slab). */
 #include "contacts/soft_step.h"
 

@@ -30,9 +30,6 @@ tb_contact_settings tb_default_contact_settings(void)
     s.max_push = 3;
     s.restitution_threshold = 1;
     s.slop = 0.005;
-    s.velocity_iterations = 20;
-    s.velocity_tolerance = 1e-6;
-    s.position_iterations = 3;
     s.particle_radius = -1;
     s.particle_friction = 0.6;
     s.sleep_speed = 0.05;
@@ -63,7 +60,6 @@ static tb_status contacts_of(tb_world *w, tb__contacts **out)
             return tb__fail(w, TB_ERR_MEMORY, "out of memory for shapes");
         memset(c, 0, sizeof *c);
         c->settings = tb_default_contact_settings();
-        c->isa = tb__isa();
         w->contacts = c;
         w->body_removed = body_removed;
     }
@@ -95,17 +91,12 @@ void tb__contacts_free(tb_world *w)
     tb__alloc(w, c->order_scratch, c->order_scratch_cap * sizeof *c->order_scratch, 0);
     tb__alloc(w, c->starts, c->starts_cap * sizeof *c->starts, 0);
     tb__alloc(w, c->previous_starts, c->previous_starts_cap * sizeof *c->previous_starts, 0);
-    tb__alloc(w, c->batches, c->batch_cap * sizeof *c->batches, 0);
-    tb__alloc(w, c->settle, c->settle_cap * sizeof *c->settle, 0);
-    tb__alloc(w, c->cold_rows, c->cold_rows_cap * sizeof *c->cold_rows, 0);
-    tb__alloc(w, c->colours, c->colours_cap * sizeof *c->colours, 0);
-    tb__alloc(w, c->bucket, c->bucket_cap * sizeof *c->bucket, 0);
+    tb__alloc(w, c->park_index, c->park_index_cap * sizeof *c->park_index, 0);
     tb__alloc(w, c->owner, c->proxy_cap * sizeof(uint32_t), 0);
     tb__alloc(w, c->still, c->proxy_cap * sizeof(uint32_t), 0);
     tb__alloc(w, c->parked, c->parked_cap * sizeof *c->parked, 0);
     tb__alloc(w, c->poses, c->pose_cap * sizeof *c->poses, 0);
     tb__alloc(w, c->island_scratch, c->island_scratch_cap * sizeof(double), 0);
-    tb__alloc(w, c->motion_block, TB__MOTION_BYTES(c->motion_cap), 0); /* velocity, motion, momenta */
     tb__alloc(w, c->bodies, c->body_cap * sizeof *c->bodies, 0);
     tb__alloc(w, c->body_map, c->body_map_cap * sizeof(int32_t), 0);
     tb__alloc(w, c->particle_map, c->particle_map_cap * sizeof(int32_t), 0);
@@ -313,10 +304,9 @@ tb_status tb_shape_definition(const tb_world *w, tb_shape_id id, tb_shape_def *d
     return TB_OK;
 }
 
-/* The most sweeps of each kind a step may take: far beyond any use (the
-   defaults are 20, 3 and 0), and small enough that the solver's multiples
-   of them stay ints. */
-#define MAX_ITERATIONS 1000000
+/* The most substeps a step may take: far beyond any use (the default is
+   4), and small enough that the solver's multiples of them stay ints. */
+#define MAX_SUBSTEPS 1000000
 
 static tb_status check_settings(tb_world *w, const tb_contact_settings *s)
 {
@@ -328,22 +318,13 @@ static tb_status check_settings(tb_world *w, const tb_contact_settings *s)
         (st = tb__check_scale(w, s->max_push, "contact settings: max_push")) != TB_OK ||
         (st = tb__check_coefficient(w, s->restitution_threshold, "contact settings: restitution_threshold")) != TB_OK ||
         (st = tb__check_coefficient(w, s->slop, "contact settings: slop")) != TB_OK ||
-        (st = tb__check_coefficient(w, s->velocity_tolerance, "contact settings: velocity_tolerance")) != TB_OK ||
         (st = tb__check_values(w, &s->particle_radius, 1, "contact settings: particle_radius")) != TB_OK ||
         (st = tb__check_coefficient(w, s->particle_friction, "contact settings: particle_friction")) != TB_OK ||
         (st = tb__check_coefficient(w, s->sleep_speed, "contact settings: sleep_speed")) != TB_OK)
         return st;
-    if (s->velocity_iterations < 1 || s->velocity_iterations > MAX_ITERATIONS)
-        return tb__fail(w, TB_ERR_ARGUMENT, "contact settings: velocity iterations must be from 1 to %d (got %d)",
-                        MAX_ITERATIONS, s->velocity_iterations);
-    if (s->position_iterations < 0 || s->position_iterations > MAX_ITERATIONS ||
-        s->stack_iterations < 0 || s->stack_iterations > MAX_ITERATIONS)
-        return tb__fail(w, TB_ERR_ARGUMENT,
-                        "contact settings: position and stack iterations must be from 0 to %d (got %d, %d)",
-                        MAX_ITERATIONS, s->position_iterations, s->stack_iterations);
-    if (s->substeps < 0 || s->substeps > MAX_ITERATIONS)
-        return tb__fail(w, TB_ERR_ARGUMENT, "contact settings: substeps must be from 0 to %d (got %d)",
-                        MAX_ITERATIONS, s->substeps);
+    if (s->substeps < 1 || s->substeps > MAX_SUBSTEPS)
+        return tb__fail(w, TB_ERR_ARGUMENT, "contact settings: substeps must be from 1 to %d (got %d)",
+                        MAX_SUBSTEPS, s->substeps);
     if (!(s->particle_restitution >= 0 && s->particle_restitution <= 1))
         return tb__fail(w, TB_ERR_ARGUMENT, "contact settings: particle_restitution must be in [0, 1] (got %g)",
                         s->particle_restitution);

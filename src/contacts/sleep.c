@@ -159,8 +159,8 @@ void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
         tb__body_velocity(w, (uint32_t)i, v, omega);
         w->body_rest[i] = tb__norm3(v) + tb__norm3(omega) * reach[i] < c->settings.sleep_speed ? w->body_rest[i] + h : 0;
     }
-    /* ... and that moved slower than that over the step: the position pass
-       moves a body out of an overlap without giving it speed
+    /* ... and that moved slower than that over the step: the push out of
+       overlaps moves a body without giving it speed
        (buried_plank_comes_out_before_it_sleeps) */
     for (i = 0; i < c->body_count; ++i) {
         const tb__solver_body *b = &c->bodies[i];

@@ -1,8 +1,8 @@
-/* soft_step.c: the soft-step contact solver, chosen by settings.substeps
-   > 0 (docs/contacts.md, "The soft-step solver"). The step's contacts are
+/* soft_step.c: the contact solver (docs/contacts.md, "The soft step").
+   The step's contacts are
    those tb__contacts_prepare found at the start positions; the bodies
    and particles in them are moved again from the start of the step in
-   substeps of h / n, each of which
+   n = settings.substeps substeps of h / n, each of which
    1. adds half the substep's share of the step's external change of
       momentum (what the world's method gave the free motion: P and L for
       bodies, the velocity for particles);
@@ -974,7 +974,7 @@ static int impacts(tb__contacts *c, double hs)
    turned back by its change of spin so: a turn changes the energy of a
    body whose inertia is far from round (w is taken from L at the new
    orientation), and a thin bar spun up by a corner's blow gained 2777 J
-   in one substep by it (heaps_built_overlapping_soft_step). The drift
+   in one substep by it (heaps_built_overlapping). The drift
    turns it by the spin after the blow over the whole substep, which keeps
    its energy. */
 static void impacts_moved(tb__contacts *c)
@@ -1034,7 +1034,6 @@ static void store(tb_world *w, tb__contacts *c, int n)
         else
             memset(b->turn, 0, sizeof b->turn);
     }
-    memset(c->motion, 0, TB__MOTION * (c->body_count + 1) * sizeof *c->motion);
     /* the impulses of the step, for the next one's warm start (+ 0.0: a
        zero kept as +0, whichever sign the clamps (tb__most) gave it, which a
        compiler may choose either way: the state hash reads the bits,
@@ -1043,10 +1042,7 @@ static void store(tb_world *w, tb__contacts *c, int n)
     for (i = 0; i < c->soft_row_count; ++i) {
         const tb__soft_row *o = &c->soft_rows[i];
         tb__point *p = o->point;
-        int k;
         p->normal_impulse = n * tb__most(o->impulse - o->settled, 0) + 0.0;
-        for (k = 0; k < 3; ++k)
-            p->friction_impulse[k] = 0;
         p->active = o->most > 0 || o->bounced; /* a bounce alone touched too */
         p->speed = o->struck && o->approach < 0 && p->active ? -o->approach : 0;
     }
@@ -1111,13 +1107,13 @@ static void settle(tb__contacts *c, double hs, const soft *sf)
    with it (a bar's about its axis is thousands of times its others), and
    a row pushing through the old one would change w by what L's change
    does not give, which the next drift, taking w from L, turns into energy
-   (smallest_failing_scenes' bar). */
+   (smallest_failing_scenes_pass' bar). */
 /* After a substep: a patch whose points bounced keeps, as the next
    substep's warm start, only the share of its friction, twist and
    rolling resistance that its rows' pushes back (the bounce's share is a
    blow, not a force that lasts): warm started whole, a rod's rim
    friction from a bounce would spin it up again in every substep
-   (smallest_failing_scenes' rod). */
+   (smallest_failing_scenes_pass' rod). */
 static void unbounce(tb__contacts *c)
 {
     size_t i, k;
@@ -1139,7 +1135,7 @@ static void unbounce(tb__contacts *c)
    rate its separation (separation_from_motion) changes at. With the
    start's arms a thin bar spun at 725 rad/s about its axis by a corner's
    blow saw that corner rise at 29 m/s while it fell 9 cm into the plane
-   in a substep (heaps_built_overlapping_soft_step). */
+   in a substep (heaps_built_overlapping). */
 static void turn_arms(const tb__contacts *c, tb__soft_row *o)
 {
     double d[3];
@@ -1217,7 +1213,6 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
     tb__soft_continuous(w, c);
     store(w, c, n);
     c->kept_h = h;
-    c->sweeps = 0;
     return TB_OK;
 }
 

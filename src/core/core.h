@@ -164,13 +164,13 @@ tb_status tb__check_busy(tb_world *w, const char *what);
 
 /* ---- instruction sets (isa.c) ---------------------------------------------
 
-   The loops over lanes (rotation kernels, body sweeps, contact sweeps) are
-   compiled once per instruction set and chosen at run time: portable C
-   (SSE2 on x86-64, two lanes an instruction), AVX2 (four) and AVX-512
-   (eight), on x86-64 with GCC or Clang. Every variant does the same
-   operations in the same order, so all give the same bits
-   (test_contact_lanes.every_instruction_set_gives_the_same_bits,
-   test_rotation.lanes_give_the_one_body_bits).
+   The loops over lanes (rotation kernels, body sweeps, the particles'
+   one-pass kernel) are compiled once per instruction set and chosen at
+   run time: portable C (SSE2 on x86-64, two lanes an instruction), AVX2
+   (four) and AVX-512 (eight), on x86-64 with GCC or Clang. Every variant
+   does the same operations in the same order, so all give the same bits
+   (test_rotation.lanes_give_the_one_body_bits,
+   test_particle_step's comparisons on every instruction set).
 
    TB__FOR_EACH_ISA(GEN) expands GEN(suffix, attribute, isa) once per
    instruction set this build can dispatch to; a file defines its variants

@@ -399,14 +399,14 @@ static double no_limit(double z)
 /* decay limits h k on v' = -k v: 2 for the Euler methods and Verlet
    (|1 - hk + (hk)^2/2| <= 1), 2.785 for RK4, 3.307 for dopri5 */
 static const tb__method methods[] = {
-    { "euler", 1, 0, 0, 1, euler, euler_limit, 2, 0, NULL, 0 },
-    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, symplectic_limit, 2, 0, NULL, 1 },
-    { "verlet", 2, 1, 1, 1, verlet, verlet_limit, 2, 0, NULL, 0.5 },
-    { "rk4", 4, 0, 0, 3, rk4, rk4_limit, 2.785293563405282, 0, NULL, 0.5 },
-    { "verlet_exact", 2, 1, 1, 1, verlet_exact, verlet_limit, 2, 0, NULL, 0.5 },
-    { "implicit_euler", 1, 1, 0, 4, implicit_euler, no_limit, INFINITY, 0, NULL, 1 },
-    { "dopri5", 5, 0, 0, 10, dopri5, dopri5_limit, 3.306567898702859, 1, NULL, 0.5 },
-    { "auto", 0, 0, 1, 10, auto_step, no_limit, INFINITY, 1, tb__auto_plan, 0.5 },
+    { "euler", 1, 0, 0, 1, euler, euler_limit, 2, 0, NULL },
+    { "symplectic_euler", 1, 1, 0, 0, symplectic_euler, symplectic_limit, 2, 0, NULL },
+    { "verlet", 2, 1, 1, 1, verlet, verlet_limit, 2, 0, NULL },
+    { "rk4", 4, 0, 0, 3, rk4, rk4_limit, 2.785293563405282, 0, NULL },
+    { "verlet_exact", 2, 1, 1, 1, verlet_exact, verlet_limit, 2, 0, NULL },
+    { "implicit_euler", 1, 1, 0, 4, implicit_euler, no_limit, INFINITY, 0, NULL },
+    { "dopri5", 5, 0, 0, 10, dopri5, dopri5_limit, 3.306567898702859, 1, NULL },
+    { "auto", 0, 0, 1, 10, auto_step, no_limit, INFINITY, 1, tb__auto_plan },
 };
 #define METHOD_COUNT ((int)(sizeof methods / sizeof methods[0]))
 
@@ -419,15 +419,6 @@ int tb__one_pass_step(const tb_world *w)
     return w->particle_count > 0 && w->forces.count == 0 && w->spring_count == 0 &&
            !tb__body_velocity_dependent(w) &&
            (m->step == symplectic_euler || m->step == verlet || m->step == verlet_exact);
-}
-
-/* n substeps of a method with share c move x by (h/n)^2 a c each and by
-   the velocity they add: h^2 a (c / n + (n - 1) / (2 n)) in all. */
-double tb__force_lever(const tb_world *w)
-{
-    if (w->method->plan && w->auto_method && w->auto_substeps > 0)
-        return 0.5 + (w->auto_method->force_lever - 0.5) / (double)w->auto_substeps;
-    return w->method->force_lever;
 }
 
 tb_status tb__method_step(tb_world *w, const tb__method *m, double h)

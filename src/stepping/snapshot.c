@@ -68,13 +68,10 @@ static void list_blocks_of(block *b, size_t *n, tb__list *list)
    has none), in a fixed order. Left out, because every step writes them
    before it reads them and a restore keeps the world's own:
    - w->scratch, the integrators' vectors (each method fills what it uses);
-   - c's per-step solver room: order_scratch (the key sort's), batches,
-     settle and cold_rows (set_up_batches, sweep_until_settled and
-     tb__cold_start fill them), colours (cleared by colour_entries), bucket
-     (set_up_batches), island_scratch (sleep.c), the motion block (cleared
-     by load_bodies) and the soft step's rows, bodies and patches
-     (set_up_rows). The batches and soft rows also point into the entries,
-     which a copy could not keep.
+   - c's per-step solver room: order_scratch (the key sort's), park_index
+     (park's), island_scratch (sleep.c) and the soft step's rows, bodies
+     and patches (set_up_rows). The soft rows also point into the
+     entries, which a copy could not keep.
    The previous entries are listed, but with nothing used once solved. */
 static size_t list_blocks(tb_world *w, tb__contacts *c, block *b)
 {
@@ -155,14 +152,8 @@ static size_t list_blocks(tb_world *w, tb__contacts *c, block *b)
 static void carry_scratch(tb__contacts *dst, const tb__contacts *src)
 {
     dst->order_scratch = src->order_scratch, dst->order_scratch_cap = src->order_scratch_cap;
-    dst->batches = src->batches, dst->batch_cap = src->batch_cap, dst->batch_count = 0;
-    dst->settle = src->settle, dst->settle_cap = src->settle_cap;
-    dst->cold_rows = src->cold_rows, dst->cold_rows_cap = src->cold_rows_cap;
-    dst->colours = src->colours, dst->colours_cap = src->colours_cap;
-    dst->bucket = src->bucket, dst->bucket_cap = src->bucket_cap;
+    dst->park_index = src->park_index, dst->park_index_cap = src->park_index_cap;
     dst->island_scratch = src->island_scratch, dst->island_scratch_cap = src->island_scratch_cap;
-    dst->motion_block = src->motion_block, dst->motion_cap = src->motion_cap;
-    dst->velocity = src->velocity, dst->motion = src->motion, dst->momenta = src->momenta;
     dst->soft_rows = src->soft_rows, dst->soft_row_cap = src->soft_row_cap, dst->soft_row_count = 0;
     dst->soft_bodies = src->soft_bodies, dst->soft_body_cap = src->soft_body_cap;
     dst->soft_patches = src->soft_patches, dst->soft_patch_cap = src->soft_patch_cap, dst->soft_patch_count = 0;
@@ -569,13 +560,11 @@ uint64_t tb_world_hash(const tb_world *w)
             h = mix_u64(h, (uint64_t)(uint32_t)e->asleep << 32 | (uint32_t)e->struck);
             h = mix_doubles(h, e->friction_impulse, 3);
             h = mix_doubles(h, &e->twist_impulse, 1);
-            h = mix_doubles(h, e->tilt_impulse, 3);
             h = mix_doubles(h, e->rolling_impulse, 3);
             for (k = 0; k < (size_t)e->count && k < TB__MANIFOLD_POINTS; ++k) {
                 const tb__point *p = &e->point[k];
                 h = mix_u64(h, p->feature);
                 h = mix_doubles(h, &p->normal_impulse, 1);
-                h = mix_doubles(h, p->friction_impulse, 3);
             }
         }
     }

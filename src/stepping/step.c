@@ -185,7 +185,7 @@ tb_status tb_world_step(tb_world *w, double h)
         /* what the solve changes of the energy is the contacts' work; it
            changes only the bodies and particles in contact */
         const double before = tb__contacts_energy(w);
-        tb__contacts_solve(w, h, tb__force_lever(w));
+        tb__contacts_solve(w, h);
         w->work.contact_work += tb__contacts_energy(w) - before;
     }
     if (summed)

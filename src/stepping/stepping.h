@@ -20,9 +20,6 @@ tb_status tb__method_step(tb_world *w, const tb__method *m, double h);
    one-pass kernel this step, with nothing else velocity-dependent: then
    that sweep can sum the drag's power (w->damping_sums). */
 int tb__one_pass_step(const tb_world *w);
-/* The force_lever of the step just taken (auto: of the method it chose,
-   over its substeps). */
-double tb__force_lever(const tb_world *w);
 
 /* ---- the primitives (step.c) ----------------------------------------------- */
 /* dy = F(t, y), the whole state's derivative. */

@@ -34,7 +34,7 @@ tb_body_id add_solid(tb_world *w, tb_shape_type type, const double at[3], const 
                      double size);
 
 /* A 1 m cube (1 kg) set on a plane, both mu = 0.5, pushed at 5 m/s along
-   x and stepped at hz with `substeps` (0: the sweeps) until it
+   x and stepped at hz with `substeps` substeps until it
    stops (3 s at most): the distance it slid. kept: the world and the box
    are handed back instead of destroyed. */
 double slide(double hz, int substeps, tb_world **kept, tb_body_id *box);
@@ -52,17 +52,13 @@ double uniform(uint64_t *state);
 /* Sleep off: tests of the solver's own resting behaviour. */
 void awake(tb_world *w);
 
-/* The sweeps (substeps 0) instead of the default soft step: tests of
-   their own mechanisms (docs/contacts.md, "The rules, and why"). */
-void sweeps(tb_world *w);
-
 /* Steps w for `seconds` at steps of h, or of h and h / 3 in turn (a
    game's frame times changing). */
 void step_changing(tb_world *w, double seconds, double h, int changing);
 
 /* How far the worst box of a column of 10 unit boxes (mu 0.6, sleep off)
    is from where it was put after 10 s of step_changing, with `substeps`
-   (0: the sweeps). */
+   substeps. */
 double column_after(double h, int changing, int substeps);
 
 #endif

@@ -41,15 +41,16 @@ static void bad_shapes_are_refused(void **state)
     assert_int_equal(tb_world_shape_count(w), shapes);
     cs.hertz = 0;
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
-    cs = tb_default_contact_settings(), cs.velocity_iterations = 0;
+    cs = tb_default_contact_settings(), cs.substeps = 0;
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
-    cs = tb_default_contact_settings(), cs.stack_iterations = -1;
+    assert_non_null(strstr(tb_world_message(w), "substeps"));
+    cs = tb_default_contact_settings(), cs.substeps = -1;
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
-    assert_non_null(strstr(tb_world_message(w), "stack iterations"));
-    cs = tb_default_contact_settings(), cs.velocity_tolerance = -1e-6;
+    cs = tb_default_contact_settings(), cs.slop = -1e-6;
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
-    cs.velocity_tolerance = NAN;
+    cs.slop = NAN;
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_ERR_ARGUMENT);
+    assert_true(tb_world_contact_settings(w).substeps == tb_default_contact_settings().substeps);
     /* a removed body takes its shapes with it; its id goes stale */
     assert_int_equal(tb_world_remove_body(w, body), TB_OK);
     assert_int_equal(tb_world_shape_count(w), shapes - 1);

@@ -58,26 +58,22 @@ static void ball_bounces_to_e_squared(void **state)
    turn, and the plate rises with 20 to 48% more energy than it was
    dropped with (the 2 by 2 contact mass of normal and friction couple;
    Newton's restitution with sticking friction is known to make energy
-   so). Both solvers: the default, and the soft step with 4 substeps, whose
-   impacts bounce before its friction rows meet the edge. */
+   so). The substep's impacts bounce before its friction rows meet the
+   edge. */
 static void spinning_plate_bounces_without_gaining_energy(void **state)
 {
     static const double cases[][3] = { /* spin (rad/s), restitution, height (m) */
         { 30, 0.9, 1 }, { 30, 0.9, 0.8 }, { 60, 0.9, 1 }, { 20, 1, 1 }, { 10, 1, 1 }, { 30, 1, 0.6 } };
     size_t n;
     (void)state;
-    for (n = 0; n < 2 * sizeof cases / sizeof cases[0]; ++n) {
-        const size_t i = n % (sizeof cases / sizeof cases[0]);
-        const int substeps = n < sizeof cases / sizeof cases[0] ? 0 : 4;
+    for (n = 0; n < sizeof cases / sizeof cases[0]; ++n) {
+        const size_t i = n;
         tb_world *w = world_on_plane(0.6, cases[i][1]);
-        tb_contact_settings settings = tb_world_contact_settings(w);
         tb_body_def b = tb_default_body_def();
         tb_shape_def s = tb_default_shape_def();
         const double size[3] = { 1, 1, 0.1 };
         double start, worst = -INFINITY;
         int t;
-        settings.substeps = substeps;
-        assert_int_equal(tb_world_set_contact_settings(w, &settings), TB_OK);
         assert_int_equal(tb_mass_box(1000, size, &b.mass, NULL), TB_OK);
         b.position[2] = cases[i][2];
         b.angular_velocity[0] = cases[i][0];
@@ -92,9 +88,9 @@ static void spinning_plate_bounces_without_gaining_energy(void **state)
             assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
             worst = fmax(worst, tb_world_energy(w).total - start);
         }
-        print_message("%s: plate spun at %2.0f rad/s, restitution %.1f, dropped from %.1f m: largest energy gain "
-                      "%.3g J of %.0f, as lifting it %.2g m\n", substeps ? "soft step" : "sweeps", cases[i][0],
-                      cases[i][1], cases[i][2], worst, start, worst / (b.mass.mass * G));
+        print_message("plate spun at %2.0f rad/s, restitution %.1f, dropped from %.1f m: largest energy gain "
+                      "%.3g J of %.0f, as lifting it %.2g m\n", cases[i][0], cases[i][1], cases[i][2], worst, start,
+                      worst / (b.mass.mass * G));
         assert_true(worst <= 1e-4 * b.mass.mass * G);
         tb_world_destroy(w);
     }
@@ -170,22 +166,17 @@ static void collision_keeps_momentum(void **state)
 }
 
 /* The drop's first contact begins with the impact speed sqrt(2 g h0),
-   found from the step's free motion, which Verlet makes exact: 1e-12;
-   under both solvers (the soft step's from the energy over the gap in the
-   substep it closes in; a point that only bounced reported no begin there
-   before). */
+   found from the energy over the gap in the substep it closes in, exact
+   under gravity alone: 1e-12 (a point that only bounced reported no
+   begin before). */
 static void events_report_impacts(void **state)
 {
-    int substeps;
     (void)state;
-    for (substeps = 0; substeps <= 4; substeps += 4) {
+    {
         tb_world *w = world_on_plane(0.6, 0);
-        tb_contact_settings cs = tb_world_contact_settings(w);
         const double start[3] = { 0, 0, 1.1 };
         int i, begins = 0, ends = 0;
         double speed = 0;
-        cs.substeps = substeps;
-        assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
         add_ball(w, start, 0.1, 0.5);
         for (i = 0; i < 90; ++i) {
             size_t n, k;
@@ -200,8 +191,8 @@ static void events_report_impacts(void **state)
                 assert_false(TB_ID_IS_NULL(ev[k].b));
             }
         }
-        print_message("%s: first impact at %.15f m/s (sqrt(2 g h0) = %.15f), %d begins, %d ends\n",
-                      substeps ? "soft step" : "sweeps", speed, sqrt(2 * G), begins, ends);
+        print_message("first impact at %.15f m/s (sqrt(2 g h0) = %.15f), %d begins, %d ends\n", speed, sqrt(2 * G),
+                      begins, ends);
         assert_rel(speed, sqrt(2 * G), 1e-12);
         assert_true(begins >= 2 && ends >= 1);
         tb_world_destroy(w);
@@ -214,11 +205,8 @@ static void events_report_impacts(void **state)
    more than the slop (5 mm; measured: none at all), and every particle
    must hit the sphere, since the nozzles' disc (0.3 m across, aimed at its
    centre) lies inside its outline: at least 200 begin events with the
-   sphere (measured 203 and, under the soft step, 201: a particle may come
-   back for a second touch).
-   Under both solvers (the soft step's bounces made no begin events
-   before); substeps: 0, the sweeps. */
-static void spray(int substeps)
+   sphere (measured 201: a particle may come back for a second touch). */
+static void spray_stays_outside_the_sphere(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
     tb_shape_def ball = tb_default_shape_def();
@@ -227,7 +215,7 @@ static void spray(int substeps)
     double deepest = 0, lowest = INFINITY;
     size_t hits = 0;
     int i, n;
-    cs.substeps = substeps;
+    (void)state;
     cs.particle_radius = r, cs.particle_restitution = 0.3, cs.particle_friction = 0.2;
     assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
     ball.type = TB_SHAPE_SPHERE;
@@ -259,20 +247,12 @@ static void spray(int substeps)
             lowest = fmin(lowest, p[2] - r);
         }
     }
-    print_message("spray (%s): %zu of 200 particles hit the sphere, deepest in it %.2e m, lowest below the plane "
-                  "%.2e m\n", substeps ? "soft step" : "sweeps", hits, deepest, -lowest);
+    print_message("spray: %zu of 200 particles hit the sphere, deepest in it %.2e m, lowest below the plane "
+                  "%.2e m\n", hits, deepest, -lowest);
     assert_below(deepest, slop);
     assert_true(lowest > -slop);
     assert_true(hits >= 200);
     tb_world_destroy(w);
-}
-
-static void spray_stays_outside_the_sphere(void **state)
-{
-    int substeps;
-    (void)state;
-    for (substeps = 0; substeps <= 4; substeps += 4)
-        spray(substeps);
 }
 
 /* The first apex (truth e^2 h0 = 0.25 m) and the second (e^4 h0) of
@@ -287,18 +267,17 @@ static void apexes_under(const char *method, double hz, double top[2])
     tb_world_destroy(w);
 }
 
-/* Bounce heights depend on the method. The methods exact under constant
-   gravity, whose force lever is h/2 (verlet, verlet_exact, rk4, dopri5,
-   and auto, which plans verlet here), time the impact within the step and
-   reach e^2k h0 to rounding at any rate (1e-9 asserted at 30, 60 and 240
-   Hz). Symplectic and implicit Euler (lever h, the same steps here: no
-   springs or drag) fall short at first order: the shortfall shrinks 4
-   times from 60 to 240 Hz (asserted: order within 0.15 of 1; measured
-   9.5% and 2.65% on the first apex under the default soft step, whose
-   flight between bounces is the method's). Explicit Euler (lever 0)
-   misses both ways and converges at first order only from about 240 Hz
-   (2.7% and 0.68% over at 240 and 960 Hz: order 0.99, asserted within
-   0.3 of 1). */
+/* Bounce heights depend on the method: the step's motion in contact is
+   the substeps' leapfrog, but the flight between bounces is the method's.
+   The methods exact under constant gravity (verlet, verlet_exact, rk4,
+   dopri5, and auto, which plans verlet here) reach e^2k h0 to rounding at
+   any rate (1e-9 asserted at 30, 60 and 240 Hz). Symplectic and implicit
+   Euler (the same steps here: no springs or drag) fall short at first
+   order: the shortfall shrinks 4 times from 60 to 240 Hz (asserted: order
+   within 0.15 of 1; measured 9.5% and 2.65% on the first apex).
+   Explicit Euler misses both ways and converges at first order only from
+   about 240 Hz (2.7% and 0.68% over at 240 and 960 Hz: order 0.99,
+   asserted within 0.3 of 1). */
 static void bounce_heights_follow_each_method(void **state)
 {
     const char *exact[] = { "verlet", "verlet_exact", "rk4", "dopri5", "auto" };

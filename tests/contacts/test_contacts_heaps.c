@@ -41,11 +41,11 @@ static void mass_of_shape(double rho, const tb_shape_def *s, tb_mass *mass)
    own unrelated to the shapes (a body's mass may sit anywhere in it: a
    heavy core on a light frame), restitution up to 1, one speed or spin
    component in ten up to 50 m/s or rad/s. Contacts with restitution at
-   most 1 take energy and never give it; the position pass lifts bodies
-   out of their starting overlaps, by less than 1 m each, so the heap may
-   never hold more energy than at its start plus lifting everything 1 m.
-   (In 100 heaps it never held more than at its start less lifting
-   everything 1.95 m.) A bounce leaves a patch's centre no faster than the
+   most 1 take energy and never give it; the push out of overlaps lifts
+   bodies out of their starting overlaps, by less than 1 m each, so the heap may
+   never hold more energy than at its start plus lifting everything 1 m
+   (measured: never more than its start less lifting everything 3.66 m).
+   A bounce leaves a patch's centre no faster than the
    centre came: bounced at their points' mean target, patches of a
    spinning body whose one end strikes while the other leaves ask its
    centre, hardly moving, for the striking end's rebound, and heaps 22 and
@@ -74,19 +74,14 @@ static void dense_heaps_never_gain_energy(void **state)
     static const int heaps[] = { 22, 52, 1, 2 };
     size_t h;
     (void)state;
-    for (h = 0; h < 2 * sizeof heaps / sizeof heaps[0]; ++h) {
-        const int heap = heaps[h % 4], substeps = h < 4 ? 0 : 4;
+    for (h = 0; h < sizeof heaps / sizeof heaps[0]; ++h) {
+        const int heap = heaps[h];
         uint64_t rng = (uint64_t)heap * 2654435761u + 7;
         tb_world *w = world_on_plane(0.6, 0);
         double weight = 0, start, worst = -INFINITY;
         int i, t;
         assert_int_equal(tb_world_set_integrator(w, tb_integrator_name(heap % tb_integrator_count())), TB_OK);
         awake(w);
-        {
-            tb_contact_settings cs = tb_world_contact_settings(w);
-            cs.substeps = substeps;
-            assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
-        }
         for (i = 0; i < 200; ++i) {
             tb_body_def b = tb_default_body_def();
             tb_body_id id;
@@ -126,27 +121,26 @@ static void dense_heaps_never_gain_energy(void **state)
             assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
             worst = fmax(worst, tb_world_energy(w).total - start);
         }
-        print_message("dense heap %2d (%s, %s): largest energy gain %.3g J, as lifting every body %.3g m\n", heap,
-                      tb_world_integrator(w), substeps ? "soft step" : "sweeps", worst, worst / weight);
+        print_message("dense heap %2d (%s): largest energy gain %.3g J, as lifting every body %.3g m\n", heap,
+                      tb_world_integrator(w), worst, worst / weight);
         assert_true(worst <= weight * 1);
         tb_world_destroy(w);
     }
 }
 
 /* The bridge of heap_scenes.h: the top box, shifted 0 to 0.5 mm (four
-   placements), kept awake 10 s under each solver, is at rest after a
+   placements), kept awake 10 s, is at rest after a
    second: never again faster than the sleep speed (|v| + |w| times its half diagonal). Truth: the edge
    under it along its face (a line, both ends) and a corner on the other
    box hold it on three points, still. The edge met as one point that
    jumps from end to end of the line lets it rock (bench_robustness
    bridge; notes.md, "A box rocking on two corners"). Measured: at rest
-   from 0.02 s, at most 4.6e-5 m/s after 1 s. */
+   from 0.02 s, at most 2.4e-7 m/s after 1 s. */
 static void box_across_two_rests(void **state)
 {
-    int shift, substeps;
+    int shift;
     (void)state;
-    for (substeps = 0; substeps <= 4; substeps += 4)
-        for (shift = 0; shift < 4; ++shift) {
+    for (shift = 0; shift < 4; ++shift) {
             tb_world *w = world_on_plane(0.6, 0);
             tb_contact_settings cs = tb_world_contact_settings(w);
             const double *half = HEAP_BRIDGE[0] + 7;
@@ -154,7 +148,6 @@ static void box_across_two_rests(void **state)
             double fastest = 0, last = 0;
             tb_body_id top = { 0, 0 };
             int i, t;
-            cs.substeps = substeps;
             cs.sleep_time = INFINITY;
             assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
             for (i = 0; i < 3; ++i) {
@@ -188,9 +181,8 @@ static void box_across_two_rests(void **state)
                 if (t > 60)
                     fastest = fmax(fastest, speed);
             }
-            print_message("box across two, %s, shifted %d: last faster than the sleep speed at %.2f s, "
-                          "fastest after 1 s %.3g m/s\n",
-                          substeps ? "soft step" : "sweeps", shift, last, fastest);
+            print_message("box across two, shifted %d: last faster than the sleep speed at %.2f s, "
+                          "fastest after 1 s %.3g m/s\n", shift, last, fastest);
             assert_true(fastest < cs.sleep_speed);
             tb_world_destroy(w);
         }
@@ -198,14 +190,11 @@ static void box_across_two_rests(void **state)
 
 /* 60 random spheres, capsules and boxes (0.1 to 0.6 m, 50 to 5000
    kg/m^3) built at rest overlapping one another and the ground in a
-   1.5 m cube, under the default soft step and under the sweeps with
-   every sweep done (substeps 0, velocity_tolerance 0), 1 s: many new
-   contacts, some at rest (the cold start solves those together,
-   cold_start.c; the soft step, its islands), most deeper than the slop.
+   1.5 m cube, four crowds, 1 s: many new contacts, some at rest (solved
+   together in their islands), most deeper than the slop.
    The overlaps part at the push's rate (max_push) without giving speed
    that stays, and the bodies start at rest, so none may go faster than
-   free fall for the second: g t (measured at most 4.11 m/s under the
-   sweeps, 9.55 m/s under the soft step). */
+   free fall for the second: g t (measured at most 9.09 m/s). */
 static void crowds_built_overlapping_stay_calm(void **state)
 {
     int pass, i, t;
@@ -217,8 +206,6 @@ static void crowds_built_overlapping_stay_calm(void **state)
         tb_body_id ids[60];
         double fastest = 0;
         cs.sleep_time = INFINITY;
-        if (pass & 1)
-            cs.velocity_tolerance = 0, cs.substeps = 0;
         assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
         for (i = 0; i < 60; ++i) {
             tb_body_def b = tb_default_body_def();
@@ -241,8 +228,7 @@ static void crowds_built_overlapping_stay_calm(void **state)
                 fastest = fmax(fastest, sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
             }
         }
-        print_message("crowd %d built overlapping (%s): fastest body %.3g m/s in 1 s\n", pass,
-                      pass & 1 ? "sweeps, every sweep" : "soft step", fastest);
+        print_message("crowd %d built overlapping: fastest body %.3g m/s in 1 s\n", pass, fastest);
         assert_true(isfinite(fastest));
         assert_below(fastest, G * 1.0);
         tb_world_destroy(w);
@@ -254,8 +240,8 @@ static void crowds_built_overlapping_stay_calm(void **state)
    dropped spinning from a column of cells that keeps them apart, 10 s,
    sleep off, two heaps under every integrator but explicit Euler (which
    gains energy in free fall by itself). Contacts take energy out
-   (restitution below 1, friction) and the position pass puts back at most
-   what an overlap cost, which speculative points keep to rounding: the
+   (restitution below 1, friction) and the push out of overlaps puts back
+   at most what an overlap cost, which speculative points keep to rounding: the
    total energy must never exceed its start by more than lifting every
    body 0.1 mm (measured at most 1e-8 m, verlet). A twist impulse pushed on
    every step from nowhere (capsule_stood_on_end_keeps_its_spin in

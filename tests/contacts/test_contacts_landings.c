@@ -31,28 +31,22 @@ static void corner_heights(tb_world *w, tb_body_id id, const double half[3], dou
 /* 40 unit cubes dropped on the plane one at a time, from up to 0.5 m,
    turned up to 0.8 rad about a tilted axis, restitution 0, 0.2 or 0.4,
    sleep off: after 5 s each lies on the plane, its lowest corner within
-   1 um of it, under both solvers (measured at most 4.7e-11 m by the
-   sweeps, 4.0e-11 m by the soft step). Against static ground, a point
-   that touched last step with a gap under a fifth of the slop lands again
-   within the step (its friction holding as at rest): held at the gap
-   instead, 2 of these cubes rest 0.33 mm up. The soft step's island
-   solve pushes out every overlap and brings in-band gaps to touching
-   (stack_solve.c, tb__stacks_push): pushing only beyond its touching
-   band, it left cubes 5 um into the plane or above it. */
-static double dropped_cubes_lowest(int substeps)
+   1 um of it (measured at most 3.6e-11 m). The island solve pushes out
+   every overlap and brings in-band gaps to touching (stack_solve.c,
+   tb__stacks_push): pushing only beyond its touching band, it left cubes
+   5 um into the plane or above it. */
+static void dropped_boxes_lie_on_the_plane(void **state)
 {
     double worst = 0;
     int k;
+    (void)state;
     for (k = 0; k < 40; ++k) {
         tb_world *w = world_on_plane(0.6, 0);
         tb_body_def b = tb_default_body_def();
         tb_shape_def s = tb_default_shape_def();
-        tb_contact_settings cs = tb_world_contact_settings(w);
         const double size[3] = { 1, 1, 1 }, turn = 0.02 * k;
         double low, high;
         int t;
-        cs.substeps = substeps;
-        assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK);
         awake(w);
         assert_int_equal(tb_mass_box(1000, size, &b.mass, NULL), TB_OK);
         b.position[2] = 0.5 + 0.013 * k;
@@ -67,17 +61,8 @@ static double dropped_cubes_lowest(int substeps)
         worst = fmax(worst, fabs(low));
         tb_world_destroy(w);
     }
-    return worst;
-}
-
-static void dropped_boxes_lie_on_the_plane(void **state)
-{
-    const double sweeps = dropped_cubes_lowest(0), soft = dropped_cubes_lowest(4);
-    (void)state;
-    print_message("40 dropped cubes: lowest corners within %.2e m of the plane (sweeps), %.2e m (soft step)\n", sweeps,
-                  soft);
-    assert_below(sweeps, 1e-6);
-    assert_below(soft, 1e-6);
+    print_message("40 dropped cubes: lowest corners within %.2e m of the plane\n", worst);
+    assert_below(worst, 1e-6);
 }
 
 /* A unit box `ratio` times the mass of the unit boxes under it (a column
@@ -97,7 +82,6 @@ static void heavy_landing(double ratio, int under, double gap, int sleep, double
     tb_shape_def s = tb_default_shape_def();
     const double size[3] = { 1, 1, 1 }, top = 0.5 + under + 1;
     int i, k, landed = 0;
-    sweeps(w); /* the soft step's: test_contacts_soft.heavy_box_lands_on_light_ones_soft */
     if (!sleep)
         awake(w);
     for (k = 0; k <= under; ++k) {
@@ -133,27 +117,19 @@ static void heavy_landing(double ratio, int under, double gap, int sleep, double
     tb_world_destroy(w);
 }
 
-/* Under the sweeps (substeps 0; the soft step's is
-   test_contacts_soft.heavy_box_lands_on_light_ones_soft). Sequential
-   impulses pass a load between bodies of very different masses
-   about one mass ratio's part a sweep: left to them, a box 100 times
-   heavier dropped 0.5 m onto a light box on the ground is still falling
-   at 0.7 m/s after the landing step, the landing's warm starts then throw
-   it back up at 1.6 m/s (restitution 0), and it goes through the light
-   box (ODE's QuickStep, bench_contacts: sinks 8 cm; 1000 times heavier,
-   through). With restitution 0 it may not rise (bound: the sleep speed,
-   0.05 m/s), must end on the column within a fifth of the slop (1 mm, the
-   gap a resting contact holds as touching; the part of the landing that
-   holds it up acts as on the ground, or it ends 0.9 mm above), and no box
-   under it may go below its place by more than that (dropped 0.1 m,
-   landing at 1.3 m/s, a landing timed at the end of its step presses the
-   light box 1 cm into the ground, then bounces back at 1.2 m/s); at the
-   end no box may jitter (moving faster than 1 mm/s, the resting box's
-   bound; a light box under one 1000 times heavier can rise and fall
-   0.7 mm every other step). Mass ratios 10 to 10000 on one box from 0.1,
-   0.5 and 2 m, 100 and 1000 on a column of four, sleep on (the default)
-   and off; and 3 and 5 times, left to the sweeps, where the landing's
-   warm starts can throw the box back up at 0.35 and 1 m/s from 2 m. */
+/* Sequential impulses pass a load between bodies of very different
+   masses about one mass ratio's part a pass: left to them, a box 100
+   times heavier dropped 0.5 m onto a light box on the ground goes
+   through it (ODE's QuickStep, bench_contacts: sinks 8 cm; 1000 times
+   heavier, through). Solved with its island (stack_solve.c) the landing
+   is met whole. With restitution 0 the heavy box may not rise (bound: the
+   sleep speed, 0.05 m/s), must end on the column within a fifth of the
+   slop (1 mm), and no box under it may go below its place by more than
+   that; at the end no box may jitter (moving faster than 1 mm/s, the
+   resting box's bound). Mass ratios 3 to 10000 on one box from 0.1, 0.5
+   and 2 m, 100 and 1000 on a column of four, sleep on (the default) and
+   off (measured: rising at most 5.0e-11 m/s, ending within 2.9e-13 m of
+   its place, light boxes at most 7.5e-14 m under theirs). */
 static void heavy_box_lands_on_light_ones(void **state)
 {
     static const struct {
@@ -182,17 +158,15 @@ static void heavy_box_lands_on_light_ones(void **state)
 }
 
 /* A unit box, or a ball of radius 0.5 m, of 1 kg dropped from gap onto a
-   1 kg unit box on the plane, default settings (with_sweeps: substeps 0),
-   5 s at 60 Hz: where it ends against resting on the box (m). */
-static double dropped_on_a_box(double gap, int ball, int with_sweeps)
+   1 kg unit box on the plane, default settings, 5 s at 60 Hz: where it
+   ends against resting on the box (m). */
+static double dropped_on_a_box(double gap, int ball)
 {
     tb_world *w = world_on_plane(0.6, 0);
     const double below[3] = { 0, 0, 0.5 }, above[3] = { 0, 0, 1.5 + gap };
     tb_body_id top;
     double x[3];
     int i;
-    if (with_sweeps)
-        sweeps(w);
     add_box(w, below, 1, 0.6);
     top = ball ? add_ball(w, above, 0.5, 0) : add_box(w, above, 1, 0.6);
     for (i = 0; i < 5 * 60; ++i)
@@ -202,46 +176,34 @@ static double dropped_on_a_box(double gap, int ball, int with_sweeps)
     return x[2] - 1.5;
 }
 
-/* Boxes and balls dropped on a box come to rest on it: under the default
-   soft step exactly (its touching points solved with their island, rigid:
-   measured 0 m), and under the sweeps (substeps 0) as follows. Their
-   landing step leaves a body that lands on another a little above
-   it: the part of the landing impulse that holds it up acts on positions
-   over the whole rest of the step, where on the static ground it acts
-   for half of it (g h^2 / 16 at most, 1 mm at 60 Hz). A gap of more than
-   1% of the slop between two bodies lands again, as under gravity; what
-   is left must be under that, 0.05 mm, and an overlap within the slop.
-   Rested on instead (touching last step and within a fifth of the slop),
-   such a gap leaves boxes and balls dropped on a box hovering up to
-   0.96 mm above it. */
+/* Boxes and balls dropped on a box come to rest on it: their touching
+   points are solved with their island, rigid, so the truth, resting on
+   it, is met to rounding (measured 0 m); bound: no gap over 1%
+   of the slop, no overlap over the slop. */
 static void bodies_dropped_on_bodies_rest_on_them(void **state)
 {
     static const double gaps[] = { 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1, 2 };
     const double slop = tb_default_contact_settings().slop;
     size_t i;
-    int ball, solver;
+    int ball;
+    double most = 0, least = 0;
     (void)state;
-    for (solver = 0; solver < 2; ++solver) {
-        double most = 0, least = 0;
-        for (i = 0; i < sizeof gaps / sizeof gaps[0]; ++i)
-            for (ball = 0; ball < 2; ++ball) {
-                const double end = dropped_on_a_box(gaps[i], ball, solver);
-                most = fmax(most, end);
-                least = fmin(least, end);
-            }
-        print_message("boxes and balls dropped 0.05 to 2 m on a box (%s): from %.2e m into it to %.2e m above it\n",
-                      solver ? "sweeps" : "soft step", -least, most);
-        assert_below(most, 0.01 * slop);
-        assert_below(-least, slop);
-    }
+    for (i = 0; i < sizeof gaps / sizeof gaps[0]; ++i)
+        for (ball = 0; ball < 2; ++ball) {
+            const double end = dropped_on_a_box(gaps[i], ball);
+            most = fmax(most, end);
+            least = fmin(least, end);
+        }
+    print_message("boxes and balls dropped 0.05 to 2 m on a box: from %.2e m into it to %.2e m above it\n", -least,
+                  most);
+    assert_below(most, 0.01 * slop);
+    assert_below(-least, slop);
 }
 
 /* Manifolds that share no moving body are independent: a capsule falling
    tilted onto the plane, end first, must move to the bit the same with or
-   without a box resting far away. The solver lays such manifolds side by
-   side in one batch, the box's four points first; the capsule's lane then
-   has rows for points it lacks, which must be empty (rows that hold the
-   inverse masses stop the capsule's centre at its first touch). */
+   without a box resting far away (nothing of one island's solve may reach
+   another's). */
 static tb_body_id drop_capsule(tb_world *w)
 {
     tb_body_def b = tb_default_body_def();
@@ -325,24 +287,19 @@ static void plank_heights(tb_world *w, tb_body_id id, double *low, double *high)
 /* The plank buried half a metre deep and 5 degrees off level, every
    corner under the surface, default settings: the contact pass pushes it
    out (at most max_push, 3 m/s) and it comes to lie flat on the plane.
-   Speed alone does not show that it rests: a push of overlaps (the soft
-   step's, or the sweeps' position pass) leaves it at zero while it lifts
-   a body, and judged by speed alone the plank falls
-   asleep with a corner 6.6 mm deep (a heavier one 0.4 m deep). So it must
-   not sleep while any corner is deeper than the slop (5 mm), and after
-   5 s it lies asleep on the surface, within 0.1 mm of flat. Under the
-   default soft step and under the sweeps (substeps 0). */
+   Speed alone does not show that it rests: a push of overlaps leaves it
+   at zero while it lifts a body, and judged by speed alone the plank
+   falls asleep with a corner 6.6 mm deep (a heavier one 0.4 m deep). So
+   it must not sleep while any corner is deeper than the slop (5 mm), and
+   after 5 s it lies asleep on the surface, within 0.1 mm of flat. */
 static void buried_plank_comes_out_before_it_sleeps(void **state)
 {
-    int solver;
     (void)state;
-    for (solver = 0; solver < 2; ++solver) {
+    {
         tb_world *w = world_on_plane(0.6, 0);
         tb_body_id id = add_plank(w, 0.5, 5 * 3.14159265358979323846 / 180, 0);
         double low, high;
         int i, asleep;
-        if (solver)
-            sweeps(w);
         for (i = 0; i < 300; ++i) {
             assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
             assert_int_equal(tb_body_asleep(w, id, &asleep), TB_OK);
@@ -350,8 +307,7 @@ static void buried_plank_comes_out_before_it_sleeps(void **state)
             if (asleep && low < -0.005)
                 fail_msg("asleep at step %d with a corner %.4f m deep", i, -low);
         }
-        print_message("buried plank after 5 s (%s): corners from %.2e to %.5f m, asleep %d\n",
-                      solver ? "sweeps" : "soft step", low, high, asleep);
+        print_message("buried plank after 5 s: corners from %.2e to %.5f m, asleep %d\n", low, high, asleep);
         assert_true(asleep);
         assert_below(fabs(low), 1e-4);
         assert_below(fabs(high - 0.018), 1e-4);
@@ -360,13 +316,12 @@ static void buried_plank_comes_out_before_it_sleeps(void **state)
 }
 
 /* The plank with a heavy core, buried half a metre deep and 5 degrees off
-   level (sleep off), under the sweeps (substeps 0): their position pass meets each pair as a patch first,
-   pushing its centre and turning it toward the plane that levels what its
-   points need, so the plank comes out whole, as fast as the push allows
-   (max_push, 3 m/s: 10 steps), and lies flat on the surface within 0.1 mm
-   after 2 s. Rows per point alone meet its ends in turn, each push turning
-   it and sinking the other end: it comes out by about 1% of its depth a
-   step, and is still 15 cm deep after 2 s. */
+   level (sleep off): its overlaps are pushed out together, levelled per
+   patch (tb__stacks_push), so the plank comes out whole, as fast as the
+   push allows (max_push, 3 m/s: 10 steps), and lies flat on the surface
+   within 0.1 mm after 2 s. Rows per point alone meet its ends in turn,
+   each push turning it and sinking the other end: it comes out by about
+   1% of its depth a step, and is still 15 cm deep after 2 s. */
 static void heavy_plank_comes_out_whole(void **state)
 {
     tb_world *w = world_on_plane(0.6, 0);
@@ -375,7 +330,6 @@ static void heavy_plank_comes_out_whole(void **state)
     int i;
     (void)state;
     awake(w);
-    sweeps(w);
     for (i = 0; i < 120; ++i)
         assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
     plank_heights(w, id, &low, &high);
@@ -385,26 +339,18 @@ static void heavy_plank_comes_out_whole(void **state)
     tb_world_destroy(w);
 }
 
-/* A body at rest stays put under every integrator, under the default
-   soft step (its substeps' leapfrog moves a body in contact whatever the
-   method) and under the sweeps. Under the sweeps,
-   contacts come after each method's free motion, and a resting contact's
-   impulse moves positions as the method moves them under a constant force
-   (tb__method's force_lever), so a body at rest stays put under every
-   integrator: a cube set on the plane keeps its height within 0.1 mm and
-   its speed under 1 mm/s for 2 s, and the plank laid flat 5 cm under the
-   plane comes out to lie on it within 0.1 mm in 3 s. One lever for all
-   (h / 2) does not do: explicit Euler's cube hovers 1.7 mm up, bouncing
-   at 0.16 m/s, and under symplectic and implicit Euler the plank stays
-   0.9 mm deep (a plank with a heavy core 4 cm), the position pass taking
-   back the g h^2 / 2 they fall too far each step only as far as it
-   converges. (Sleep off: the solver's own resting.) */
+/* A body at rest stays put under every integrator: a body in contact
+   moves by the substeps' leapfrog whatever the method, which takes only
+   its free change of momentum from it. A cube set on the plane keeps its
+   height within 0.1 mm and its speed under 1 mm/s for 2 s, and the
+   plank laid flat 5 cm under the plane comes out to lie on it within 0.1
+   mm in 3 s. (Sleep off: the solver's own resting.) */
 static void every_integrator_keeps_a_resting_box_still(void **state)
 {
     int m;
     (void)state;
-    for (m = 0; m < 2 * tb_integrator_count(); ++m) {
-        const char *name = tb_integrator_name(m / 2), *solver = m % 2 ? "sweeps" : "soft step";
+    for (m = 0; m < tb_integrator_count(); ++m) {
+        const char *name = tb_integrator_name(m);
         tb_world *w = world_on_plane(0.6, 0);
         const double at[3] = { 3, 0, 0.5 };
         tb_body_id cube, plank;
@@ -412,8 +358,6 @@ static void every_integrator_keeps_a_resting_box_still(void **state)
         int i;
         assert_int_equal(tb_world_set_integrator(w, name), TB_OK);
         awake(w);
-        if (m % 2)
-            sweeps(w);
         cube = add_box(w, at, 1, 0.6);
         plank = add_plank(w, 0.05, 0, 0);
         for (i = 0; i < 180; ++i) {
@@ -422,14 +366,14 @@ static void every_integrator_keeps_a_resting_box_still(void **state)
                 tb_body_position(w, cube, x);
                 tb_body_velocity(w, cube, v);
                 if (!(fabs(x[2] - 0.5) < 1e-4 && sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) < 1e-3))
-                    fail_msg("%s (%s): the cube at %.6f m, %.3g m/s", name, solver, x[2],
+                    fail_msg("%s: the cube at %.6f m, %.3g m/s", name, x[2],
                              sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
             }
         }
         plank_heights(w, plank, &low, &high);
-        print_message("%-16s %-9s cube at %.7f m; plank corners from %.2e to %.7f m\n", name, solver, x[2], low, high);
+        print_message("%-16s cube at %.7f m; plank corners from %.2e to %.7f m\n", name, x[2], low, high);
         if (!(fabs(low) < 1e-4 && fabs(high - 0.018) < 1e-4))
-            fail_msg("%s (%s): the plank's corners from %.4f to %.4f m", name, solver, low, high);
+            fail_msg("%s: the plank's corners from %.4f to %.4f m", name, low, high);
         tb_world_destroy(w);
     }
 }

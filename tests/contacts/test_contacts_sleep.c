@@ -314,7 +314,7 @@ static void pull(tb_world *w, tb_body_id bottom, tb_body_id top, int trigger)
     case FORCE_AT_POINT: assert_int_equal(tb_body_apply_force_at_body_point(w, bottom, f, zero), TB_OK); break;
     case TORQUE: assert_int_equal(tb_body_apply_torque(w, bottom, f), TB_OK); break;
     case REMOVE_TOP: assert_int_equal(tb_world_remove_body(w, top), TB_OK); break;
-    case SETTINGS: cs.velocity_iterations += 1; assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK); break;
+    case SETTINGS: cs.hertz += 1; assert_int_equal(tb_world_set_contact_settings(w, &cs), TB_OK); break;
     case SHAPE: add_box(w, far, 1, 0.6); break;
     case GRAVITY: assert_int_equal(tb_world_set_gravity(w, g), TB_OK); break;
     case PARTICLE:

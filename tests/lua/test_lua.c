@@ -516,8 +516,7 @@ static void shapes_and_events(void **state)
                  "assert(math.abs(begun.speed - math.sqrt(2 * 9.81)) < 1e-3 * math.sqrt(2 * 9.81), begun.speed)\n"
                  "assert(begun.a == plane:id() and begun.b == s:id())\n"
                  "assert(math.abs(begun.normal[3] - 1) < 1e-12)\n"
-                 "w:contacts{ velocity_iterations = 5, velocity_tolerance = 0, particle_radius = 0.01,\n"
-                 "            stack_iterations = 4 }\n");
+                 "w:contacts{ substeps = 8, particle_radius = 0.01 }\n");
     expect_error(L, "w:shape{ type = 'box', half = {1, 0, 1} }", "half extents");
     expect_error(L, "w:shape{ type = 'plane', normal = {0, 0, 2} }", "unit");
     expect_error(L, "w:shape{ type = 'cone' }", "cone");
@@ -525,8 +524,9 @@ static void shapes_and_events(void **state)
     expect_error(L, "w:shape{ type = 'sphere', radius = 1, rolling_resistance = -1 }", "rolling_resistance");
     expect_error(L, "w:contacts{ hertz = -1 }", "hertz");
     expect_error(L, "w:contacts{ sleep_time = 0 }", "sleep_time");
-    expect_error(L, "w:contacts{ velocity_tolerance = -1 }", "velocity_tolerance");
-    expect_error(L, "w:contacts{ stack_iterations = -1 }", "stack iterations");
+    expect_error(L, "w:contacts{ substeps = 0 }", "substeps");
+    expect_error(L, "w:contacts{ substeps = 0/0 }", "substeps");
+    expect_error(L, "w:contacts{ stack_iterations = 4 }", "stack_iterations");
     /* the ball rests after its bounces and falls asleep; a push wakes it */
     expect_ok(L, "for i = 1, 300 do w:step() end\n"
                  "assert(ball:asleep(), 'the resting ball should sleep')\n"
@@ -556,7 +556,7 @@ static const char *fuzz_script =
     "local keys = { 'pos', 'vel', 'mass', 'type', 'body', 'radius', 'half', 'half_length', 'rot', 'k', 'rest',\n"
     "  'damping', 'friction', 'restitution', 'gravity', 'integrator', 'dt', 'sphere', 'box', 'capsule',\n"
     "  'cylinder', 'points', 'mesh', 'inertia', 'density', 'normal', 'offset', 'omega', 'hertz',\n"
-    "  'velocity_iterations', 'position_iterations', 'stack_iterations', 'velocity_tolerance', 'sleep_time',\n"
+    "  'substeps', 'max_push', 'slop', 'sleep_time',\n"
     "  'rolling_resistance', 'particle_radius', 'category', 'mask', 'pinned', 'uniform', 'vortex', 'centre' }\n"
     "local function value(depth)\n"
     "  if random(7) == 1 and depth < 2 then\n"

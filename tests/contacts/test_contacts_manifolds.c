@@ -1,7 +1,6 @@
-/* test_contact_lanes.c: the contact solver's inside. Its sweeps run on
-   batches of manifolds compiled for several instruction sets, which must
-   all give the same bits; and a resting pair keeps last step's manifold,
-   moved with its shapes, which must agree with colliding them afresh. */
+/* test_contacts_manifolds.c: manifolds kept from step to step. A resting
+   pair keeps last step's manifold, moved with its shapes, which must
+   agree with colliding them afresh; what moves is collided every step. */
 #include "test_main.h"
 #include "contacts/contacts.h"
 #include "tumble.h"
@@ -22,7 +21,6 @@ static tb_world *plane_world(double restitution)
     plane.restitution = restitution;
     assert_int_equal(tb_world_add_shape(w, &plane, NULL), TB_OK);
     s.sleep_time = INFINITY; /* the solver itself, every step */
-    s.substeps = 0;          /* the sweeps, whose lanes these are */
     assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
     return w;
 }
@@ -41,59 +39,6 @@ static int add_pyramid(tb_world *w, int levels, tb_body_id *ids)
             ++n;
         }
     return n;
-}
-
-/* A small pyramid with spinning balls thrown at it (so that friction
-   leaves its circle as well as staying inside it) that bounce on the
-   plane (restitution 0.6: the bounce after the sweeps), stepped 2 s with
-   the sweeps of instruction set isa; every body's pose and velocities,
-   and how many lanes bounced. */
-#define SCENE_BODIES (15 + 6)
-static size_t run_scene(int isa, double out[SCENE_BODIES][13])
-{
-    tb_world *w = plane_world(0.6);
-    size_t bounces = 0;
-    tb_body_id ids[SCENE_BODIES];
-    int i;
-    add_pyramid(w, 5, ids);
-    for (i = 0; i < 6; ++i) {
-        const double at[3] = { -3 + 1.2 * i, -2, 1 + 0.5 * i }, v[3] = { 0.3 * i - 1, 4, 1 },
-                     spin[3] = { 5, -3 + i, 2 };
-        ids[15 + i] = add_solid(w, i & 1 ? TB_SHAPE_SPHERE : TB_SHAPE_BOX, at, v, spin, 0.4);
-    }
-    w->contacts->isa = isa;
-    for (i = 0; i < 120; ++i) {
-        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
-        bounces += w->contacts->bounces;
-    }
-    for (i = 0; i < SCENE_BODIES; ++i) {
-        assert_int_equal(tb_body_position(w, ids[i], out[i]), TB_OK);
-        assert_int_equal(tb_body_orientation(w, ids[i], out[i] + 3), TB_OK);
-        assert_int_equal(tb_body_velocity(w, ids[i], out[i] + 7), TB_OK);
-        assert_int_equal(tb_body_angular_velocity(w, ids[i], out[i] + 10), TB_OK);
-    }
-    tb_world_destroy(w);
-    return bounces;
-}
-
-static void every_instruction_set_gives_the_same_bits(void **state)
-{
-    double portable[SCENE_BODIES][13], wider[SCENE_BODIES][13];
-    int isa, box;
-    (void)state;
-    /* the throws bounced (measured: 23 lanes over the 2 s) */
-    assert_true(run_scene(TB__ISA_PORTABLE, portable) > 0);
-    /* the throws did hit the pyramid: a box was pushed out of its plane
-       y = 0 (measured: up to 1.4 mm) */
-    for (box = 0; box < 15 && fabs(portable[box][1]) < 1e-4; ++box)
-        ;
-    assert_true(box < 15);
-    for (isa = TB__ISA_PORTABLE + 1; isa <= tb__isa(); ++isa) {
-        run_scene(isa, wider);
-        if (memcmp(portable, wider, sizeof portable) != 0)
-            fail_msg("the sweeps of instruction set %d give other bits than the portable ones", isa);
-    }
-    print_message("instruction sets compared: %d (portable to %d)\n", tb__isa() + 1, tb__isa());
 }
 
 /* The shape with id index1 key, placed in the world as this step's
@@ -232,57 +177,9 @@ static void moving_pairs_are_collided_afresh(void **state)
     tb_world_destroy(w);
 }
 
-/* The 210-box pyramid kept awake (sleep off), 10 s: once it rests, a
-   pair of sweeps soon changes no velocity by more than 1e-6 m/s, and the
-   velocity pass stops early: at most 10 sweeps a step on average
-   (measured 6.6; the count leaves out the pair of cold sweeps that finds
-   the first step settled). The target stays put while the pyramid rests: one
-   that moves every step (closing gaps of a few um between boxes by half a
-   step) keeps the sweeps from settling, all 20 every step, the whole
-   solve at twice its cost. */
-static void resting_pyramid_sweeps_stop_early(void **state)
-{
-    tb_world *w = plane_world(0);
-    long total = 0;
-    int i;
-    (void)state;
-    add_pyramid(w, 20, NULL);
-    for (i = 0; i < 600; ++i) {
-        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
-        total += w->contacts->sweeps;
-    }
-    print_message("resting pyramid, awake: %.2f velocity sweeps a step on average\n", total / 600.0);
-    assert_true(total <= 10 * 600);
-    tb_world_destroy(w);
-}
-
-/* tb__level_turns, the position patch's least-squares turns: the exact
-   solution of a well-posed S phi = b; for points on a line at 45 degrees
-   to the tangents (S singular), the smallest turns that level them, half
-   about each; for points all but on a line (levers across it of a
-   rounding's size), the line's own turn and nothing across it, where a
-   determinant test against s00 s11 turned them by 5e14 rad. */
-static void patch_turns_are_least_squares(void **state)
-{
-    double turn[2];
-    (void)state;
-    tb__level_turns(2, 1, 3, 1, 2, turn); /* S^-1 b = (1/5, 3/5) */
-    assert_true(fabs(turn[0] - 0.2) < 1e-15 && fabs(turn[1] - 0.6) < 1e-15);
-    tb__level_turns(2, 2, 2, 2, 2, turn); /* phi_1 + phi_2 = 1, smallest: (1/2, 1/2) */
-    assert_true(fabs(turn[0] - 0.5) < 1e-15 && fabs(turn[1] - 0.5) < 1e-15);
-    tb__level_turns(1e-30, 9.9e-17, 1e-2, 0, 1e-3, turn); /* b_1 / s11 = 0.1 */
-    print_message("turns for points all but on a line: %.3g, %.3g rad\n", turn[0], turn[1]);
-    assert_true(fabs(turn[0]) < 1e-12 && fabs(turn[1] - 0.1) < 1e-12);
-    tb__level_turns(0, 0, 0, 0, 0, turn); /* one point: no turn */
-    assert_true(turn[0] == 0 && turn[1] == 0);
-}
-
 static const struct CMUnitTest tests[] = {
-    cmocka_unit_test(every_instruction_set_gives_the_same_bits),
     cmocka_unit_test(reused_manifolds_match_fresh_ones),
     cmocka_unit_test(moving_pairs_are_collided_afresh),
-    cmocka_unit_test(resting_pyramid_sweeps_stop_early),
-    cmocka_unit_test(patch_turns_are_least_squares),
 };
 
 TB_TEST_MAIN(tests)
