@@ -176,6 +176,26 @@ static void random_offset_stacks_stand(void **state)
     assert_below(worst, 1e-3);
 }
 
+/* 40 random stacks of 8 (random_stack) kept awake (sleep off) for 30 s.
+   Statically each stands (by 5 cm at the least), so the truth is that
+   every box stays where it was put. Sequential impulses alone let a lean
+   of a whole stack grow from rounding, by 2 to 3% a step, until the
+   stack falls (the sweeps: 3 of the 40 from 10 s or so on); solved with
+   its island (stack_solve.c) none falls. Bound: issue 18's for towers
+   with placement errors, 1 cm, here for any box and over 30 s (measured
+   2.0e-3 m: one stack's top box ratchets as a point under it lets go and
+   comes back every 3 s, its island's twist slipping patch by patch:
+   docs/contacts.md, "Known limits"; 12 of the 40 stay within 1e-6 m). */
+static void awake_offset_stacks_stand(void **state)
+{
+    double least;
+    const double worst = random_stacks(777, 40, 0, 1800, &least);
+    (void)state;
+    print_message("40 random offset stacks of 8 awake for 30 s: worst box %.3e m\n", worst);
+    assert_true(least > 0);
+    assert_below(worst, 0.01);
+}
+
 /* The issue's pyramid (reference/ode_contacts.h's layout: 20 levels, 210
    unit cubes 1 cm apart, mu 0.6), 10 s at 60 Hz. It must fall asleep,
    and its top cube end within 1 cm of where it started across (the
@@ -233,6 +253,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(stack_of_ten_stands),
     cmocka_unit_test(staircases_stand_still),
     cmocka_unit_test(random_offset_stacks_stand),
+    cmocka_unit_test(awake_offset_stacks_stand),
 };
 
 TB_TEST_MAIN(tests)
