@@ -20,7 +20,7 @@ cd "$(dirname "$0")"
 # xauth for its off-screen display (xvfb-run), Mesa's software OpenGL, and
 # node with npm for the Khronos validator (install_node).
 run_packages=(build-essential cmake pkg-config liblua5.4-dev)
-packages=("${run_packages[@]}" lua5.4 libcmocka-dev libode-dev gnuplot-nox)
+packages=("${run_packages[@]}" lua5.4 libcmocka-dev libode-dev libbullet-dev gnuplot-nox)
 test_packages=("${packages[@]}" f3d xvfb xauth libgl1-mesa-dri)
 
 install_missing() { # packages

@@ -1,6 +1,7 @@
-/* contacts.c: contact throughput and stacking, tumble beside ODE on the
-   reference scenes of reference/ode_contacts.h (built there for ODE, here for
-   tumble from the same layouts).
+/* contacts.c: contact throughput and stacking, tumble beside ODE and
+   Bullet on the reference scenes of reference/ode_contacts.h (built there
+   for ODE, in reference/bullet_contacts.cpp for Bullet, here for tumble,
+   from the same layouts), each run in turn, BENCH_RUNS times.
 
    - pyramid: 210 unit cubes of 1 kg in 20 levels, 1 cm apart in a level, on
      a static plane, mu 0.6 on every shape (a pair uses sqrt(mu_a mu_b), so
@@ -14,6 +15,8 @@
      pyramid sways out of its plane, so the end alone catches one phase of
      the sway. Targets: ODE/tumble >= 5 and the top cube within 1 cm of
      where it started throughout (the length of its whole displacement).
+     Bullet 3.24 with its defaults beside them (bullet_contacts.h: its
+     stepSimulation timed the same way), awake and with its deactivation.
    - pile: ode_pile_scene()'s 1000 spheres, boxes and capsules, each with
      ODE's mass, principal inertia and orientation, dropped from a grid;
      the same number of steps as ODE. The pile's cost changes as it falls
@@ -21,7 +24,8 @@
      it); contacts are tumble's touching points (tb_world_contact_count)
      against ODE's contact joints, means over the steps. Then how many of
      tumble's centres end below the plane: none should, and a count there
-     means the timing is of a broken run.
+     means the timing is of a broken run. Bullet beside them, awake: the
+     issue's target is 3 times Bullet's speed (Bullet/tumble >= 3).
    - ns per contact point per substep: the median step over (mean
      touching points x substeps), for the pile and the pyramid. This
      charges the whole step to the contacts (collision, integration,
@@ -47,7 +51,8 @@
      and those still rolling at its edge keep its island awake.
    - asleep (also `bench_contacts --sleep`, alone): the ms per step once
      every body sleeps (the median of 300 steps after the last fell
-     asleep, one run): the pyramid; a block of 1000 unit cubes in 10
+     asleep, one run): the pyramid, and Bullet's (the issue gives MuJoCo's
+     figure, not measured here); a block of 1000 unit cubes in 10
      levels of 10 x 10 columns 1 cm apart (100 islands of 10, a column
      each; it stands in for the pile, which does not fall asleep); and 1000 and 10000 separate cubes, each an island, whose
      difference over 9000 is the cost of one sleeping body a step.
@@ -78,6 +83,7 @@
 #define BENCH_NAME "bench_contacts"
 
 #include "bench.h"
+#include "bullet_contacts.h"
 #include "ode_contacts.h"
 #include "tumble.h"
 
@@ -481,10 +487,14 @@ static void asleep_lines(void)
     pyramid_run pyr;
     double ms, each[2];
     int k;
+    bullet_run bullet;
     tumble_pyramid(&pd, 1, &pyr, &ms);
+    if (!bullet_pyramid(&pd, 1, ASLEEP_STEPS, &bullet))
+        bullet.asleep_ms = -1, bullet.asleep_after = -1;
     printf("asleep    pyramid %d boxes, every body asleep: %.4f ms/step (median of %d steps after all slept at step "
-           "%d; -1: not asleep) | Bullet 0.041, MuJoCo 0.033 (issue 18's figures)\n",
-           ode_pyramid_boxes(pd.levels), ms, ASLEEP_STEPS, pyr.t.asleep_after);
+           "%d; -1: not asleep) | Bullet %s %.4f ms/step (asleep at step %d) | MuJoCo 0.033 (issue 18's figure)\n",
+           ode_pyramid_boxes(pd.levels), ms, ASLEEP_STEPS, pyr.t.asleep_after, TB_BENCH_BULLET, bullet.asleep_ms,
+           bullet.asleep_after);
     fflush(stdout);
     ms = boxes_asleep_ms(1000, 10, 1, 1.01);
     printf("asleep    block of 1000 cubes (10 levels of 10 x 10, an island a column), every body asleep: %.4f ms/step "
@@ -507,6 +517,11 @@ int main(int argc, char **argv)
        the pile */
     double pyr_ms[BENCH_RUNS], pyr_ode_ms[BENCH_RUNS], pyr_ode_mean[BENCH_RUNS];
     double pyr_sleep_ms[BENCH_RUNS], pile_sleep_ms[BENCH_RUNS], pyr_ode_sleep_ms[BENCH_RUNS];
+    /* Bullet's, the same runs: the pyramid awake (median) and with sleep
+       (mean), the pile awake (mean, median) */
+    double pyr_bullet_ms[BENCH_RUNS], pyr_bullet_sleep_ms[BENCH_RUNS], pile_bullet_ms[BENCH_RUNS],
+        pile_bullet_median_ms[BENCH_RUNS];
+    bullet_run pyr_bullet, pyr_bullet_sleep, pile_bullet;
     double pile_ms[BENCH_RUNS], pile_median_ms[BENCH_RUNS], pile_ode_ms[BENCH_RUNS], pile_ode_median_ms[BENCH_RUNS];
     pyramid_run pyr, pyr_sleep;
     ode_pyramid_result pyr_ode, pyr_ode_sleep;
@@ -540,7 +555,8 @@ int main(int argc, char **argv)
         return 2;
     }
 
-    printf("tumble contacts beside ODE %s (double): medians over %d alternating runs of each scene\n", TB_BENCH_ODE,
+    printf("tumble contacts beside ODE %s (double) and Bullet %s (float): medians over %d alternating runs of each "
+           "scene\n", TB_BENCH_ODE, TB_BENCH_BULLET,
            BENCH_RUNS);
     bench_print_build();
     bench_print_asserts();
@@ -556,6 +572,12 @@ int main(int argc, char **argv)
             fprintf(stderr, BENCH_NAME ": ODE pyramid refused or failed\n");
             return EXIT_FAILURE;
         }
+        if (!bullet_pyramid(&pd, 0, 0, &pyr_bullet) || !bullet_pyramid(&pd, 1, 0, &pyr_bullet_sleep)) {
+            fprintf(stderr, BENCH_NAME ": Bullet pyramid refused or failed\n");
+            return EXIT_FAILURE;
+        }
+        pyr_bullet_ms[r] = pyr_bullet.ms_median;
+        pyr_bullet_sleep_ms[r] = pyr_bullet_sleep.ms_mean;
         tumble_pyramid(&pd, 1, &pyr_sleep, NULL);
         pd_sleep.auto_disable = 1;
         if (!ode_pyramid(&pd_sleep, &pyr_ode_sleep)) {
@@ -584,6 +606,13 @@ int main(int argc, char **argv)
            ode_pyramid_boxes(pd.levels), t_ms, pd.duration, pyr_sleep.t.ms_median, pyr_sleep.t.asleep_after,
            pyr_sleep.sink, pyr_sleep.drift, o_ms, median_of(pyr_ode_mean, BENCH_RUNS), pyr_ode_sleep.top_sink,
            pyr_ode_sleep.top_drift, o_ms / t_ms, met(o_ms / t_ms >= 5), pyr_sleep.farthest, met(pyr_sleep.farthest <= 0.01));
+    printf("pyramid   %d boxes  Bullet %s: awake %.2f ms/step (median), %.0f contact points, top box sink %.3f m drift "
+           "%.3f m | Bullet/tumble %.1f; sleep on %.2f ms/step (mean), all asleep after %d steps, top box sink %.3f m | "
+           "Bullet/tumble %.1f\n",
+           ode_pyramid_boxes(pd.levels), TB_BENCH_BULLET, median_of(pyr_bullet_ms, BENCH_RUNS), pyr_bullet.contacts_mean,
+           pyr_bullet.top_sink, pyr_bullet.top_drift, median_of(pyr_bullet_ms, BENCH_RUNS) / median_of(pyr_ms, BENCH_RUNS),
+           median_of(pyr_bullet_sleep_ms, BENCH_RUNS), pyr_bullet_sleep.asleep_after, pyr_bullet_sleep.top_sink,
+           median_of(pyr_bullet_sleep_ms, BENCH_RUNS) / t_ms);
     fflush(stdout);
 
     if (ode_pile_scene(&ld, shapes) != ld.count) {
@@ -602,6 +631,12 @@ int main(int argc, char **argv)
         pile_median_ms[r] = pile.ms_median;
         pile_ode_ms[r] = pile_ode.timing.ms_mean;
         pile_ode_median_ms[r] = pile_ode.timing.ms_median;
+        if (!bullet_pile(&ld, shapes, 0, &pile_bullet)) {
+            fprintf(stderr, BENCH_NAME ": Bullet pile refused or failed\n");
+            return EXIT_FAILURE;
+        }
+        pile_bullet_ms[r] = pile_bullet.ms_mean;
+        pile_bullet_median_ms[r] = pile_bullet.ms_median;
     }
     t_ms = median_of(pile_ms, BENCH_RUNS);
     o_ms = median_of(pile_ode_ms, BENCH_RUNS);
@@ -611,6 +646,11 @@ int main(int argc, char **argv)
            ld.count, t_ms, ld.steps, median_of(pile_median_ms, BENCH_RUNS), pile.contacts_mean, below,
            below ? " (sank through the plane)" : "", o_ms, median_of(pile_ode_median_ms, BENCH_RUNS),
            pile_ode.timing.contacts_mean, o_ms / t_ms, met(o_ms / t_ms >= 5));
+    printf("pile      %d shapes Bullet %s: awake %.2f ms/step (mean; median %.2f), %.0f contact points, centres below "
+           "the plane at the end %d | Bullet/tumble %.1f (target >= 3): %s\n",
+           ld.count, TB_BENCH_BULLET, median_of(pile_bullet_ms, BENCH_RUNS), median_of(pile_bullet_median_ms, BENCH_RUNS),
+           pile_bullet.contacts_mean, pile_bullet.below, median_of(pile_bullet_ms, BENCH_RUNS) / t_ms,
+           met(median_of(pile_bullet_ms, BENCH_RUNS) / t_ms >= 3));
     t_ms = median_of(pile_sleep_ms, BENCH_RUNS);
     printf("pile      %d shapes default (sleep on) tumble %.2f ms/step (mean of %d steps; median %.3f), all asleep after "
            "%d steps (-1: not within the run; awake at the end: %zu) | ODE/tumble %.1f\n",

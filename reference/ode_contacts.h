@@ -24,6 +24,10 @@
 
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" { /* (bullet_contacts.cpp builds the same scenes) */
+#endif
+
 /* ------------------------------------------------------------ bouncing ball
    A sphere (radius 0.1 m, mass 1 kg, inertia 0.4 m r^2) starts at rest with
    its lowest point drop_height above the plane: centre at
@@ -324,5 +328,9 @@ ode_heavy_def ode_default_heavy_def(void);
 /* Returns 1 if the run happened, 0 if def was refused or ODE did not
    initialise. */
 int ode_heavy_landing(const ode_heavy_def *def, ode_heavy_result *out);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif
