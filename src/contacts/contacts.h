@@ -185,6 +185,10 @@ struct tb__contacts {
     size_t soft_body_cap;
     struct tb__soft_patch *soft_patches;
     size_t soft_patch_count, soft_patch_cap;
+    struct tb__soft_row *wide_rows;       /* the rows and patches reordered, narrow islands' */
+    struct tb__soft_patch *wide_patches;  /* first (soft_step.c, wide_islands_apart) */
+    size_t wide_row_cap, wide_patch_cap;
+    int soft_pass;             /* the bodies the soft step's loops move now (tb__soft_body.pass) */
     struct tb__stacks *stacks; /* stack_solve.c: rows solved together */
     int prepared;              /* entries hold this step's contacts, to solve */
     int solved;                /* entries hold the last step's solved contacts */

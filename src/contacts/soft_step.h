@@ -36,6 +36,9 @@ typedef struct tb__soft_body {
     double delta[9];            /* the rotation from q0 to q */
     double v_struck[3];         /* m/s: v before this substep's impacts */
     double struck_at;           /* s into the substep of its impact; < 0: none */
+    int pass;                   /* 0: in islands solved together (or alone); 1: in an island
+                                   too wide, at rest, stepped apart at twice the rate */
+    int32_t group;              /* a body of its island (union-find, wide_islands_apart) */
 } tb__soft_body;
 
 /* A manifold: its points' normal rows, then friction (two rows at the
@@ -59,6 +62,7 @@ typedef struct tb__soft_patch {
     double friction_impulse[2], twist_impulse, rolling_impulse[2]; /* N s, N m s: this substep's */
     double settled[2], settled_twist, settled_rolling[2]; /* what settle added */
     int stacked;                /* its normal rows are solved with its stack's (stack_solve.c) */
+    int wide;                   /* in an island too wide to solve together, at rest */
 } tb__soft_patch;
 
 typedef struct tb__soft_row {

@@ -157,6 +157,8 @@ static void carry_scratch(tb__contacts *dst, const tb__contacts *src)
     dst->soft_rows = src->soft_rows, dst->soft_row_cap = src->soft_row_cap, dst->soft_row_count = 0;
     dst->soft_bodies = src->soft_bodies, dst->soft_body_cap = src->soft_body_cap;
     dst->soft_patches = src->soft_patches, dst->soft_patch_cap = src->soft_patch_cap, dst->soft_patch_count = 0;
+    dst->wide_rows = src->wide_rows, dst->wide_row_cap = src->wide_row_cap;
+    dst->wide_patches = src->wide_patches, dst->wide_patch_cap = src->wide_patch_cap;
     dst->stacks = src->stacks; /* stack_solve.c's: set up again every step */
 }
 
