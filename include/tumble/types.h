@@ -150,8 +150,8 @@ typedef struct tb_shape_def {
     double rolling_resistance;/* m: how far ahead of a rolling contact its normal force
                                  acts, so that rolling is resisted by a torque up to this
                                  times the normal force (ODE's rho, a tyre's or a ball's
-                                 rolling resistance length), and under the soft step a
-                                 spin about the normal by the same torque; default 0 (a
+                                 rolling resistance length), and a spin about the
+                                 normal by the same torque; default 0 (a
                                  ball rolls on for ever); >= 0; a pair uses the larger */
     uint32_t category;        /* bits this shape is; default 1 */
     uint32_t mask;            /* bits it collides with; default all. A pair collides

@@ -274,12 +274,11 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
     if (!found)
         old = previous_entry(c, a.key, b.key);
     e->struck = 0;
-    e->struck_before = old && old->struck;
     for (k = 0; k < m->count; ++k) {
         tb__point *p = &e->point[k];
         const double *at = m->point[k].pos;
         int j;
-        p->normal_impulse = p->speed = p->predicted = 0;
+        p->normal_impulse = p->speed = 0;
         p->active = p->matched = 0;
         p->feature = m->point[k].feature;
         p->separation = -m->point[k].depth;

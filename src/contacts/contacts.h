@@ -37,7 +37,6 @@ typedef struct tb__point {
                                   step, world (0 on a static side) */
     double separation;         /* m, at the start of the step (< 0: overlap) */
     double speed;              /* m/s: the approach speed of an impact, 0 otherwise */
-    double predicted;          /* m: separation after the free motion */
     double local_a[3], local_b[3]; /* m: the point in each shape's frame, and */
     double separation0;        /* its separation, when the shapes last collided */
     int active;                /* touching after the free motion: solved */
@@ -58,9 +57,10 @@ typedef struct tb__entry {
     double rolling_impulse[3]; /* N m s, world: the soft step's rolling resistance, kept */
     int count;
     int touching;
-    int asleep;                /* carried over unsolved: both sides sleep or are static */
+    int asleep;                /* carried over unsolved (then parked: contact.c, park): both
+                                  sides sleep or are static */
     int cached;                /* the fields below hold the last collision */
-    int struck, struck_before; /* a point of it struck this step, last step */
+    int struck;                /* a point of it struck this step */
     int reused;                /* this step's manifold is the last collision's, moved */
     double cache_rot[9];       /* b's shape frame in a's when the shapes last collided */
     double cache_pos[3];       /* m: b's shape centre then, in a's frame */

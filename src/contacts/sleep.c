@@ -7,8 +7,9 @@
    step resets it). Bodies joined by touching contacts form islands
    (union-find over this step's entries); an island whose every body has
    rested sleep_time falls asleep under one tag, with zero momenta. While
-   it sleeps its pairs are not collided but carried from step to step (so
-   no end events, and warm starts ready for when it wakes), the solver
+   it sleeps its pairs are not collided but parked, as they were (so no
+   end events, and warm starts ready for when it wakes: contact.c, park),
+   the solver
    leaves it out, and its pose is put back after the integrator's free
    motion. Worlds with force callbacks never sleep. */
 #include "contacts/contacts.h"

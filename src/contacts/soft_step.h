@@ -1,7 +1,7 @@
 /* soft_step.h: the soft-step solver's bodies, patches and rows (not
    public), shared by soft_step.c (the substeps) and stack_solve.c (the
    normal rows of a stack solved together). docs/contacts.md, "The
-   soft-step solver". */
+   soft step". */
 #ifndef TB_SOFT_STEP_H
 #define TB_SOFT_STEP_H
 
@@ -37,7 +37,8 @@ typedef struct tb__soft_body {
     double v_struck[3];         /* m/s: v before this substep's impacts */
     double struck_at;           /* s into the substep of its impact; < 0: none */
     int pass;                   /* 0: in islands solved together (or alone); 1: in an island
-                                   too wide, at rest, stepped apart at twice the rate */
+                                   too wide to, with no point deeper than the slop, stepped
+                                   apart at twice the rate (wide_islands_apart) */
     int32_t group;              /* a body of its island (union-find, wide_islands_apart) */
 } tb__soft_body;
 
@@ -62,7 +63,8 @@ typedef struct tb__soft_patch {
     double friction_impulse[2], twist_impulse, rolling_impulse[2]; /* N s, N m s: this substep's */
     double settled[2], settled_twist, settled_rolling[2]; /* what settle added */
     int stacked;                /* its normal rows are solved with its stack's (stack_solve.c) */
-    int wide;                   /* in an island too wide to solve together, at rest */
+    int wide;                   /* in an island too wide to solve together, with no point
+                                   deeper than the slop: stepped at twice the rate */
 } tb__soft_patch;
 
 typedef struct tb__soft_row {

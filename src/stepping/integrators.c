@@ -101,7 +101,7 @@ static tb_status verlet_with(tb_world *w, double h, tb__rotation_kind rotation)
            bodies, while it sits in registers or L1; a particle's closing
            kick sees its predicted velocity 2 v_half - v_n computed there,
            without the copy of the state. The same operations, the same
-           bits (test_particle_step.verlet_steps_give_the_general_bits),
+           bits (test_particle_step.split_steps_give_the_general_bits),
            in one pass over the arrays instead of three. */
         const tb__split_op kick_drift_kick[3] = { { 0, h / 2, rotation, 0 }, { 1, h, rotation, 0 },
                                                   { 0, h / 2, rotation, 1 } };
