@@ -279,7 +279,7 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
         const double *at = m->point[k].pos;
         int j;
         p->normal_impulse = p->speed = 0;
-        p->active = p->matched = 0;
+        p->active = 0;
         p->feature = m->point[k].feature;
         p->separation = -m->point[k].depth;
         memcpy(p->point, at, sizeof p->point);
@@ -306,10 +306,8 @@ static tb_status add_entry(tb_world *w, tb__contacts *c, uint32_t pa, uint32_t p
                 if (d2 < nearest)
                     nearest = d2, best = j;
             }
-            if (best >= 0) {
+            if (best >= 0)
                 p->normal_impulse = old->point[best].normal_impulse;
-                p->matched = 1;
-            }
         }
     }
     /* the patch's friction, into this step's contact plane */

@@ -40,7 +40,6 @@ typedef struct tb__point {
     double local_a[3], local_b[3]; /* m: the point in each shape's frame, and */
     double separation0;        /* its separation, when the shapes last collided */
     int active;                /* touching after the free motion: solved */
-    int matched;               /* it touched last step too (warm started) */
 } tb__point;
 
 /* The points between two shapes (or a shape and a particle). */

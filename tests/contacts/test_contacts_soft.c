@@ -12,19 +12,6 @@
 #define HZ 60.0
 #define PI 3.14159265358979323846
 
-static void soft(tb_world *w, int substeps)
-{
-    tb_contact_settings s = tb_world_contact_settings(w);
-    s.substeps = substeps;
-    assert_int_equal(tb_world_set_contact_settings(w, &s), TB_OK);
-}
-
-static void soft_awake(tb_world *w)
-{
-    soft(w, 4);
-    awake(w);
-}
-
 static double horizontal(const double a[3], const double b[3])
 {
     return hypot(a[0] - b[0], a[1] - b[1]);
@@ -48,7 +35,6 @@ static void ball_bounces_near_e_squared(void **state)
     double top[2];
     int i;
     (void)state;
-    soft(w, 4);
     assert_int_equal(ball_apexes(w, id, 0.1, HZ, NULL, top), 2);
     for (i = 0; i < 2; ++i) {
         print_message("apex %d: truth %.4f, soft step %.6f (%.2e relative)\n", i + 1, truth[i], top[i],
@@ -92,7 +78,7 @@ static double spun_ball(double rho, double seconds, double *across)
     assert_int_equal(tb_world_add_body(w, &b, &s.body), TB_OK);
     s.type = TB_SHAPE_SPHERE, s.radius = 0.1, s.friction = 0.6, s.rolling_resistance = rho;
     assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
-    soft_awake(w);
+    awake(w);
     for (i = 0; i < HZ; ++i)
         assert_int_equal(tb_world_step(w, 1 / HZ), TB_OK);
     assert_int_equal(tb_body_set_angular_velocity(w, s.body, spin), TB_OK);
@@ -146,7 +132,7 @@ static void box_rests_still(void **state)
     double x[3], settled[3] = { 0, 0, 0 }, sink = 0, drift = 0, moved = 0;
     int i;
     (void)state;
-    soft_awake(w);
+    awake(w);
     for (i = 1; i <= 10 * HZ; ++i) {
         assert_int_equal(tb_world_step(w, 1 / HZ), TB_OK);
         tb_body_position(w, id, x);
@@ -185,7 +171,7 @@ static void column_of_ten_stands(void **state)
         const double at[3] = { 0, 0, 0.5 + i };
         ids[i] = add_box(w, at, 1, 0.6);
     }
-    soft_awake(w);
+    awake(w);
     for (t = 1; t <= 10 * HZ; ++t) {
         assert_int_equal(tb_world_step(w, 1 / HZ), TB_OK);
         for (i = 0; i < 10; ++i) {
@@ -250,7 +236,7 @@ static double incline_creep(double h, int changing)
     s.body = id;
     s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = 0.5;
     assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
-    soft_awake(w);
+    awake(w);
     tb_body_position(w, id, x0);
     step_changing(w, 10, h, changing);
     tb_body_position(w, id, x);
@@ -321,7 +307,6 @@ static void soft_step_spinning_plate_stays_on_the_slab(void **state)
         s.body = id;
         s.half_extents[0] = s.half_extents[1] = 0.25, s.half_extents[2] = 0.005;
         assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
-        soft(w, 4);
         for (t = 0; t < HZ; ++t) {
             assert_int_equal(tb_world_step(w, 1 / HZ), TB_OK);
             tb_body_position(w, id, x);
@@ -368,7 +353,7 @@ static void offset_tower_stands(void **state)
         s.half_extents[0] = s.half_extents[1] = s.half_extents[2] = 0.25;
         assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
     }
-    soft_awake(w);
+    awake(w);
     for (t = 1; t <= 20 * HZ; ++t) {
         assert_int_equal(tb_world_step(w, 1 / HZ), TB_OK);
         if (t == 5 * HZ || t == 10 * HZ || t == 20 * HZ) {
@@ -424,7 +409,7 @@ static void light_plank_holds_a_heavy_beam(void **state)
         }
         assert_int_equal(tb_world_add_shape(w, &s, NULL), TB_OK);
     }
-    soft_awake(w);
+    awake(w);
     for (t = 1; t <= 5 * HZ; ++t)
         assert_int_equal(tb_world_step(w, 1 / HZ), TB_OK);
     tb_body_position(w, ids[0], x);
@@ -467,7 +452,7 @@ static void random_heap_never_gains_energy(void **state)
             assert_int_equal(tb_body_set_velocity(w, id, v), TB_OK);
             mass += 1;
         }
-        soft_awake(w);
+        awake(w);
         e0 = tb_world_energy(w).total;
         for (t = 0; t < 10 * HZ; ++t) {
             assert_int_equal(tb_world_step(w, 1 / HZ), TB_OK);
@@ -548,7 +533,7 @@ static void flat_box_lands_flat(void **state)
     double x[3], q[4], tilt = 0, drift = 0;
     int i;
     (void)state;
-    soft_awake(w);
+    awake(w);
     for (i = 0; i < 2 * HZ; ++i) {
         assert_int_equal(tb_world_step(w, 1 / HZ), TB_OK);
         tb_body_position(w, id, x);
@@ -607,7 +592,7 @@ static void heavy_box_lands_on_light_ones_soft(void **state)
             box.half_extents[0] = box.half_extents[1] = box.half_extents[2] = 0.5;
             assert_int_equal(tb_world_add_shape(w, &box, NULL), TB_OK);
         }
-        soft_awake(w);
+        awake(w);
         for (t = 0; t < 3 * HZ; ++t) {
             assert_int_equal(tb_world_step(w, 1 / HZ), TB_OK);
             for (k = 0; k <= cases[i].under; ++k) {
