@@ -822,6 +822,37 @@ static void box_box(const tb__geom *ga, const tb__geom *gb, double margin, doubl
         box_edge(&a, &b, ea, eb, edge_L, 1, margin, m);
         return;
     }
+    /* The edges' axis is the shallowest, but an edge may lie along the
+       face, touching it along a line: the face's points hold it along its
+       length, where the one crossing point would leave it free to rock and
+       the choice would flip between the two from step to step (a heap of
+       boxes never slept: test_collide.edge_on_a_face_across_its_edge_keeps_
+       the_line). They are taken when there are two or more, none deeper
+       than the edges' overlap by more than the tolerance, and the face's
+       normal turns the push out of that overlap aside by less than the
+       tolerance. */
+    {
+        const double *n_face = use_b ? b.ax[fb] : a.ax[fa];
+        double aside[3];
+        tb__manifold face;
+        cross(edge_L, n_face, aside);
+        face.count = 0;
+        if (fmax(-sep_e, 0) * len(aside) <= tolerance) {
+            if (use_b)
+                box_face(&b, &a, fb, 1, margin, &face);
+            else
+                box_face(&a, &b, fa, 0, margin, &face);
+        }
+        if (face.count >= 2) {
+            double deepest = -HUGE_VAL;
+            for (i = 0; i < face.count; ++i)
+                deepest = fmax(deepest, face.point[i].depth);
+            if (deepest <= -sep_e + tolerance) {
+                *m = face;
+                return;
+            }
+        }
+    }
     box_edge(&a, &b, ea, eb, edge_L, 0, margin, m);
 }
 

@@ -870,6 +870,43 @@ static void edge_along_a_face_is_a_line_of_points(void **state)
     assert_true(fabs(m.point[0].pos[1] - m.point[1].pos[1]) > 0.39); /* the face's width, 0.4 m */
 }
 
+/* A box's bottom edge lying on another box's top face and across its top
+   edge, dipping 4 mm along its 0.6 m so that its end beyond the face is
+   6 mm down: the separating axes' shallowest is the two edges' (2 mm, at
+   the crossing), not the face's (6 mm, the end over the side). The edge
+   touches the face along a line, from the crossing to its other end 2 mm
+   above the face: the face's two points hold it, where the crossing point
+   alone would leave it free to rock and the choice would flip from step
+   to step as it rocked (a heap of 2000 boxes never slept). */
+static void edge_on_a_face_across_its_edge_keeps_the_line(void **state)
+{
+    (void)state;
+    const tb__geom a = box(0, 0, 0, ID, 0.5, 0.5, 0.5);
+    const double h = 0.1, half = 0.3, dip = asin(0.004 / half), cross = 0.002;
+    double roll[9], pitch[9], yaw[9], R[9], under[3], mid[3];
+    tb__geom b;
+    tb__manifold m;
+    int k, inner;
+    rot_axis(1, 0, 0, PI / 4, roll); /* its local edge (x, -h, -h) straight under its centre */
+    rot_axis(0, 1, 0, dip, pitch);   /* its +x end down */
+    rot_axis(0, 0, 1, PI / 6, yaw);  /* across a's edge at 30 degrees */
+    rot_mul(pitch, roll, R);
+    rot_mul(yaw, R, R);
+    b = box(0, 0, 0, R, half, h, h);
+    /* the edge's middle on a's top edge (y = 0.5), 2 mm into the face */
+    mid[0] = 0, mid[1] = 0.5, mid[2] = 0.5 - cross;
+    world(&b, (const double[3]){ 0, -h, -h }, under);
+    for (k = 0; k < 3; ++k)
+        b.pos[k] = mid[k] - under[k];
+    assert_int_equal(tb__collide(&a, &b, 0.01, 5e-4, &m), 2);
+    assert_true(m.normal[2] > 1 - 1e-12); /* a's top face */
+    inner = m.point[0].pos[1] < m.point[1].pos[1] ? 0 : 1;
+    /* the crossing, 2 mm in, and the end over the face, 2 mm above it */
+    assert_true(fabs(m.point[1 - inner].depth - cross) < 1e-9 && fabs(m.point[1 - inner].pos[1] - 0.5) < 1e-9);
+    assert_true(fabs(m.point[inner].depth + cross) < 1e-9);
+    assert_true(fabs(m.point[inner].pos[1] - (0.5 - half * cos(dip) * sin(PI / 6))) < 1e-9);
+}
+
 /* ------------------------------------------------------------- random -- */
 
 /* A random shape; on a grid, its position and sizes are multiples of 0.25
@@ -1125,6 +1162,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(swapping_flips_the_normal_only),
     cmocka_unit_test(small_moves_keep_the_features),
     cmocka_unit_test(edge_along_a_face_is_a_line_of_points),
+    cmocka_unit_test(edge_on_a_face_across_its_edge_keeps_the_line),
     cmocka_unit_test(random_pairs_agree_with_brute_force),
     cmocka_unit_test(random_overlapping_boxes_touch),
     cmocka_unit_test(bounds_contain_the_shape),
