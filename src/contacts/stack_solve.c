@@ -739,8 +739,8 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
             if (s->solved[i])
                 s->x[i] += *s->views[i].impulse;
         /* a point solved to pull lets go; in the last round the solve
-           stands, cut at no pull (the next solve of the substep starts
-           from it) */
+           stands, stopped where its first pulling point lets go (below;
+           the next solve of the substep starts from it) */
         for (i = from; i < to && !last; ++i) {
             const band_row *v = &s->views[i];
             if (!v->patch && s->solved[i] && s->x[i] < -tiny * (c->soft_rows[s->order[i]].mass + 1)) {
