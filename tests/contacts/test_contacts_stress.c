@@ -571,8 +571,9 @@ static void smallest_failing_scenes_pass(void **state)
    2 cm and boulders of 2 m, 0.1 to 100 kg, at up to 30 m/s and 30 rad/s),
    8 seeds of 60. Measured: deepest 5.1 cm, fastest 74 m/s (a rod),
    energy never more than 5.7e-5 m of lift above the start (0.34 J in
-   heap 6's first step, whose cause is not found; within the 1 mm
-   allowed). They failed 1 of 8 while the time of impact left a body where
+   heap 6's first step, in the air: bodies spun at 20 to 30 rad/s gain up
+   to 0.32 J each from the split method's torque-free turns, second order
+   in the step, not from a contact; within the 1 mm allowed). They failed 1 of 8 while the time of impact left a body where
    it ended when its 32 advances ran out: heap 6's plate of 2 m, spun to
    88 rad/s by its landing, whose advances crept at its sweep of 2.3 m,
    turned a corner 0.15 m under the plane (continuous.c, TB__TOI_STEPS);
