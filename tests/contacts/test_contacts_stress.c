@@ -573,13 +573,13 @@ static void smallest_failing_scenes_pass(void **state)
    energy never more than 5.7e-5 m of lift above the start (0.34 J in
    heap 6's first step, in the air: bodies spun at 20 to 30 rad/s gain up
    to 0.32 J each from the split method's torque-free turns, second order
-   in the step, not from a contact; within the 1 mm allowed). They failed 1 of 8 while the time of impact left a body where
-   it ended when its 32 advances ran out: heap 6's plate of 2 m, spun to
-   88 rad/s by its landing, whose advances crept at its sweep of 2.3 m,
-   turned a corner 0.15 m under the plane (continuous.c, TB__TOI_STEPS);
-   before that, a rod's spin raised by the time of impact (292 to 12110
-   rad/s) and a 1 kg ball under bodies of 25 to 97 kg 0.114 m into the
-   plane. */
+   in the step, not from a contact; within the 1 mm allowed). They failed
+   1 of 8 while the time of impact left a body where it ended when its 32
+   advances ran out: heap 6's plate of 2 m, spun to 88 rad/s by its
+   landing, whose advances crept at its sweep of 2.3 m, turned a corner
+   0.15 m under the plane (continuous.c, TB__TOI_STEPS); before that, a
+   rod's spin raised by the time of impact (292 to 12110 rad/s) and a 1
+   kg ball under bodies of 25 to 97 kg 0.114 m into the plane. */
 static void extreme_heaps(void **state)
 {
     (void)state;
