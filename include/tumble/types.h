@@ -177,9 +177,9 @@ typedef struct tb_contact_settings {
     double sleep_time;            /* s: an island of touching bodies that all rest this
                                      long falls asleep; default 0.5, INFINITY: never */
     int substeps;                 /* the soft-step solver's substeps a step; an island
-                                     too wide to solve together, with no overlap deeper
-                                     than the slop, takes twice as many at twice the
-                                     hertz (docs/contacts.md); default 4; >= 1 */
+                                     too wide to solve together, with no particle and no
+                                     overlap deeper than the slop, takes twice as many at
+                                     twice the hertz (docs/contacts.md); default 4; >= 1 */
 } tb_contact_settings;
 
 typedef enum tb_contact_event_type { TB_CONTACT_BEGIN, TB_CONTACT_END } tb_contact_event_type;

@@ -1203,8 +1203,9 @@ static tb_status wide_islands_apart(tb_world *w, tb__contacts *c, size_t *narrow
     tb__soft_patch *swap_patches;
     size_t cap;
     *any = 0;
-    /* the wide islands without a deep overlap: no point deeper than the
-       slop (pass marks a body with one; group joins an island's bodies) */
+    /* the wide islands without a deep overlap or a particle: pass marks
+       a particle and a body with a point deeper than the slop, group
+       joins an island's bodies */
     for (i = 0; i < c->body_count; ++i) {
         c->soft_bodies[i].group = (int32_t)i;
         c->soft_bodies[i].pass = c->bodies[i].tier != TB__BODIES;

@@ -579,14 +579,42 @@ static double patch_press(const tb__contacts *c, const struct tb__stacks *s, con
     return n;
 }
 
+/* What patch p's points push now: their normal impulses and bounces */
+static double pressing(const tb__contacts *c, const tb__soft_patch *p)
+{
+    double press = 0;
+    size_t k;
+    for (k = 0; k < p->count; ++k)
+        press += c->soft_rows[p->first + k].impulse + c->soft_rows[p->first + k].bounce;
+    return press;
+}
+
+/* Whether position i holds the first of a patch's two friction rows, the
+   second right after it */
+static int friction_pair(const tb__contacts *c, const struct tb__stacks *s, size_t i)
+{
+    return s->views[i].patch && (s->order[i] - c->soft_row_count) % 2 == 0 && s->order[i + 1] == s->order[i] + 1;
+}
+
+/* The friction pair at position i given the impulses f0 and f1 */
+static void set_pair(tb__contacts *c, struct tb__stacks *s, size_t i, double f0, double f1)
+{
+    int d;
+    for (d = 0; d < 2; ++d) {
+        const band_row *w = &s->views[i + d];
+        const double f = d ? f1 : f0;
+        band_push(c, w, f - *w->impulse);
+        *w->impulse = f;
+    }
+}
+
 /* Whether patch p's friction may stick: its centre's slip stopped by the
    patch alone (its tangent mass) within the cone of what its points
    push now. A patch that slides is left to its own pass, which meets
    the slip's direction exactly (soft_step_slides_to_v2_over_2_mu_g). */
 static int sticks(const tb__contacts *c, const tb__soft_patch *p)
 {
-    double slip[2], stop[2], press = 0;
-    size_t k;
+    double slip[2], stop[2];
     int d;
     for (d = 0; d < 2; ++d) {
         const band_row v = view(c, c->soft_row_count + 2 * (size_t)(p - c->soft_patches) + (size_t)d);
@@ -594,9 +622,7 @@ static int sticks(const tb__contacts *c, const tb__soft_patch *p)
     }
     stop[0] = p->tangent_mass[0] * slip[0] + p->tangent_mass[1] * slip[1];
     stop[1] = p->tangent_mass[1] * slip[0] + p->tangent_mass[2] * slip[1];
-    for (k = 0; k < p->count; ++k)
-        press += c->soft_rows[p->first + k].impulse + c->soft_rows[p->first + k].bounce;
-    return hypot(p->friction_impulse[0] - stop[0], p->friction_impulse[1] - stop[1]) <= p->friction * press;
+    return hypot(p->friction_impulse[0] - stop[0], p->friction_impulse[1] - stop[1]) <= p->friction * pressing(c, p);
 }
 
 /* The approach speed position i's normal row allows: none where it
@@ -778,27 +804,17 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
         }
         /* friction beyond its cone slides, held at the cone's edge */
         for (i = from; i + 1 < to; ++i) {
-            const band_row *v = &s->views[i];
-            tb__soft_patch *p = v->patch;
             double f, most, cut;
-            int d;
-            /* the pair of a patch: its first row, then its second */
-            if (!p || (s->order[i] - c->soft_row_count) % 2 || !s->solved[i] || s->order[i + 1] != s->order[i] + 1 ||
-                !s->solved[i + 1])
+            if (!friction_pair(c, s, i) || !s->solved[i] || !s->solved[i + 1])
                 continue;
             f = hypot(s->x[i], s->x[i + 1]);
-            most = p->friction * patch_press(c, s, p);
+            most = s->views[i].patch->friction * patch_press(c, s, s->views[i].patch);
             if (f <= most * (1 + 1e-12))
                 continue;
             cut = f > 0 ? most / f : 0;
-            for (d = 0; d < 2; ++d) {
-                const band_row *w = &s->views[i + d];
-                const double held = s->x[i + d] * cut;
-                band_push(c, w, held - *w->impulse);
-                *w->impulse = held;
-                s->solved[i + d] = 0;
-                s->held[i + d] = 1;
-            }
+            set_pair(c, s, i, s->x[i] * cut, s->x[i + 1] * cut);
+            s->solved[i] = s->solved[i + 1] = 0;
+            s->held[i] = s->held[i + 1] = 1;
             changed = !last;
         }
         if (changed)
@@ -828,25 +844,14 @@ static int solve_island_once(tb__contacts *c, struct tb__stacks *s, size_t k, do
        body squeezed in a crowd was thrown at 10 m/s:
        test_contacts_heaps.crowds_built_overlapping_stay_calm) */
     for (i = from; i + 1 < to; ++i) {
-        const band_row *v = &s->views[i];
-        tb__soft_patch *p = v->patch;
-        double f, most, press = 0;
-        size_t r;
-        int d;
-        if (!p || !s->held[i] || (s->order[i] - c->soft_row_count) % 2 || s->order[i + 1] != s->order[i] + 1)
+        double f0, f1, f, most;
+        if (!s->held[i] || !friction_pair(c, s, i))
             continue;
-        for (r = 0; r < p->count; ++r)
-            press += c->soft_rows[p->first + r].impulse + c->soft_rows[p->first + r].bounce;
-        f = hypot(*v->impulse, *s->views[i + 1].impulse);
-        most = p->friction * tb__most(press, 0);
-        if (f <= most * (1 + 1e-12))
-            continue;
-        for (d = 0; d < 2; ++d) {
-            const band_row *w = &s->views[i + d];
-            const double held = *w->impulse * most / f;
-            band_push(c, w, held - *w->impulse);
-            *w->impulse = held;
-        }
+        f0 = *s->views[i].impulse, f1 = *s->views[i + 1].impulse;
+        f = hypot(f0, f1);
+        most = s->views[i].patch->friction * tb__most(pressing(c, s->views[i].patch), 0);
+        if (f > most * (1 + 1e-12))
+            set_pair(c, s, i, f0 * most / f, f1 * most / f);
     }
     return closing;
 }

@@ -242,7 +242,7 @@ static void crowds_built_overlapping_stay_calm(void **state)
    face is held there by the face's points (test_collide.edge_on_a_face_
    across_its_edge_keeps_the_line); held by the edges' one crossing point
    it rocked, the manifold flipping between the two, and one of these
-   heaps never slept (measured: asleep at 5.55, 5.78, 6.12 and 5.48 s;
+   heaps never slept (measured: asleep at 5.55, 5.55, 6.12 and 5.48 s;
    by the crossing point, heap 2 never slept). */
 static void heaps_of_boxes_fall_asleep(void **state)
 {
