@@ -1,5 +1,5 @@
 /* fuzz_api.c: a libFuzzer target for the C API. The input is decoded into
-   a world and a sequence of calls: adds, removes (of live, removed and
+   a world and a sequence of calls: adds (joints too), removes (of live, removed and
    never-made ids), setters with hostile numbers, contact settings, steps.
    Every call may fail, but none may crash or leak, and with the guard on
    (the world starts with it checking finiteness; the input may change
@@ -20,7 +20,8 @@ typedef struct made {
     tb_body_id body[MOST];
     tb_shape_id shape[MOST];
     tb_spring_id spring[MOST];
-    unsigned particles, bodies, shapes, springs;
+    tb_joint_id joint[MOST];
+    unsigned particles, bodies, shapes, springs, joints;
 } made;
 
 /* Every body and particle position finite after a step that succeeded */
@@ -112,6 +113,25 @@ static void add_spring(tb_world *w, fuzz_input *in, made *m)
         m->spring[m->springs++] = id;
 }
 
+static void add_joint(tb_world *w, fuzz_input *in, made *m)
+{
+    tb_joint_def d = tb_default_joint_def();
+    tb_joint_id id;
+    d.type = (tb_joint_type)fuzz_below(in, 6); /* 5: not a type */
+    d.a = m->body[fuzz_below(in, m->bodies)];
+    if (fuzz_below(in, 2))
+        d.b = m->body[fuzz_below(in, m->bodies)];
+    fuzz_vector(in, d.anchor);
+    if (fuzz_below(in, 2))
+        fuzz_vector(in, d.axis);
+    if (d.type == TB_JOINT_DISTANCE) {
+        fuzz_vector(in, d.anchor_b);
+        d.length = fuzz_below(in, 2) ? fuzz_double(in) : -1;
+    }
+    if (tb_world_add_joint(w, &d, &id) == TB_OK && m->joints < MOST)
+        m->joint[m->joints++] = id;
+}
+
 /* Removes one of the ids made (it may be gone already: stale) */
 static void remove_one(tb_world *w, fuzz_input *in, made *m)
 {
@@ -129,7 +149,9 @@ static void remove_one(tb_world *w, fuzz_input *in, made *m)
             (void)tb_world_remove_shape(w, m->shape[fuzz_below(in, m->shapes)]);
         break;
     default:
-        if (m->springs)
+        if (m->joints && fuzz_below(in, 2))
+            (void)tb_world_remove_joint(w, m->joint[fuzz_below(in, m->joints)]);
+        else if (m->springs)
             (void)tb_world_remove_spring(w, m->spring[fuzz_below(in, m->springs)]);
     }
 }
@@ -212,7 +234,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         case 0: add_particle(w, &in, &m); break;
         case 1: add_body(w, &in, &m); break;
         case 2: add_shape(w, &in, &m); break;
-        case 3: add_spring(w, &in, &m); break;
+        case 3:
+            if (m.bodies && fuzz_below(&in, 2))
+                add_joint(w, &in, &m);
+            else
+                add_spring(w, &in, &m);
+            break;
         case 4: remove_one(w, &in, &m); break;
         case 5: set_something(w, &in, &m); break;
         case 6: set_contacts(w, &in); break;

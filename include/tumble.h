@@ -406,6 +406,34 @@ TB_API tb_body_id tb_world_body_at(const tb_world *world, size_t slot);
 TB_API tb_status tb_world_add_force(tb_world *world, tb_force_fn *fn, void *user, tb_force_id *id);
 TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
 
+/* --------------------------------------------------------------- joints -- */
+/* Joints hold bodies together, or a body to the world (tb_joint_def). Each
+   force evaluation of every integrator solves their forces from the
+   bodies' other forces and motion (the accelerations the joints allow,
+   exactly), and after each step the bodies are put back on the joints,
+   positions then velocities; how, and what each integrator's order
+   becomes: docs/joints.md (test_joints.pendulum_period_matches_closed_form,
+   rk4_pendulum_keeps_its_order, double_pendulum_keeps_its_energy,
+   joints_hold_every_type). A removed body takes its joints with it
+   (test_joints.removing_a_body_removes_its_joints). */
+TB_API tb_joint_def tb_default_joint_def(void);
+TB_API tb_status tb_world_add_joint(tb_world *world, const tb_joint_def *def, tb_joint_id *id);
+TB_API tb_status tb_world_remove_joint(tb_world *world, tb_joint_id id);
+TB_API size_t tb_world_joint_count(const tb_world *world);
+/* The joint in slot 0 .. tb_world_joint_count() - 1; the null id past the
+   end (a removal moves the last joint into the freed slot). */
+TB_API tb_joint_id tb_world_joint_at(const tb_world *world, size_t slot);
+/* The force (N) and torque (N m, about the joint's anchor on a) the joint
+   exerted on body a over the last step (the split methods: its impulses
+   over the step's length; the others: at the last force evaluation); b
+   feels the opposite (test_joints.reaction_carries_the_weight). Zeros
+   before the first step. */
+TB_API tb_status tb_joint_reaction(const tb_world *world, tb_joint_id id, double force[3], double torque[3]);
+/* How far the joint is from holding now: the largest of its rows' errors
+   (m for points, and for axes that should be square the cosine between
+   them) (test_joints.joints_hold_every_type). */
+TB_API tb_status tb_joint_error(const tb_world *world, tb_joint_id id, double *error);
+
 /* ------------------------------------------------------ shapes, contacts -- */
 /* Shapes make bodies and particles collide; a world without shapes pays
    nothing for collision. How contacts are found and solved: docs/contacts.md. */

@@ -44,10 +44,10 @@
 #define WORLD_MT "tumble.world"
 #define SNAPSHOT_MT "tumble.snapshot"
 
-enum tl_handle_kind { H_PARTICLE, H_TRACER, H_SPRING, H_FIELD, H_FORCE, H_BODY, H_SHAPE, H_KINDS };
+enum tl_handle_kind { H_PARTICLE, H_TRACER, H_SPRING, H_FIELD, H_FORCE, H_BODY, H_SHAPE, H_JOINT, H_KINDS };
 static const char *const handle_mt[H_KINDS] = {
     "tumble.particle", "tumble.tracer", "tumble.spring", "tumble.field", "tumble.force", "tumble.body",
-    "tumble.shape"
+    "tumble.shape", "tumble.joint"
 };
 
 typedef struct tl_callback tl_callback;
@@ -568,6 +568,11 @@ static int handle_remove(lua_State *L)
         st = tb_world_remove_spring(lw->world, id);
     } else if (k == H_BODY) {
         st = tb_world_remove_body(lw->world, to_body_id(h));
+    } else if (k == H_JOINT) {
+        tb_joint_id id;
+        id.index1 = h->index1;
+        id.generation = h->generation;
+        st = tb_world_remove_joint(lw->world, id);
     } else if (k == H_SHAPE) {
         tb_shape_id id;
         id.index1 = h->index1;
@@ -656,6 +661,44 @@ static const luaL_Reg body_methods[] = {
     { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
 };
 static const luaL_Reg plain_methods[] = {
+    { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
+};
+
+static tb_joint_id to_joint_id(const tl_handle *h)
+{
+    tb_joint_id id;
+    id.index1 = h->index1;
+    id.generation = h->generation;
+    return id;
+}
+
+/* joint:reaction(): fx, fy, fz, tx, ty, tz, the force (N) and torque (N m,
+   about the joint's anchor) on body a over the last step */
+static int joint_reaction(lua_State *L)
+{
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_JOINT, &lw);
+    double f[3], t[3];
+    if (tb_joint_reaction(lw->world, to_joint_id(h), f, t) != TB_OK)
+        return raise_world_error(L, lw, "joint:reaction");
+    push_vec3(L, f);
+    return push_vec3(L, t) + 3;
+}
+
+/* joint:error(): how far it is from holding (m, or a sine for axes) */
+static int joint_error(lua_State *L)
+{
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_JOINT, &lw);
+    double e;
+    if (tb_joint_error(lw->world, to_joint_id(h), &e) != TB_OK)
+        return raise_world_error(L, lw, "joint:error");
+    lua_pushnumber(L, e);
+    return 1;
+}
+
+static const luaL_Reg joint_methods[] = {
+    { "reaction", joint_reaction }, { "error", joint_error },
     { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
 };
 
@@ -1355,6 +1398,47 @@ static int world_shape(lua_State *L)
     return 1;
 }
 
+/* world:joint{ type = "ball" | "hinge" | "slider" | "fixed" | "distance",
+   a = body, b = body (none: the world), anchor = {x, y, z}, anchor_b,
+   axis, length } (tb_joint_def) */
+static const char *const joint_options[] = { "type", "a", "b", "anchor", "anchor_b", "axis", "length", NULL };
+
+static int world_joint(lua_State *L)
+{
+    static const char *const types[] = { "ball", "hinge", "slider", "fixed", "distance", NULL };
+    static const char *const ends[] = { "a", "b" };
+    tl_world *lw = check_world(L, 1), *other;
+    tb_joint_def def = tb_default_joint_def();
+    tb_joint_id id;
+    int k;
+    check_options(L, 2, "world:joint", joint_options);
+    lua_getfield(L, 2, "type");
+    def.type = (tb_joint_type)luaL_checkoption(L, -1, "ball", types);
+    lua_pop(L, 1);
+    for (k = 0; k < 2; ++k) {
+        if (lua_getfield(L, 2, ends[k]) != LUA_TNIL) {
+            tl_handle *b = check_handle(L, lua_gettop(L), H_BODY, &other);
+            if (other != lw)
+                return luaL_error(L, "world:joint: body %s belongs to another world", ends[k]);
+            if (k)
+                def.b = to_body_id(b);
+            else
+                def.a = to_body_id(b);
+        } else if (k == 0) {
+            return luaL_error(L, "world:joint: 'a' (a body) is required");
+        }
+        lua_pop(L, 1);
+    }
+    opt_vec3(L, 2, "anchor", "world:joint", def.anchor);
+    opt_vec3(L, 2, "anchor_b", "world:joint", def.anchor_b);
+    opt_vec3(L, 2, "axis", "world:joint", def.axis);
+    opt_number(L, 2, "length", "world:joint", &def.length);
+    if (tb_world_add_joint(lw->world, &def, &id) != TB_OK)
+        return raise_world_error(L, lw, "world:joint");
+    push_handle(L, 1, H_JOINT, id.index1, id.generation, 0);
+    return 1;
+}
+
 /* world:contacts{ hertz, damping_ratio, max_push, restitution_threshold,
    slop, particle_radius, particle_friction, particle_restitution,
    sleep_speed, sleep_time, substeps }: change the contact settings
@@ -1788,7 +1872,7 @@ static const luaL_Reg snapshot_methods[] = { { "size", snapshot_size }, { "time"
 
 static const luaL_Reg world_methods[] = {
     { "particle", world_particle }, { "tracer", world_tracer }, { "spring", world_spring },
-    { "body", world_body }, { "angular_momentum", world_angular_momentum },
+    { "body", world_body }, { "joint", world_joint }, { "angular_momentum", world_angular_momentum },
     { "shape", world_shape }, { "contacts", world_contacts }, { "events", world_events },
     { "drag", world_drag }, { "field", world_field }, { "force", world_force },
     { "step", world_step }, { "time", world_time }, { "dt", world_dt }, { "set_dt", world_set_dt },
@@ -1831,7 +1915,7 @@ int luaopen_tumble(lua_State *L)
     };
     static const luaL_Reg *const kind_methods[H_KINDS] = {
         particle_methods, tracer_methods, plain_methods, plain_methods, plain_methods, body_methods,
-        plain_methods
+        plain_methods, joint_methods
     };
     int k;
     if (lua_rawgetp(L, LUA_REGISTRYINDEX, &anchor_key) != LUA_TTABLE) {

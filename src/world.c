@@ -5,6 +5,7 @@
 #include "contacts/contacts.h"
 #include "stepping/stepping.h"
 #include "forces/forces.h"
+#include "joints/joints.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -87,6 +88,7 @@ void tb_world_destroy(tb_world *w)
     tb__ids_free(w, &w->tracer_ids);
     tb__ids_free(w, &w->particle_ids);
     tb__springs_free(w);
+    tb__joints_free(w);
     tb__list_free(w, &w->fields);
     tb__list_free(w, &w->forces);
     tb__rollback_free(w);

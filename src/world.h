@@ -57,6 +57,7 @@ typedef struct tb__method {
 } tb__method;
 
 typedef struct tb__contacts tb__contacts;
+enum { TB__HEARS_SHAPES, TB__HEARS_JOINTS };
 struct tb__split_frame;    /* bodies/bodies.h */
 
 struct tb_world {
@@ -155,15 +156,32 @@ struct tb_world {
                                  once a sweep finds them all zero) */
     tb__ids body_ids;
 
+    /* joints (joints/joints.h): their ends are body id indices (0: the
+       world), found again each evaluation, so a body's swap-remove moves
+       nothing here */
+    size_t joint_count, joint_cap;
+    uint32_t *joint_type;     /* [joint_cap] tb_joint_type */
+    uint32_t *joint_body;     /* [2 * joint_cap] index1 of a, of b (0: the world) */
+    double *joint_anchor;     /* [6 * joint_cap] m: the anchor in a's principal frame, in b's
+                                 (or the world) */
+    double *joint_frame;      /* [18 * joint_cap] the joint's axes (axis, then two across it,
+                                 by rows) in a's principal frame, in b's (or the world) */
+    double *joint_length;     /* [joint_cap] m, DISTANCE */
+    double *joint_reaction;   /* [6 * joint_cap] N, N m: on a, at the last evaluation */
+    tb__ids joint_ids;
+    struct tb__joint_work *joint_work; /* the solve's rows and factor (joint_solve.c): scratch
+                                 that every evaluation writes before it reads */
+
     /* shapes and contacts (contacts/contacts.h); NULL until the first shape */
     struct tb__contacts *contacts;
 
     /* Tiers above particles and bodies that refer to them hear of their
        removal here (set when they first hold such a reference), so the
        lower tier calls no upper one: springs keep particle slots, shapes
-       keep body ids. NULL: nobody listens. */
+       keep body ids, and so do joints (one listener each: TB__HEARS_SHAPES,
+       TB__HEARS_JOINTS). NULL: nobody listens. */
     void (*particle_removed)(tb_world *w, uint32_t slot, uint32_t last);
-    void (*body_removed)(tb_world *w, uint32_t body_index1);
+    void (*body_removed[2])(tb_world *w, uint32_t body_index1);
 
     /* velocity fields for tracers (tb__field), user forces (tb__force) */
     tb__list fields;

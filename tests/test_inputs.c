@@ -344,6 +344,28 @@ static tb_status spring_damping(scene *s, double c)
     return tb_world_add_spring(s->w, &d, NULL);
 }
 
+/* the scene's body held to the world by a joint */
+static tb_status joint_anchor(scene *s, double x)
+{
+    tb_joint_def d = tb_default_joint_def();
+    d.a = s->body, d.anchor[0] = x;
+    return tb_world_add_joint(s->w, &d, NULL);
+}
+
+static tb_status joint_axis(scene *s, double x)
+{
+    tb_joint_def d = tb_default_joint_def();
+    d.type = TB_JOINT_HINGE, d.a = s->body, d.axis[1] = x;
+    return tb_world_add_joint(s->w, &d, NULL);
+}
+
+static tb_status joint_length(scene *s, double length)
+{
+    tb_joint_def d = tb_default_joint_def();
+    d.type = TB_JOINT_DISTANCE, d.a = s->body, d.anchor_b[2] = 1, d.length = length;
+    return tb_world_add_joint(s->w, &d, NULL);
+}
+
 static tb_status shape_radius(scene *s, double r)
 {
     tb_shape_def d = tb_default_shape_def();
@@ -492,6 +514,13 @@ static const probe probes[] = {
     { "spring rest length 1e200", spring_rest, 1e200, "rest length", NULL },
     { "spring anchor 1e308", spring_anchor, 1e308, "anchor", NULL },
     { "spring damping 1e300", spring_damping, 1e300, "damping", NULL },
+    /* joints */
+    { "joint anchor 1e308", joint_anchor, 1e308, "joint anchor", NULL },
+    { "joint anchor 1e90 m from the body", joint_anchor, 1e90, NULL, NULL },
+    { "hinge axis 1e308", joint_axis, 1e308, "joint axis", NULL },
+    { "hinge axis 1e-300 long", joint_axis, 1e-300, NULL, NULL },
+    { "distance joint length 1e200", joint_length, 1e200, "length", NULL },
+    { "distance joint length 1e90", joint_length, 1e90, NULL, NULL },
     /* shapes */
     { "sphere radius 1e-320", shape_radius, 1e-320, "radius", NULL },
     { "sphere radius 1e200", shape_radius, 1e200, "radius", NULL },

@@ -20,6 +20,7 @@ typedef struct tb_body_id     { uint32_t index1; uint32_t generation; } tb_body_
 typedef struct tb_shape_id    { uint32_t index1; uint32_t generation; } tb_shape_id;
 typedef struct tb_field_id    { uint32_t index1; uint32_t generation; } tb_field_id;
 typedef struct tb_force_id    { uint32_t index1; uint32_t generation; } tb_force_id;
+typedef struct tb_joint_id    { uint32_t index1; uint32_t generation; } tb_joint_id;
 
 /* Whether an id is null; whether two ids of one type name the same object. */
 #define TB_ID_IS_NULL(id) ((id).index1 == 0)

@@ -127,6 +127,39 @@ typedef struct tb_force_args {
 } tb_force_args;
 typedef tb_status tb_force_fn(const tb_force_args *args, void *user);
 
+/* --------------------------------------------------------------- joints -- */
+
+/* What a joint holds between its two bodies (docs/joints.md):
+   - BALL: the anchor points of both bodies together (3 rows);
+   - HINGE: a ball joint that also keeps the axis of each body together,
+     so the bodies turn about it only (5 rows);
+   - SLIDER: the bodies keep their relative orientation and the anchor of
+     b stays on the axis through the anchor of a (5 rows);
+   - FIXED: the bodies move as one (6 rows);
+   - DISTANCE: a rod: the anchors of the two bodies stay `length` apart
+     (1 row). */
+typedef enum tb_joint_type {
+    TB_JOINT_BALL,
+    TB_JOINT_HINGE,
+    TB_JOINT_SLIDER,
+    TB_JOINT_FIXED,
+    TB_JOINT_DISTANCE
+} tb_joint_type;
+
+typedef struct tb_joint_def {
+    tb_joint_type type;
+    tb_body_id a;
+    tb_body_id b;            /* null: the joint holds a to the world */
+    double anchor[3];        /* m, a world point at creation, fixed in a and in b
+                                (or the world); DISTANCE: the end on a */
+    double anchor_b[3];      /* m, DISTANCE only: the end on b (or in the world),
+                                a world point at creation */
+    double axis[3];          /* HINGE, SLIDER: the axis in the world at creation,
+                                any length but 0; default (0, 0, 1) */
+    double length;           /* m, DISTANCE: the rod's length; negative (the
+                                default): the distance at creation */
+} tb_joint_def;
+
 /* ------------------------------------------------------ shapes, contacts -- */
 
 typedef enum tb_shape_type { TB_SHAPE_SPHERE, TB_SHAPE_CAPSULE, TB_SHAPE_BOX, TB_SHAPE_PLANE } tb_shape_type;

@@ -318,8 +318,9 @@ tb_status tb_world_remove_body(tb_world *w, tb_body_id id)
     }
     tb__ids_release(&w->body_ids, id.index1);
     w->body_count--;
-    if (w->body_removed)
-        w->body_removed(w, id.index1);
+    for (k = 0; k < 2; ++k)
+        if (w->body_removed[k])
+            w->body_removed[k](w, id.index1);
     return TB_OK;
 }
 

@@ -298,6 +298,9 @@ void tb__body_energy(const tb_world *w, const double *y, tb_energy *e);
 void tb__body_energy_at(const tb_world *w, const double *y, size_t s, tb_energy *e);
 void tb__body_momenta(const tb_world *w, double linear[3], double angular[3]);
 
+/* dP/dt and dL/dt of body slot s at momenta P, L: gravity, damping, held
+   forces, and w->body_force when it is ready. */
+void tb__body_rates(const tb_world *w, uint32_t s, const double *P, const double *L, double dP[3], double dL[3]);
 /* dy = F(t, y) for the bodies, their callback forces already in w->body_force. */
 void tb__body_derive(tb_world *w, const double *y, double *dy);
 /* The split methods' kicks and drifts over every body, in blocks of lanes;

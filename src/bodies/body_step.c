@@ -31,6 +31,11 @@ static void rates(const tb_world *w, uint32_t s, const double *P, const double *
         }
 }
 
+void tb__body_rates(const tb_world *w, uint32_t s, const double *P, const double *L, double dP[3], double dL[3])
+{
+    rates(w, s, P, L, dP, dL);
+}
+
 /* dx/dt = P / M and dq/dt = (0, w) q / 2 = q (0, w_b) / 2, with w = R w_b
    and w_b = diag(invI) R^T L for R = R(q / |q|): the q of a Runge-Kutta
    stage is not unit. R^T L comes straight from q, as
@@ -423,7 +428,7 @@ static int gravity_only(tb_world *w)
             ;
         w->body_held = i < 6 * w->body_count;
     }
-    return w->body_damped == 0 && !w->body_held && !(w->force_ready && w->forces.count > 0);
+    return w->body_damped == 0 && !w->body_held && !(w->force_ready && (w->forces.count > 0 || w->joint_count > 0));
 }
 
 /* A block of bodies that all sleep is left alone by the sweep: sleep.c
@@ -434,9 +439,9 @@ static int gravity_only(tb_world *w)
    test_snapshot.contact_scene_hash_is_recorded). */
 int tb__body_sweep_skips_sleeping(const tb_world *w)
 {
-    /* springs are the one force between bodies: verlet's second evaluation
-       would see a sleeping body's drift */
-    return w->body_sleeping >= TB__LANES && w->spring_count == 0;
+    /* springs and joints are the forces between bodies: verlet's second
+       evaluation would see a sleeping body's drift */
+    return w->body_sleeping >= TB__LANES && w->spring_count == 0 && w->joint_count == 0;
 }
 
 int tb__body_block_asleep(const tb_world *w, size_t b, size_t m)

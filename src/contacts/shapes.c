@@ -61,7 +61,7 @@ static tb_status contacts_of(tb_world *w, tb__contacts **out)
         memset(c, 0, sizeof *c);
         c->settings = tb_default_contact_settings();
         w->contacts = c;
-        w->body_removed = body_removed;
+        w->body_removed[TB__HEARS_SHAPES] = body_removed;
     }
     *out = w->contacts;
     return TB_OK;

@@ -19,7 +19,9 @@
 
 static int sleep_allowed(const tb_world *w)
 {
-    return w->contacts && isfinite(w->contacts->settings.sleep_time) && w->forces.count == 0;
+    /* joints are not in the islands yet: a jointed body would sleep apart
+       from what it holds */
+    return w->contacts && isfinite(w->contacts->settings.sleep_time) && w->forces.count == 0 && w->joint_count == 0;
 }
 
 int tb__key_still(const tb_world *w, const tb__contacts *c, uint32_t key)

@@ -250,31 +250,22 @@ void tb__stacks_assemble(tb__contacts *c)
 
 /* The band of the solved rows factored (L L^T), held rows made the
    identity. 0 if a pivot is not positive. */
+static tb__envelope envelope(struct tb__stacks *s)
+{
+    tb__envelope e;
+    e.first = s->first, e.offset = s->offset, e.a = s->a, e.l = s->l, e.use = s->solved, e.drop = 0;
+    return e;
+}
+
 static int factor(struct tb__stacks *s, size_t k)
 {
     const size_t from = s->island_start[k], to = s->island_start[k + 1];
-    size_t i, j, q;
+    const tb__envelope e = envelope(s);
     if (s->current[k] && memcmp(s->factored + from, s->solved + from, to - from) == 0)
         return 1; /* the same matrix and rows as the factor in l */
     s->current[k] = 0;
-    for (i = from; i < to; ++i) {
-        double *li = s->l + s->offset[i] - s->first[i];
-        const double *ai = s->a + s->offset[i] - s->first[i];
-        double d;
-        for (j = s->first[i]; j < i; ++j) {
-            const double *lj = s->l + s->offset[j] - s->first[j];
-            double sum = s->solved[i] && s->solved[j] ? ai[j] : 0;
-            for (q = s->first[i] > s->first[j] ? s->first[i] : s->first[j]; q < j; ++q)
-                sum -= li[q] * lj[q];
-            li[j] = sum / lj[j];
-        }
-        d = s->solved[i] ? ai[i] : 1;
-        for (q = s->first[i]; q < i; ++q)
-            d -= li[q] * li[q];
-        if (!(d > 0))
-            return 0;
-        li[i] = sqrt(d);
-    }
+    if (!tb__envelope_factor(&e, from, to))
+        return 0;
     memcpy(s->factored + from, s->solved + from, to - from);
     s->current[k] = 1;
     return 1;
@@ -283,21 +274,8 @@ static int factor(struct tb__stacks *s, size_t k)
 /* x = (L L^T)^-1 x over island k */
 static void substitute_into(struct tb__stacks *s, size_t k, double *x)
 {
-    const size_t from = s->island_start[k], to = s->island_start[k + 1];
-    size_t i, q;
-    for (i = from; i < to; ++i) {
-        const double *li = s->l + s->offset[i] - s->first[i];
-        double sum = x[i];
-        for (q = s->first[i]; q < i; ++q)
-            sum -= li[q] * x[q];
-        x[i] = sum / li[i];
-    }
-    for (i = to; i-- > from;) {
-        const double *li = s->l + s->offset[i] - s->first[i];
-        x[i] /= li[i];
-        for (q = s->first[i]; q < i; ++q)
-            x[q] -= li[q] * x[i];
-    }
+    const tb__envelope e = envelope(s);
+    tb__envelope_solve(&e, s->island_start[k], s->island_start[k + 1], x);
 }
 
 static void substitute(struct tb__stacks *s, size_t k)

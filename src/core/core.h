@@ -162,6 +162,36 @@ double tb__dot(const double *a, const double *b, size_t n);
 /* TB_ERR_BUSY with a message while the world is stepping (inside a callback). */
 tb_status tb__check_busy(tb_world *w, const char *what);
 
+/* ---- envelope factors (envelope.c) ------------------------------------------
+   A symmetric positive definite matrix stored by rows, each from its
+   first column to the diagonal: A_ij = a[offset[i] + j - first[i]] for
+   first[i] <= j <= i; its factor L (L L^T = A) goes in l with the same
+   layout. The rows of a factor or solve are from .. to - 1 of the
+   arrays, with first[i] >= from. */
+typedef struct tb__envelope {
+    const size_t *first, *offset;
+    const double *a;
+    double *l;
+    unsigned char *use;    /* NULL: every row; else a row with use[i] 0 is left
+                              out, factored as the identity (its x must be 0) */
+    double drop;           /* > 0: a row whose pivot falls to drop times its
+                              diagonal depends on the rows before it and is left
+                              out (use[i] set to 0); 0: no row is dropped */
+} tb__envelope;
+/* 0 when a pivot is not positive (then l holds part of a factor). */
+int tb__envelope_factor(const tb__envelope *e, size_t from, size_t to);
+/* x = (L L^T)^-1 x */
+void tb__envelope_solve(const tb__envelope *e, size_t from, size_t to, double *x);
+/* A matrix that is not symmetric: its lower triangle (with the diagonal)
+   in e->a, its upper one by columns in `upper` (A_ji = upper[offset[i] +
+   j - first[i]] for first[i] <= j < i), both overwritten by L U (L unit
+   lower, in e->a below the diagonal; U by columns in upper, its diagonal
+   in e->a's). No pivoting: for matrices near a positive definite one. 0
+   when a pivot is 0 or not finite (with drop, a row whose pivot falls to
+   drop times its diagonal is left out instead). */
+int tb__envelope_lu(const tb__envelope *e, double *upper, size_t from, size_t to);
+void tb__envelope_lu_solve(const tb__envelope *e, const double *upper, size_t from, size_t to, double *x);
+
 /* ---- instruction sets (isa.c) ---------------------------------------------
 
    The loops over lanes (rotation kernels, body sweeps, the particles'

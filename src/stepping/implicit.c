@@ -198,6 +198,6 @@ tb_status tb__implicit_step(tb_world *w, double h)
     if (st == TB_OK && w->particle_count)
         st = tb__implicit_particles(w, h);
     if (st == TB_OK && w->body_count)
-        tb__body_sweep(w, kick_drift, 2);
+        st = tb__split_sweep_bodies(w, kick_drift, 2);
     return st;
 }

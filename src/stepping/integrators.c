@@ -73,8 +73,7 @@ static tb_status symplectic_euler(tb_world *w, double h)
     tb_status st = tb__split_prepare(w, w->time, NULL);
     if (st != TB_OK)
         return st;
-    tb__split_sweep(w, kick_drift, 2);
-    return TB_OK;
+    return tb__split_sweep(w, kick_drift, 2);
 }
 
 /* Kick h/2, drift h, evaluate the forces again, kick h/2. The second
@@ -94,7 +93,7 @@ static tb_status verlet_with(tb_world *w, double h, tb__rotation_kind rotation)
     const tb__split_op kick[1] = { { 0, h / 2, rotation, 0 } };
     double *predicted = NULL;
     tb_status st;
-    if (w->forces.count == 0 && w->spring_count == 0 && !tb__body_velocity_dependent(w)) {
+    if (w->forces.count == 0 && w->spring_count == 0 && w->joint_count == 0 && !tb__body_velocity_dependent(w)) {
         /* Only local forces: gravity, drag on particles, held forces on
            bodies. Each object's closing kick depends on that object alone,
            so one sweep does the three ops on each particle, or block of
@@ -107,8 +106,7 @@ static tb_status verlet_with(tb_world *w, double h, tb__rotation_kind rotation)
                                                   { 0, h / 2, rotation, 1 } };
         if ((st = tb__split_prepare(w, w->time, NULL)) != TB_OK)
             return st;
-        tb__split_sweep(w, kick_drift_kick, 3);
-        return TB_OK;
+        return tb__split_sweep(w, kick_drift_kick, 3);
     }
     if (tb__split_velocity_dependent(w)) {
         if ((st = tb__state_scratch(w, 1)) != TB_OK)
@@ -116,14 +114,13 @@ static tb_status verlet_with(tb_world *w, double h, tb__rotation_kind rotation)
         predicted = tb__scratch_vector(w, 0);
         tb__state_copy(w, predicted, w->y);
     }
-    if ((st = tb__split_prepare(w, w->time, NULL)) != TB_OK)
+    if ((st = tb__split_prepare(w, w->time, NULL)) != TB_OK || (st = tb__split_sweep(w, kick_drift, 2)) != TB_OK)
         return st;
-    tb__split_sweep(w, kick_drift, 2);
     if (predicted)
         tb__split_extrapolate(w, predicted);
     st = tb__split_prepare(w, w->time + h, predicted);
     if (st == TB_OK)
-        tb__split_sweep(w, kick, 1);
+        st = tb__split_sweep(w, kick, 1);
     w->kick_seen = NULL;
     return st;
 }

@@ -16,7 +16,7 @@
 
 #include <string.h>
 
-/* list_blocks lists some 70 arrays: room for a few more */
+/* list_blocks lists some 80 arrays: room for a few more */
 #define MAX_BLOCKS 96
 
 struct tb_snapshot {
@@ -68,6 +68,8 @@ static void list_blocks_of(block *b, size_t *n, tb__list *list)
    has none), in a fixed order. Left out, because every step writes them
    before it reads them and a restore keeps the world's own:
    - w->scratch, the integrators' vectors (each method fills what it uses);
+   - w->joint_work, the joints' rows and factor (every evaluation and
+     projection sets them up before reading them);
    - c's per-step solver room: order_scratch (the key sort's), park_index
      (park's), island_scratch (sleep.c) and the soft step's rows, bodies
      and patches (set_up_rows). The soft rows also point into the
@@ -115,6 +117,16 @@ static size_t list_blocks(tb_world *w, tb__contacts *c, block *b)
     ids_blocks(b, &n, &w->body_ids);
     list_blocks_of(b, &n, &w->fields);
     list_blocks_of(b, &n, &w->forces);
+    {
+        const size_t nj = w->joint_count, jc = w->joint_cap;
+        add(b, &n, &w->joint_type, nj * sizeof(uint32_t), jc * sizeof(uint32_t), 1);
+        add(b, &n, &w->joint_body, 2 * nj * sizeof(uint32_t), 2 * jc * sizeof(uint32_t), 1);
+        add(b, &n, &w->joint_anchor, 6 * nj * sizeof(double), 6 * jc * sizeof(double), 1);
+        add(b, &n, &w->joint_frame, 18 * nj * sizeof(double), 18 * jc * sizeof(double), 1);
+        add(b, &n, &w->joint_length, nj * sizeof(double), jc * sizeof(double), 1);
+        add(b, &n, &w->joint_reaction, 6 * nj * sizeof(double), 6 * jc * sizeof(double), 0);
+        ids_blocks(b, &n, &w->joint_ids);
+    }
 
     add(b, &n, &c->shapes, c->shape_count * sizeof(tb__shape), c->shape_cap * sizeof(tb__shape), 1);
     ids_blocks(b, &n, &c->ids);
@@ -216,6 +228,7 @@ static tb_status take(tb_world *w, tb_snapshot *s)
     }
     s->world = *w;
     s->world.rollback = NULL;
+    s->world.joint_work = NULL;
     s->world.scratch = NULL;
     s->world.scratch_count = 0;
     s->world.kick_seen = NULL;
@@ -347,6 +360,7 @@ static tb_status restore(tb_world *w, const tb_snapshot *s)
     memcpy(nw.message, w->message, sizeof nw.message);
     nw.stepping = 0;
     nw.rollback = w->rollback;
+    nw.joint_work = w->joint_work;
     nw.kick_seen = NULL; /* between steps it is always NULL (integrators.c clears it) */
     nw.damping_sums = NULL; /* and so is this (step.c) */
     if (!nw.y)
@@ -543,6 +557,10 @@ uint64_t tb_world_hash(const tb_world *w)
     for (i = 0; i < w->body_count; ++i)
         h = mix_u64(h, w->body_island[i]);
     h = mix_u64(h, w->body_sleeping);
+    if (w->joint_count) { /* (worlds without joints keep the hashes they had) */
+        h = mix_u64(h, w->joint_count);
+        h = mix_doubles(h, w->joint_reaction, 6 * w->joint_count);
+    }
     if (w->contacts) {
         const tb__contacts *c = w->contacts;
         size_t j = 0;

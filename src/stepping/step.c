@@ -5,6 +5,7 @@
 #include "bodies/bodies.h"
 #include "contacts/contacts.h"
 #include "forces/forces.h"
+#include "joints/joints.h"
 #include "particles/particles.h"
 
 #include <math.h>
@@ -64,7 +65,7 @@ tb_status tb__derive(tb_world *w, double t, const double *y, double *dy)
     ++w->work.evaluations;
     if (w->tracer_count && (st = tb__tracer_derive(w, t, y, dy)) != TB_OK)
         return st;
-    if ((st = tb__global_forces(w, t, y, y)) != TB_OK)
+    if ((st = tb__global_forces(w, t, y, y)) != TB_OK || (st = tb__joint_forces(w, y, y)) != TB_OK)
         return st;
     if (w->particle_count)
         tb__particle_derive(w, y, dy);
@@ -83,15 +84,34 @@ tb_status tb__split_prepare(tb_world *w, double t, const double *seen)
 {
     w->kick_seen = seen;
     ++w->work.evaluations;
+    /* (no joint forces: the split methods' drifts hold the joints,
+       tb__split_sweep) */
     return tb__global_forces(w, t, w->y, seen ? seen : w->y);
 }
 
-void tb__split_sweep(tb_world *w, const tb__split_op *ops, int n)
+tb_status tb__split_sweep_bodies(tb_world *w, const tb__split_op *ops, int n)
+{
+    const tb__split_op *drift = NULL;
+    tb_status st;
+    int i;
+    for (i = 0; i < n; ++i)
+        if (ops[i].drift)
+            drift = &ops[i];
+    if (!w->joint_count || !drift) {
+        tb__body_sweep(w, ops, n);
+        return TB_OK;
+    }
+    if ((st = tb__joints_hold(w)) != TB_OK)
+        return st;
+    tb__body_sweep(w, ops, n);
+    return tb__joints_shake(w, drift->h, drift->rotation);
+}
+
+tb_status tb__split_sweep(tb_world *w, const tb__split_op *ops, int n)
 {
     if (w->particle_count)
         tb__particle_sweep(w, ops, n);
-    if (w->body_count)
-        tb__body_sweep(w, ops, n);
+    return w->body_count ? tb__split_sweep_bodies(w, ops, n) : TB_OK;
 }
 
 /* RK4 one block of objects at a time through all four stages, when nothing
@@ -99,7 +119,7 @@ void tb__split_sweep(tb_world *w, const tb__split_op *ops, int n)
    every object). Returns whether it stepped. */
 int tb__fused_rk4(tb_world *w, double h)
 {
-    if (!w->body_count || w->tracer_count || w->particle_count || w->forces.count)
+    if (!w->body_count || w->tracer_count || w->particle_count || w->forces.count || w->joint_count)
         return 0;
     w->force_ready = 0; /* what tb__global_forces finds with no springs or callbacks */
     w->work.evaluations += 4; /* each body's four stages */
@@ -109,7 +129,8 @@ int tb__fused_rk4(tb_world *w, double h)
 
 int tb__split_velocity_dependent(const tb_world *w)
 {
-    return w->forces.count > 0 || tb__particle_velocity_dependent(w) || tb__body_velocity_dependent(w);
+    return w->forces.count > 0 || w->joint_count > 0 || tb__particle_velocity_dependent(w) ||
+           tb__body_velocity_dependent(w);
 }
 
 void tb__split_extrapolate(const tb_world *w, double *saved)
@@ -169,6 +190,7 @@ tb_status tb_world_step(tb_world *w, double h)
     if (damped && !summed)
         power = tb__damping_power(w);
     w->damping_sums = summed ? sums : NULL;
+    tb__joints_begin_step(w);
     w->stepping = 1;
     st = tb__method_step(w, w->method, h);
     w->stepping = 0;
@@ -187,6 +209,15 @@ tb_status tb_world_step(tb_world *w, double h)
         const double before = tb__contacts_energy(w);
         tb__contacts_solve(w, h);
         w->work.contact_work += tb__contacts_energy(w) - before;
+    }
+    /* the bodies back on their joints (joint_solve.c) */
+    if (w->joint_count && (st = tb__joints_project(w, h)) != TB_OK) {
+        w->work = work;
+        if (guard && tb__rollback(w) != TB_OK)
+            tb__state_copy(w, w->y, tb__rollback_state(w));
+        else if (snapshot)
+            tb__state_copy(w, w->y, saved);
+        return st;
     }
     if (summed)
         w->work.damping_work += h / 2 * (sums[0] + (tb__contacts_active(w) ? tb__damping_power(w) : sums[1]));

@@ -475,6 +475,36 @@ static void bodies_from_lua(void **state)
     lua_close(L);
 }
 
+/* Joints from Lua: a body hung from a hinge swings on it, the reaction
+   carries a resting body's weight, and bad joints are refused. */
+static void joints_from_lua(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{ gravity = {0, 0, -9.81} }\n"
+                 "b = w:body{ sphere = 0.1, mass = 2, pos = {1, 0, 0} }\n"
+                 "j = w:joint{ type = 'hinge', a = b, anchor = {0, 0, 0}, axis = {0, 1, 0} }\n"
+                 "for i = 1, 30 do w:step(1/60) end\n"
+                 "local x, y, z = b:pos()\n"
+                 "assert(math.abs(math.sqrt(x * x + z * z) - 1) < 1e-12 and y == 0 and z < -0.5, x .. ' ' .. z)\n"
+                 "assert(j:error() < 1e-12)\n"
+                 "r = w:body{ sphere = 0.1, mass = 3, pos = {5, 0, -1} }\n"
+                 "h = w:joint{ a = r, anchor = {5, 0, 0} }\n"
+                 "w:step(1/60)\n"
+                 "local fx, fy, fz, tx, ty, tz = h:reaction()\n"
+                 "assert(math.abs(fz - 3 * 9.81) < 1e-9 and math.abs(fx) < 1e-9 and tostring(h):find('tumble.joint'))\n"
+                 "d = w:joint{ type = 'distance', a = b, b = r, anchor = {1, 0, 0}, anchor_b = {5, 0, -1} }\n"
+                 "d:remove()\n");
+    expect_error(L, "d:error()", "removed");
+    expect_error(L, "w:joint{ type = 'rope', a = b }", "invalid option 'rope'");
+    expect_error(L, "w:joint{ type = 'ball' }", "'a' (a body) is required");
+    expect_error(L, "w:joint{ a = b, b = b }", "itself");
+    expect_error(L, "w:joint{ a = b, anchor = {0/0, 0, 0} }", "finite");
+    expect_error(L, "w:joint{ type = 'hinge', a = b, axis = {0, 0, 0} }", "no direction");
+    expect_error(L, "w:joint{ a = b, spring = 3 }", "unknown option 'spring'");
+    lua_close(L);
+}
+
 /* A Lua force sees the bodies and pushes them: a constant force and torque
    from Lua match the same held through the C API. */
 static void lua_force_moves_bodies(void **state)
@@ -677,6 +707,7 @@ static void random_calls_never_crash(void **state)
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(shapes_and_events),
     cmocka_unit_test(bodies_from_lua),
+    cmocka_unit_test(joints_from_lua),
     cmocka_unit_test(lua_force_moves_bodies),
     cmocka_unit_test(bad_input_from_lua_is_refused),
     cmocka_unit_test(random_calls_never_crash),

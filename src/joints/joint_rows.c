@@ -1,0 +1,176 @@
+/* joint_rows.c: the rows each type of joint holds at a pose, from three
+   kinds of row (joints.h, tb__joint_row):
+   - a point row: t.(p_a - p_b) = 0 for the anchors p_a, p_b and a
+     direction t fixed in the world (a ball joint's three axes) or turning
+     with a (a slider's two directions across its axis);
+   - a distance row: |p_a - p_b| = length;
+   - an angle row: u.v = 0 for an axis u of a and an axis v of b, square
+     at creation (a hinge's axis against b's two across it; three of them
+     fix the relative orientation).
+   Each row's Jacobian and its bias (what the motion alone adds to the
+   second derivative) are the exact derivatives of its C, so that the
+   accelerations the solve gives keep C'' = 0
+   (test_joints.joints_hold_every_type). */
+#include "joints/joints.h"
+#include "bodies/bodies.h"
+
+#include <math.h>
+
+/* What every row of a joint reads: its ends, their anchors and axes in
+   the world */
+typedef struct ends {
+    const tb__joint_end *a, *b;
+    double ra[3], rb[3];       /* anchors from the centres */
+    double d[3], dd[3];        /* p_a - p_b and its rate */
+    double centripetal[3];     /* w_a x (w_a x r_a) - w_b x (w_b x r_b) */
+    double fa[3][3], fb[3][3]; /* the joint's axes as a and b hold them */
+} ends;
+
+static void sub3(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[0] - b[0], out[1] = a[1] - b[1], out[2] = a[2] - b[2];
+}
+
+/* w x (w x r) */
+static void twice(const double w[3], const double r[3], double out[3])
+{
+    double t[3];
+    tb__cross(w, r, t);
+    tb__cross(w, t, out);
+}
+
+static void row_start(tb__joint_row *row, const ends *e)
+{
+    row->a = e->a->slot, row->b = e->b->slot;
+}
+
+/* t.(p_a - p_b), t fixed in the world, or turning with a */
+static void point_row(tb__joint_row *row, const ends *e, const double t[3], int turns)
+{
+    double lever[3], wt[3], wwt[3];
+    int k;
+    row_start(row, e);
+    for (k = 0; k < 3; ++k)
+        row->lin_a[k] = t[k], row->lin_b[k] = -t[k];
+    if (turns) /* (t x d) from t's turn, plus r_a x t: (p_b - x_a) x t */
+        for (k = 0; k < 3; ++k)
+            lever[k] = e->ra[k] - e->d[k];
+    else
+        for (k = 0; k < 3; ++k)
+            lever[k] = e->ra[k];
+    tb__cross(lever, t, row->ang_a);
+    tb__cross(t, e->rb, row->ang_b);
+    row->bias = tb__dot3(t, e->centripetal);
+    if (turns) {
+        tb__cross(e->a->w, t, wt);
+        tb__cross(e->a->w, wt, wwt);
+        row->bias += tb__dot3(wwt, e->d) + 2 * tb__dot3(wt, e->dd);
+    }
+    row->error = tb__dot3(t, e->d);
+}
+
+/* |p_a - p_b| - length */
+static void distance_row(tb__joint_row *row, const ends *e, double length)
+{
+    const double r = tb__norm3(e->d);
+    double n[3], along;
+    int k;
+    if (r > 0)
+        for (k = 0; k < 3; ++k)
+            n[k] = e->d[k] / r;
+    else /* the ends met: any direction; the row holds them apart along it */
+        n[0] = e->fa[0][0], n[1] = e->fa[0][1], n[2] = e->fa[0][2];
+    point_row(row, e, n, 0);
+    along = tb__dot3(n, e->dd);
+    if (r > 0)
+        row->bias += (tb__dot3(e->dd, e->dd) - along * along) / r;
+    row->error = r - length;
+}
+
+/* u.v for u an axis of a, v one of b */
+static void angle_row(tb__joint_row *row, const ends *e, const double u[3], const double v[3])
+{
+    double wu[3], wv[3], t[3];
+    int k;
+    row_start(row, e);
+    for (k = 0; k < 3; ++k)
+        row->lin_a[k] = row->lin_b[k] = 0;
+    tb__cross(u, v, row->ang_a);
+    tb__cross(v, u, row->ang_b);
+    tb__cross(e->a->w, u, wu);
+    tb__cross(e->b->w, v, wv);
+    twice(e->a->w, u, t);
+    row->bias = tb__dot3(t, v) + 2 * tb__dot3(wu, wv);
+    twice(e->b->w, v, t);
+    row->bias += tb__dot3(u, t);
+    row->error = tb__dot3(u, v);
+}
+
+/* a and b keep their relative orientation: each axis square to the next
+   one of the other */
+static int orientation_rows(tb__joint_row *rows, const ends *e)
+{
+    angle_row(&rows[0], e, e->fa[0], e->fb[1]);
+    angle_row(&rows[1], e, e->fa[1], e->fb[2]);
+    angle_row(&rows[2], e, e->fa[2], e->fb[0]);
+    return 3;
+}
+
+static int ball_rows(tb__joint_row *rows, const ends *e)
+{
+    static const double axes[3][3] = { { 1, 0, 0 }, { 0, 1, 0 }, { 0, 0, 1 } };
+    int k;
+    for (k = 0; k < 3; ++k)
+        point_row(&rows[k], e, axes[k], 0);
+    return 3;
+}
+
+int tb__joint_rows(const tb_world *w, size_t j, const tb__joint_end *a, const tb__joint_end *b, tb__joint_row *rows)
+{
+    const double *anchor = w->joint_anchor + 6 * j, *frame = w->joint_frame + 18 * j;
+    double pa[3], pb[3], va[3], vb[3];
+    ends e;
+    int k, n = 0;
+    e.a = a, e.b = b;
+    tb__mul(a->R, anchor, e.ra);
+    tb__mul(b->R, anchor + 3, e.rb);
+    for (k = 0; k < 3; ++k) {
+        tb__mul(a->R, frame + 3 * k, e.fa[k]);
+        tb__mul(b->R, frame + 9 + 3 * k, e.fb[k]);
+        pa[k] = a->x[k] + e.ra[k];
+        pb[k] = b->x[k] + e.rb[k];
+    }
+    sub3(pa, pb, e.d);
+    tb__cross(a->w, e.ra, va);
+    tb__cross(b->w, e.rb, vb);
+    for (k = 0; k < 3; ++k)
+        e.dd[k] = (a->v[k] + va[k]) - (b->v[k] + vb[k]);
+    twice(a->w, e.ra, va);
+    twice(b->w, e.rb, vb);
+    sub3(va, vb, e.centripetal);
+    switch (w->joint_type[j]) {
+    case TB_JOINT_BALL:
+        n = ball_rows(rows, &e);
+        break;
+    case TB_JOINT_HINGE:
+        n = ball_rows(rows, &e);
+        angle_row(&rows[n++], &e, e.fa[0], e.fb[1]);
+        angle_row(&rows[n++], &e, e.fa[0], e.fb[2]);
+        break;
+    case TB_JOINT_SLIDER:
+        point_row(&rows[n++], &e, e.fa[1], 1);
+        point_row(&rows[n++], &e, e.fa[2], 1);
+        n += orientation_rows(rows + n, &e);
+        break;
+    case TB_JOINT_FIXED:
+        n = ball_rows(rows, &e);
+        n += orientation_rows(rows + n, &e);
+        break;
+    case TB_JOINT_DISTANCE:
+        distance_row(&rows[n++], &e, w->joint_length[j]);
+        break;
+    default:
+        break;
+    }
+    return n;
+}

@@ -1,0 +1,532 @@
+/* joint_solve.c: the joints' forces in each force evaluation, and the
+   projection after each step (docs/joints.md).
+   The forces: the joints' rows J at the evaluation's positions and
+   velocities, the bodies' accelerations a0 under their other forces, and
+   the multipliers of (J M^-1 J^T) lambda = -(J a0 + bias), so that every
+   row's C'' = 0: the constrained motion as an ordinary differential
+   equation, which each integrator follows to its own order
+   (test_joints.rk4_pendulum_keeps_its_order). The matrix is solved
+   directly, by its envelope factor with the rows ordered joint by joint
+   (a chain's is a band), so that a light body hung from a heavy one
+   costs no iterations; a row that depends on others (a closed loop) is
+   left out by the factor.
+   The projection: what a step leaves of C, taken out by Newton steps
+   that move each body through its inverse mass and inertia, then the
+   velocities' components along the rows (J v) by an impulse: both
+   lowest in kinetic-energy norm, and of the order of the step's own
+   error, so they keep the method's order. */
+#include "joints/joints.h"
+#include "bodies/bodies.h"
+
+#include <math.h>
+#include <string.h>
+
+/* A row's pivot under DROP times its diagonal: it depends on the rows
+   before it (a closed loop's last joint), and is left out */
+#define DROP 1e-10
+/* Newton steps of the projection at most; each doubles the error's digits */
+#define PROJECTION_STEPS 8
+/* SHAKE's steps at most: each takes the error down by about the turn of
+   the rows over the step */
+#define SHAKE_STEPS 40
+
+struct tb__joint_work {
+    tb__joint_row *rows;
+    double (*weighted)[12];  /* [rows] M^-1 J^T: lin_a, ang_a, lin_b, ang_b, each through its body */
+    size_t *first, *offset;  /* [rows] the envelope (core.h) */
+    double *x;               /* [rows] right side, then multipliers */
+    unsigned char *use;      /* [rows] 0: left out */
+    size_t row_cap;
+    size_t *row_start;       /* [joints + 1] */
+    double *lever;           /* [3 joints] the anchor on a from a's centre */
+    double *held_lever;      /* [3 joints] ... at the start of the drift */
+    size_t joint_cap;
+    double *a, *l, *upper;   /* the envelope of J M^-1 J^T, its factor; SHAKE's matrix's
+                                upper part (tb__joints_shake): one block */
+    size_t env_cap;
+    double *accel;           /* [6 bodies] a0 and alpha0 under the other forces */
+    size_t *body_row;        /* [bodies] the first row that moves the body */
+    unsigned *stamp;         /* [bodies] the set-up that last wrote the two above */
+    double *start;           /* [7 bodies] x and q at the start of a drift (tb__joints_hold) */
+    int32_t *moved;          /* [bodies] the bodies the joints hold, moved_count of them */
+    size_t moved_count;
+    size_t body_cap;
+    unsigned now;            /* this set-up's stamp */
+    int impulses;            /* the reactions hold impulses of this step's drifts
+                                (tb__joints_shake), for the projection to finish */
+    tb__joint_row *held;     /* [rows] the rows at the start of the drift */
+    double (*held_weighted)[12]; /* [rows] ... through the inertia now (SHAKE's) */
+    size_t held_cap, held_weighted_cap, held_count;
+};
+
+static tb_status reserve_rows(tb_world *w, struct tb__joint_work *k, size_t rows)
+{
+    void **arrays[6];
+    const size_t sizes[6] = { sizeof(tb__joint_row), 12 * sizeof(double), sizeof(size_t), sizeof(size_t),
+                              sizeof(double), 1 };
+    size_t cap = k->row_cap ? k->row_cap : 16;
+    tb_status st;
+    if (rows <= k->row_cap)
+        return TB_OK;
+    while (cap < rows)
+        cap *= 2;
+    arrays[0] = (void **)&k->rows, arrays[1] = (void **)&k->weighted, arrays[2] = (void **)&k->first;
+    arrays[3] = (void **)&k->offset, arrays[4] = (void **)&k->x, arrays[5] = (void **)&k->use;
+    if ((st = tb__grow(w, arrays, sizes, 6, 0, k->row_cap, cap)) != TB_OK)
+        return st;
+    k->row_cap = cap;
+    return TB_OK;
+}
+
+static tb_status reserve(tb_world *w, size_t rows)
+{
+    struct tb__joint_work *k = w->joint_work;
+    tb_status st;
+    if (!k) {
+        if (!(k = tb__alloc(w, NULL, 0, sizeof *k)))
+            return tb__fail(w, TB_ERR_MEMORY, "out of memory for the joints' solve");
+        memset(k, 0, sizeof *k);
+        w->joint_work = k;
+    }
+    if ((st = reserve_rows(w, k, rows)) != TB_OK)
+        return st;
+    if (w->joint_count + 1 > k->joint_cap) {
+        void **arrays[3] = { (void **)&k->row_start, (void **)&k->lever, (void **)&k->held_lever };
+        const size_t sizes[3] = { sizeof(size_t), 3 * sizeof(double), 3 * sizeof(double) };
+        const size_t cap = 2 * (w->joint_count + 1);
+        if ((st = tb__grow(w, arrays, sizes, 3, 0, k->joint_cap, cap)) != TB_OK)
+            return st;
+        k->joint_cap = cap;
+    }
+    if (w->body_count > k->body_cap) {
+        void **arrays[5] = { (void **)&k->accel, (void **)&k->body_row, (void **)&k->stamp, (void **)&k->start,
+                             (void **)&k->moved };
+        const size_t sizes[5] = { 6 * sizeof(double), sizeof(size_t), sizeof(unsigned), 7 * sizeof(double),
+                                  sizeof(int32_t) };
+        const size_t cap = 2 * w->body_count;
+        if ((st = tb__grow(w, arrays, sizes, 5, 0, k->body_cap, cap)) != TB_OK)
+            return st;
+        memset(k->stamp, 0, cap * sizeof *k->stamp);
+        k->body_cap = cap;
+    }
+    return TB_OK;
+}
+
+/* v through body s's inverse mass (lin) or world inverse inertia (ang) */
+static void weigh(const tb_world *w, const tb__joint_end *e, const double lin[3], const double ang[3], double out[6])
+{
+    double b[3];
+    int d;
+    if (e->slot < 0) {
+        memset(out, 0, 6 * sizeof *out);
+        return;
+    }
+    for (d = 0; d < 3; ++d)
+        out[d] = w->body_inv_mass[e->slot] * lin[d];
+    tb__mul_transposed(e->R, ang, b);
+    for (d = 0; d < 3; ++d)
+        b[d] *= w->body_inv_inertia[3 * e->slot + d];
+    tb__mul(e->R, b, out + 3);
+}
+
+/* Row i's part through body s, against the weighted row j */
+static double through(const tb__joint_row *ri, int side, const double *wj, const tb__joint_row *rj)
+{
+    const int32_t s = side ? ri->b : ri->a;
+    const double *lin = side ? ri->lin_b : ri->lin_a, *ang = side ? ri->ang_b : ri->ang_a;
+    double sum = 0;
+    if (s < 0)
+        return 0;
+    if (rj->a == s)
+        sum += tb__dot3(lin, wj) + tb__dot3(ang, wj + 3);
+    if (rj->b == s)
+        sum += tb__dot3(lin, wj + 6) + tb__dot3(ang, wj + 9);
+    return sum;
+}
+
+/* Every joint's rows at positions from y, velocities from seen, with
+   their weighted copies, envelope and matrix; with `forces`, the
+   bodies' accelerations under their other forces too; with `shake`, the
+   matrix is the rows now through the inertia now times the held rows
+   (tb__joints_shake), not symmetric. The row count. */
+static tb_status set_up(tb_world *w, const double *y, const double *seen, int forces, int shake, size_t *count)
+{
+    struct tb__joint_work *k;
+    size_t rows = 0, j, i, q, env = 0;
+    tb_status st;
+    for (j = 0; j < w->joint_count; ++j)
+        rows += (size_t)tb__joint_row_count(w->joint_type[j]);
+    if ((st = reserve(w, rows)) != TB_OK)
+        return st;
+    k = w->joint_work;
+    ++k->now;
+    if (k->now == 0) { /* the stamps wrapped: none is this set-up's */
+        memset(k->stamp, 0, k->body_cap * sizeof *k->stamp);
+        k->now = 1;
+    }
+    rows = 0;
+    k->moved_count = 0;
+    for (j = 0; j < w->joint_count; ++j) {
+        tb__joint_end e[2];
+        size_t first = rows;
+        int n, r, side;
+        tb__joint_end_at(w, j, 0, y, seen, &e[0]);
+        tb__joint_end_at(w, j, 1, y, seen, &e[1]);
+        k->row_start[j] = rows;
+        tb__mul(e[0].R, w->joint_anchor + 6 * j, k->lever + 3 * j);
+        n = tb__joint_rows(w, j, &e[0], &e[1], k->rows + rows);
+        for (r = 0; r < n; ++r) {
+            const tb__joint_row *row = shake ? &k->held[rows + r] : &k->rows[rows + r];
+            double (*out)[12] = shake ? k->held_weighted : k->weighted;
+            weigh(w, &e[0], row->lin_a, row->ang_a, out[rows + r]);
+            weigh(w, &e[1], row->lin_b, row->ang_b, out[rows + r] + 6);
+        }
+        /* the envelope: from the first row of any joint before this one
+           that moves one of its bodies */
+        for (side = 0; side < 2; ++side) {
+            const int32_t s = e[side].slot;
+            if (s < 0)
+                continue;
+            if (k->stamp[s] == k->now) {
+                first = k->body_row[s] < first ? k->body_row[s] : first;
+                continue;
+            }
+            k->stamp[s] = k->now;
+            k->body_row[s] = rows;
+            k->moved[k->moved_count++] = s;
+            if (forces) {
+                const double *P = seen + w->off[TB__BODY_MOM] + 3 * s, *L = seen + w->off[TB__BODY_ANG] + 3 * s;
+                double dP[3], dL[3], wl[3], out[6];
+                int d;
+                tb__body_rates(w, (uint32_t)s, P, L, dP, dL);
+                tb__cross(e[side].w, L, wl);
+                for (d = 0; d < 3; ++d)
+                    dL[d] -= wl[d]; /* I alpha = tau - w x L */
+                weigh(w, &e[side], dP, dL, out);
+                memcpy(k->accel + 6 * s, out, sizeof out);
+            }
+        }
+        for (r = 0; r < n; ++r) {
+            k->first[rows + r] = first;
+            k->offset[rows + r] = env;
+            env += rows + r - first + 1;
+        }
+        rows += (size_t)n;
+    }
+    k->row_start[w->joint_count] = rows;
+    if ((st = tb__reserve(w, (void **)&k->a, &k->env_cap, 3 * env, sizeof(double))) != TB_OK)
+        return st;
+    k->l = k->a + env, k->upper = k->l + env;
+    for (i = 0; i < rows; ++i) {
+        double *ai = k->a + k->offset[i] - k->first[i], *ui = k->upper + k->offset[i] - k->first[i];
+        double (*weighted)[12] = shake ? k->held_weighted : k->weighted;
+        for (q = k->first[i]; q <= i; ++q)
+            ai[q] = through(&k->rows[i], 0, weighted[q], &k->rows[q]) +
+                    through(&k->rows[i], 1, weighted[q], &k->rows[q]);
+        for (q = k->first[i]; shake && q < i; ++q) /* B_qi = J_q M^-1 H_i^T */
+            ui[q] = through(&k->rows[q], 0, weighted[i], &k->held[i]) +
+                    through(&k->rows[q], 1, weighted[i], &k->held[i]);
+        k->use[i] = 1;
+    }
+    *count = rows;
+    return TB_OK;
+}
+
+/* x = (J M^-1 J^T)^-1 x over the rows, those the factor leaves out at 0 */
+static void solve(struct tb__joint_work *k, size_t rows)
+{
+    tb__envelope e;
+    size_t i;
+    e.first = k->first, e.offset = k->offset, e.a = k->a, e.l = k->l, e.use = k->use, e.drop = DROP;
+    (void)tb__envelope_factor(&e, 0, rows); /* with drop, no pivot fails */
+    for (i = 0; i < rows; ++i)
+        if (!k->use[i])
+            k->x[i] = 0;
+    tb__envelope_solve(&e, 0, rows, k->x);
+}
+
+/* J^T x added to the bodies' linear (lin) and angular (ang) parts: 3 per
+   body slot each (forces and torques, or momenta) */
+static void apply(const tb__joint_row *rows, size_t count, const double *x, double *lin, double *ang)
+{
+    size_t i;
+    int d;
+    for (i = 0; i < count; ++i) {
+        const tb__joint_row *r = &rows[i];
+        for (d = 0; d < 3; ++d) {
+            if (r->a >= 0) {
+                lin[3 * r->a + d] += r->lin_a[d] * x[i];
+                ang[3 * r->a + d] += r->ang_a[d] * x[i];
+            }
+            if (r->b >= 0) {
+                lin[3 * r->b + d] += r->lin_b[d] * x[i];
+                ang[3 * r->b + d] += r->ang_b[d] * x[i];
+            }
+        }
+    }
+}
+
+/* Each joint's rows times the multipliers in k->x, added to its reaction:
+   the force on a, and the torque on a about its anchor (lever from a's
+   centre) */
+static void add_reactions(tb_world *w, const struct tb__joint_work *k, const tb__joint_row *rows, const double *lever)
+{
+    size_t i, j;
+    int d;
+    for (j = 0; j < w->joint_count; ++j) {
+        double *reaction = w->joint_reaction + 6 * j, force[3] = { 0, 0, 0 }, turn[3];
+        for (i = k->row_start[j]; i < k->row_start[j + 1]; ++i)
+            for (d = 0; d < 3; ++d) {
+                force[d] += rows[i].lin_a[d] * k->x[i];
+                reaction[3 + d] += rows[i].ang_a[d] * k->x[i];
+            }
+        tb__cross(lever + 3 * j, force, turn);
+        for (d = 0; d < 3; ++d) {
+            reaction[d] += force[d];
+            reaction[3 + d] -= turn[d];
+        }
+    }
+}
+
+/* J times the motion of the bodies in m (6 per body slot: linear, then
+   angular) */
+static double row_times(const tb__joint_row *r, const double *m)
+{
+    double sum = 0;
+    if (r->a >= 0)
+        sum += tb__dot3(r->lin_a, m + 6 * r->a) + tb__dot3(r->ang_a, m + 6 * r->a + 3);
+    if (r->b >= 0)
+        sum += tb__dot3(r->lin_b, m + 6 * r->b) + tb__dot3(r->ang_b, m + 6 * r->b + 3);
+    return sum;
+}
+
+tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen)
+{
+    struct tb__joint_work *k;
+    double *force, *torque;
+    size_t rows, i;
+    tb_status st;
+    if (w->joint_count == 0)
+        return TB_OK;
+    if (!w->force_ready) {
+        if (w->particle_count)
+            memset(w->particle_force, 0, 3 * w->particle_count * sizeof(double));
+        memset(w->body_force, 0, 6 * w->body_count * sizeof(double));
+    }
+    w->force_ready = 1; /* (set before the rates: they read body_force from now) */
+    if ((st = set_up(w, y, seen, 1, 0, &rows)) != TB_OK)
+        return st;
+    k = w->joint_work;
+    for (i = 0; i < rows; ++i)
+        k->x[i] = -(row_times(&k->rows[i], k->accel) + k->rows[i].bias);
+    solve(k, rows);
+    force = w->body_force, torque = w->body_force + 3 * w->body_count;
+    memset(w->joint_reaction, 0, 6 * w->joint_count * sizeof *w->joint_reaction);
+    add_reactions(w, k, k->rows, k->lever);
+    k->impulses = 0;
+    apply(k->rows, rows, k->x, force, torque);
+    return TB_OK;
+}
+
+/* The largest |C| of the rows */
+static double largest_error(const struct tb__joint_work *k, size_t rows)
+{
+    double e = 0;
+    size_t i;
+    for (i = 0; i < rows; ++i)
+        e = fmax(e, fabs(k->rows[i].error));
+    return e;
+}
+
+tb_status tb__joints_project(tb_world *w, double h)
+{
+    double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
+    double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
+    double last = INFINITY;
+    struct tb__joint_work *k;
+    size_t rows, i;
+    tb_status st;
+    int step, d;
+    if (w->joint_count == 0)
+        return TB_OK;
+    /* positions: Newton steps while they still halve the error (after
+       that it is rounding) */
+    for (step = 0; step < PROJECTION_STEPS; ++step) {
+        double e;
+        if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+            return st;
+        k = w->joint_work;
+        e = largest_error(k, rows);
+        if (e == 0 || !(e < 0.5 * last))
+            break;
+        last = e;
+        for (i = 0; i < rows; ++i)
+            k->x[i] = -k->rows[i].error;
+        solve(k, rows);
+        for (i = 0; i < rows; ++i) {
+            const tb__joint_row *r = &k->rows[i];
+            const double *m = k->weighted[i];
+            int side;
+            for (side = 0; side < 2; ++side) {
+                const int32_t s = side ? r->b : r->a;
+                double turn[3];
+                if (s < 0)
+                    continue;
+                for (d = 0; d < 3; ++d) {
+                    x[3 * s + d] += m[6 * side + d] * k->x[i];
+                    turn[d] = m[6 * side + 3 + d] * k->x[i];
+                }
+                tb__rotation_isotropic(q + 4 * s, turn, 1, 1);
+            }
+        }
+    }
+    /* velocities: the rows' rates taken out by an impulse */
+    if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+        return st;
+    k = w->joint_work;
+    for (i = 0; i < rows; ++i) {
+        const tb__joint_row *r = &k->rows[i];
+        double rate = 0;
+        if (r->a >= 0) {
+            double v[3], om[3];
+            tb__body_velocity(w, (uint32_t)r->a, v, om);
+            rate += tb__dot3(r->lin_a, v) + tb__dot3(r->ang_a, om);
+        }
+        if (r->b >= 0) {
+            double v[3], om[3];
+            tb__body_velocity(w, (uint32_t)r->b, v, om);
+            rate += tb__dot3(r->lin_b, v) + tb__dot3(r->ang_b, om);
+        }
+        k->x[i] = -rate;
+    }
+    solve(k, rows);
+    if (k->impulses) { /* the step's impulses over its length: the force */
+        add_reactions(w, k, k->rows, k->lever);
+        for (i = 0; i < 6 * w->joint_count; ++i)
+            w->joint_reaction[i] /= h;
+        k->impulses = 0;
+    }
+    apply(k->rows, rows, k->x, P, L);
+    return TB_OK;
+}
+
+/* ---- the split methods' drift (SHAKE, with the velocities' part at the
+   end of the step: RATTLE) ------------------------------------------------------ */
+
+tb_status tb__joints_hold(tb_world *w)
+{
+    struct tb__joint_work *k;
+    size_t rows, i;
+    tb_status st;
+    if (w->joint_count == 0)
+        return TB_OK;
+    if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+        return st;
+    k = w->joint_work;
+    if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows, sizeof *k->held)) != TB_OK ||
+        (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows, sizeof *k->held_weighted)) !=
+            TB_OK)
+        return st;
+    memcpy(k->held, k->rows, rows * sizeof *k->rows);
+    memcpy(k->held_lever, k->lever, 3 * w->joint_count * sizeof *k->lever);
+    k->held_count = rows;
+    if (!k->impulses) { /* the step's first drift */
+        memset(w->joint_reaction, 0, 6 * w->joint_count * sizeof *w->joint_reaction);
+        k->impulses = 1;
+    }
+    for (i = 0; i < k->moved_count; ++i) {
+        const int32_t s = k->moved[i];
+        memcpy(k->start + 7 * s, w->y + w->off[TB__BODY_POS] + 3 * s, 3 * sizeof(double));
+        memcpy(k->start + 7 * s + 3, w->y + w->off[TB__BODY_ROT] + 4 * s, 4 * sizeof(double));
+    }
+    return TB_OK;
+}
+
+/* Body s drifted again over h from where the drift started, with the
+   momenta it has now, turned as the drift turned it */
+static void drift_again(tb_world *w, const struct tb__joint_work *k, size_t s, double h, tb__rotation_kind rotation)
+{
+    double *x = w->y + w->off[TB__BODY_POS] + 3 * s, *q = w->y + w->off[TB__BODY_ROT] + 4 * s;
+    const double *P = w->y + w->off[TB__BODY_MOM] + 3 * s, *L = w->y + w->off[TB__BODY_ANG] + 3 * s;
+    const double *inv = w->body_inv_inertia + 3 * s;
+    int d;
+    for (d = 0; d < 3; ++d)
+        x[d] = k->start[7 * s + d] + h * (P[d] * w->body_inv_mass[s]);
+    memcpy(q, k->start + 7 * s + 3, 4 * sizeof(double));
+    if (rotation == TB__ROTATE_FROZEN)
+        tb__rotation_frozen(q, L, inv, h);
+    else if (rotation == TB__ROTATE_ACCURATE)
+        tb__rotation_accurate(q, L, inv, h);
+    else
+        tb__rotation_split2(q, L, inv, h);
+}
+
+tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
+{
+    double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
+    double last = INFINITY;
+    struct tb__joint_work *k = w->joint_work;
+    size_t rows, i;
+    tb_status st;
+    int step;
+    if (w->joint_count == 0 || !k || k->held_count == 0)
+        return TB_OK;
+    for (step = 0; step < SHAKE_STEPS; ++step) {
+        tb__envelope e;
+        double most;
+        if ((st = set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
+            return st;
+        most = largest_error(k, rows);
+        if (most == 0 || !(most < 0.5 * last))
+            break;
+        last = most;
+        /* Newton's step: the impulse along the held rows whose drift
+           takes C out to first order, through the matrix of the rows now
+           times the held ones (not symmetric: with the symmetric one of
+           the rows now, their turn over the step, times a light body's
+           inverse inertia, stalled it) */
+        e.first = k->first, e.offset = k->offset, e.a = k->a, e.l = NULL, e.use = k->use, e.drop = DROP;
+        (void)tb__envelope_lu(&e, k->upper, 0, rows); /* with drop, no pivot fails */
+        for (i = 0; i < rows; ++i)
+            k->x[i] = k->use[i] ? -k->rows[i].error / h : 0;
+        tb__envelope_lu_solve(&e, k->upper, 0, rows, k->x);
+        add_reactions(w, k, k->held, k->held_lever);
+        apply(k->held, rows, k->x, P, L);
+        for (i = 0; i < k->moved_count; ++i)
+            drift_again(w, k, (size_t)k->moved[i], h, rotation);
+    }
+    k->held_count = 0;
+    return TB_OK;
+}
+
+void tb__joints_begin_step(tb_world *w)
+{
+    if (w->joint_work)
+        w->joint_work->impulses = 0;
+}
+
+void tb__joint_work_free(tb_world *w)
+{
+    struct tb__joint_work *k = w->joint_work;
+    if (!k)
+        return;
+    tb__alloc(w, k->rows, k->row_cap * sizeof *k->rows, 0);
+    tb__alloc(w, k->weighted, k->row_cap * sizeof *k->weighted, 0);
+    tb__alloc(w, k->first, k->row_cap * sizeof *k->first, 0);
+    tb__alloc(w, k->offset, k->row_cap * sizeof *k->offset, 0);
+    tb__alloc(w, k->x, k->row_cap * sizeof *k->x, 0);
+    tb__alloc(w, k->use, k->row_cap, 0);
+    tb__alloc(w, k->row_start, k->joint_cap * sizeof *k->row_start, 0);
+    tb__alloc(w, k->lever, k->joint_cap * 3 * sizeof *k->lever, 0);
+    tb__alloc(w, k->held_lever, k->joint_cap * 3 * sizeof *k->held_lever, 0);
+    tb__alloc(w, k->a, k->env_cap * sizeof *k->a, 0);
+    tb__alloc(w, k->accel, k->body_cap * 6 * sizeof *k->accel, 0);
+    tb__alloc(w, k->body_row, k->body_cap * sizeof *k->body_row, 0);
+    tb__alloc(w, k->stamp, k->body_cap * sizeof *k->stamp, 0);
+    tb__alloc(w, k->start, k->body_cap * 7 * sizeof *k->start, 0);
+    tb__alloc(w, k->moved, k->body_cap * sizeof *k->moved, 0);
+    tb__alloc(w, k->held, k->held_cap * sizeof *k->held, 0);
+    tb__alloc(w, k->held_weighted, k->held_weighted_cap * sizeof *k->held_weighted, 0);
+    tb__alloc(w, k, sizeof *k, 0);
+    w->joint_work = NULL;
+}

@@ -1,0 +1,69 @@
+/* joints.h: joints between bodies (not public): their storage and API
+   (joints.c), the rows each type holds at a pose (joint_rows.c), and
+   their solve in every force evaluation and the projection after each
+   step (joint_solve.c). docs/joints.md has the model. */
+#ifndef TB_JOINTS_H
+#define TB_JOINTS_H
+
+#include "world.h"
+
+/* A joint's most rows (FIXED) */
+#define TB__JOINT_ROWS 6
+
+/* One end of a joint at a state: a body's pose and velocities, or the
+   world's (at rest, at the origin, unturned) */
+typedef struct tb__joint_end {
+    int32_t slot;          /* the body's slot; -1: the world */
+    double x[3], R[9];     /* m: centre of mass; world from principal axes */
+    double v[3], w[3];     /* m/s, rad/s */
+} tb__joint_end;
+
+/* One row of a joint: a function C of the two poses that the joint keeps
+   at 0. Its rate is dC/dt = lin_a.v_a + ang_a.w_a + lin_b.v_b + ang_b.w_b
+   (the Jacobian J), and its second derivative J times the accelerations
+   plus `bias`, what the motion alone adds (dJ/dt times the velocities). */
+typedef struct tb__joint_row {
+    int32_t a, b;          /* body slots; -1: the world */
+    double lin_a[3], ang_a[3], lin_b[3], ang_b[3];
+    double bias;           /* 1/s^2 times C's unit */
+    double error;          /* C now: m, or the cosine of axes that should be square */
+} tb__joint_row;
+
+/* ---- joints.c ------------------------------------------------------------ */
+/* The rows a joint of this type holds */
+int tb__joint_row_count(uint32_t type);
+/* The end of joint j's side k (0: a, 1: b) at positions from y and
+   momenta from seen */
+void tb__joint_end_at(const tb_world *w, size_t j, int k, const double *y, const double *seen, tb__joint_end *end);
+void tb__joints_free(tb_world *w);
+
+/* ---- joint_rows.c -------------------------------------------------------- */
+/* Joint j's rows between ends a and b; returns how many */
+int tb__joint_rows(const tb_world *w, size_t j, const tb__joint_end *a, const tb__joint_end *b, tb__joint_row *rows);
+
+/* ---- joint_solve.c --------------------------------------------------------- */
+/* Add the joints' forces at positions from y and momenta from seen to
+   w->body_force (making it ready if nothing else had): the forces that
+   give the accelerations the joints allow, from the bodies' other forces
+   of this evaluation. Each joint's reaction is kept. */
+tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen);
+/* Put the bodies back on their joints after a step: positions (Newton
+   steps, each body moved through its inverse mass and inertia), then the
+   velocities' components along the rows taken out. After a split
+   method's step (tb__joints_shake), each joint's reaction becomes its
+   impulses over the step of length h, as a force. */
+tb_status tb__joints_project(tb_world *w, double h);
+/* The split methods' drift: tb__joints_hold keeps the rows and the
+   jointed bodies' poses before it; tb__joints_shake, after it, finds the
+   impulses along those rows that bring the drifted poses onto the joints
+   (SHAKE), drifting the bodies again from the kept poses with rotation.
+   The velocities' part (RATTLE's) is the projection's at the end of the
+   step. */
+tb_status tb__joints_hold(tb_world *w);
+/* A step begins: no drift's impulses are in the reactions yet (a step
+   that failed may have left some) */
+void tb__joints_begin_step(tb_world *w);
+tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation);
+void tb__joint_work_free(tb_world *w);
+
+#endif
