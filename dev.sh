@@ -107,6 +107,7 @@ bench)
     ./build/default/bench/bench_rotation
     ./build/default/bench/bench_contacts
     ./build/default/bench/bench_robustness
+    ./build/default/bench/bench_joints
     ./build/default/bench/bench_snapshot
     ;;
 charts)

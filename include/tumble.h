@@ -414,8 +414,10 @@ TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
    positions then velocities; how, and what each integrator's order
    becomes: docs/joints.md (test_joints.pendulum_period_matches_closed_form,
    rk4_pendulum_keeps_its_order, double_pendulum_keeps_its_energy,
-   joints_hold_every_type). A removed body takes its joints with it
-   (test_joints.removing_a_body_removes_its_joints). */
+   joints_hold_every_type). The shapes of two bodies a joint holds pass
+   through each other unless tb_joint_def.collide is set
+   (test_joints.jointed_bodies_pass_through_each_other). A removed body
+   takes its joints with it (test_joints.removing_a_body_removes_its_joints). */
 TB_API tb_joint_def tb_default_joint_def(void);
 TB_API tb_status tb_world_add_joint(tb_world *world, const tb_joint_def *def, tb_joint_id *id);
 TB_API tb_status tb_world_remove_joint(tb_world *world, tb_joint_id id);

@@ -1400,8 +1400,9 @@ static int world_shape(lua_State *L)
 
 /* world:joint{ type = "ball" | "hinge" | "slider" | "fixed" | "distance",
    a = body, b = body (none: the world), anchor = {x, y, z}, anchor_b,
-   axis, length } (tb_joint_def) */
-static const char *const joint_options[] = { "type", "a", "b", "anchor", "anchor_b", "axis", "length", NULL };
+   axis, length, collide = boolean } (tb_joint_def) */
+static const char *const joint_options[] = { "type", "a", "b", "anchor", "anchor_b", "axis", "length", "collide",
+                                             NULL };
 
 static int world_joint(lua_State *L)
 {
@@ -1433,6 +1434,9 @@ static int world_joint(lua_State *L)
     opt_vec3(L, 2, "anchor_b", "world:joint", def.anchor_b);
     opt_vec3(L, 2, "axis", "world:joint", def.axis);
     opt_number(L, 2, "length", "world:joint", &def.length);
+    lua_getfield(L, 2, "collide");
+    def.collide = lua_toboolean(L, -1);
+    lua_pop(L, 1);
     if (tb_world_add_joint(lw->world, &def, &id) != TB_OK)
         return raise_world_error(L, lw, "world:joint");
     push_handle(L, 1, H_JOINT, id.index1, id.generation, 0);

@@ -168,6 +168,7 @@ struct tb_world {
                                  by rows) in a's principal frame, in b's (or the world) */
     double *joint_length;     /* [joint_cap] m, DISTANCE */
     double *joint_reaction;   /* [6 * joint_cap] N, N m: on a, at the last evaluation */
+    uint32_t *joint_collide;  /* [joint_cap] nonzero: a's and b's shapes collide */
     tb__ids joint_ids;
     struct tb__joint_work *joint_work; /* the solve's rows and factor (joint_solve.c): scratch
                                  that every evaluation writes before it reads */

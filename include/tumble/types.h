@@ -158,6 +158,8 @@ typedef struct tb_joint_def {
                                 any length but 0; default (0, 0, 1) */
     double length;           /* m, DISTANCE: the rod's length; negative (the
                                 default): the distance at creation */
+    int collide;             /* nonzero: the shapes of a and b collide with each
+                                other; 0 (the default): they pass through */
 } tb_joint_def;
 
 /* ------------------------------------------------------ shapes, contacts -- */

@@ -4,6 +4,7 @@
    (soft_step.c); then the step's begin and end events, sleep, and the
    entries of sleeping pairs parked. The model is in docs/contacts.md. */
 #include "contacts/contacts.h"
+#include "joints/joints.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -779,7 +780,7 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
     const size_t bodies_shapes = c->shape_count - c->planes;
     const size_t n = bodies_shapes + (particles ? w->particle_count : 0);
     size_t i, k, cap;
-    int carry, same;
+    int carry, same, apart;
     tb__entry *swap;
     tb__key *swap_order;
     uint32_t *swap_starts;
@@ -888,13 +889,17 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
                             &c->pair_count, &c->pair_cap)) != TB_OK)
         return st;
     if ((st = tb__sleep_prepare(w, c)) != TB_OK || (st = unpark(w, c, h)) != TB_OK ||
-        (st = collide_planes(w, c)) != TB_OK)
+        (st = collide_planes(w, c)) != TB_OK || (st = tb__joints_apart_prepare(w)) != TB_OK)
         return st;
+    apart = w->joint_count > 0;
     for (i = 0; i < c->pair_count; ++i) {
         const uint32_t a = c->pairs[i].a, b = c->pairs[i].b;
         const size_t before = c->entry_count;
         if ((c->proxy[a] & TB__PARTICLE_KEY) && (c->proxy[b] & TB__PARTICLE_KEY))
             continue;
+        if (apart && !(c->proxy[a] & TB__PARTICLE_KEY) && !(c->proxy[b] & TB__PARTICLE_KEY) &&
+            tb__joints_apart(w, c->group[a], c->group[b]))
+            continue; /* bodies a joint holds pass through each other */
         if (inert(w, c, a) && inert(w, c, b))
             st = c->unparked ? carry_over(w, c, c->proxy[a], c->proxy[b]) : TB_OK;
         else

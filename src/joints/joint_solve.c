@@ -19,6 +19,7 @@
 #include "bodies/bodies.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* A row's pivot under DROP times its diagonal: it depends on the rows
@@ -54,6 +55,9 @@ struct tb__joint_work {
     unsigned now;            /* this set-up's stamp */
     int impulses;            /* the reactions hold impulses of this step's drifts
                                 (tb__joints_shake), for the projection to finish */
+    uint64_t *apart;         /* [apart_count] the body pairs whose shapes pass through each
+                                other (tb__joints_apart), sorted */
+    size_t apart_count, apart_cap;
     tb__joint_row *held;     /* [rows] the rows at the start of the drift */
     double (*held_weighted)[12]; /* [rows] ... through the inertia now (SHAKE's) */
     size_t held_cap, held_weighted_cap, held_count;
@@ -499,6 +503,57 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
     return TB_OK;
 }
 
+/* ---- which bodies' shapes pass through each other ------------------------------ */
+
+static uint64_t pair_key(uint32_t a, uint32_t b)
+{
+    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+}
+
+static int by_key(const void *x, const void *y)
+{
+    const uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return a < b ? -1 : a > b;
+}
+
+tb_status tb__joints_apart_prepare(tb_world *w)
+{
+    struct tb__joint_work *k;
+    tb_status st;
+    size_t j;
+    if (w->joint_count == 0)
+        return TB_OK;
+    if ((st = reserve(w, 0)) != TB_OK)
+        return st;
+    k = w->joint_work;
+    if ((st = tb__reserve(w, (void **)&k->apart, &k->apart_cap, w->joint_count, sizeof *k->apart)) != TB_OK)
+        return st;
+    k->apart_count = 0;
+    for (j = 0; j < w->joint_count; ++j)
+        if (!w->joint_collide[j] && w->joint_body[2 * j + 1])
+            k->apart[k->apart_count++] = pair_key(w->joint_body[2 * j], w->joint_body[2 * j + 1]);
+    qsort(k->apart, k->apart_count, sizeof *k->apart, by_key);
+    return TB_OK;
+}
+
+int tb__joints_apart(const tb_world *w, uint32_t a, uint32_t b)
+{
+    const struct tb__joint_work *k = w->joint_work;
+    const uint64_t key = pair_key(a, b);
+    size_t lo = 0, hi;
+    if (w->joint_count == 0 || !k || k->apart_count == 0)
+        return 0;
+    hi = k->apart_count;
+    while (lo < hi) {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (k->apart[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < k->apart_count && k->apart[lo] == key;
+}
+
 void tb__joints_begin_step(tb_world *w)
 {
     if (w->joint_work)
@@ -526,6 +581,7 @@ void tb__joint_work_free(tb_world *w)
     tb__alloc(w, k->start, k->body_cap * 7 * sizeof *k->start, 0);
     tb__alloc(w, k->moved, k->body_cap * sizeof *k->moved, 0);
     tb__alloc(w, k->held, k->held_cap * sizeof *k->held, 0);
+    tb__alloc(w, k->apart, k->apart_cap * sizeof *k->apart, 0);
     tb__alloc(w, k->held_weighted, k->held_weighted_cap * sizeof *k->held_weighted, 0);
     tb__alloc(w, k, sizeof *k, 0);
     w->joint_work = NULL;

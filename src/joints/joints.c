@@ -7,7 +7,7 @@
 #include <math.h>
 #include <string.h>
 
-#define JOINT_ARRAYS 6
+#define JOINT_ARRAYS 7
 
 static void body_removed(tb_world *w, uint32_t body_index1);
 
@@ -35,6 +35,7 @@ static void arrays_of(tb_world *w, void **arrays[JOINT_ARRAYS], size_t sizes[JOI
     arrays[3] = (void **)&w->joint_frame;    sizes[3] = 18 * sizeof(double);
     arrays[4] = (void **)&w->joint_length;   sizes[4] = sizeof(double);
     arrays[5] = (void **)&w->joint_reaction; sizes[5] = 6 * sizeof(double);
+    arrays[6] = (void **)&w->joint_collide;  sizes[6] = sizeof(uint32_t);
 }
 
 /* The pose of body slot s (x, R), or the world's for s = -1 */
@@ -186,6 +187,7 @@ tb_status tb_world_add_joint(tb_world *w, const tb_joint_def *def, tb_joint_id *
     into_frame(xa, Ra, def->anchor, frame, w->joint_anchor + 6 * j, w->joint_frame + 18 * j);
     into_frame(xb, Rb, anchor_b, frame, w->joint_anchor + 6 * j + 3, w->joint_frame + 18 * j + 9);
     w->joint_length[j] = length;
+    w->joint_collide[j] = def->collide != 0;
     memset(w->joint_reaction + 6 * j, 0, 6 * sizeof(double));
     tb__wake_body(w, sa);
     if (sb >= 0)

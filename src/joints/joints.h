@@ -64,6 +64,12 @@ tb_status tb__joints_hold(tb_world *w);
    that failed may have left some) */
 void tb__joints_begin_step(tb_world *w);
 tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation);
+/* The pairs of bodies a joint holds whose shapes pass through each other
+   (tb_joint_def.collide 0), found once a step before the contacts
+   (tb__joints_apart_prepare); whether bodies of id indices a and b are
+   such a pair */
+tb_status tb__joints_apart_prepare(tb_world *w);
+int tb__joints_apart(const tb_world *w, uint32_t a, uint32_t b);
 void tb__joint_work_free(tb_world *w);
 
 #endif

@@ -327,6 +327,65 @@ static void reaction_carries_the_weight(void **state)
     }
 }
 
+/* ---- jointed bodies' shapes ------------------------------------------------------
+   Two boxes whose shapes overlap, held by a hinge at their common edge
+   (a door on its frame): by default the joint's bodies pass through each
+   other, so the step finds no contact between their shapes and the hinge
+   alone holds them; with collide set, the overlap is a contact the step
+   meets. */
+static int contacts_between(tb_world *w, tb_shape_id a, tb_shape_id b)
+{
+    size_t n, i;
+    const tb_contact_event *ev = tb_world_contact_events(w, &n);
+    int found = 0;
+    for (i = 0; i < n; ++i)
+        found += ev[i].type == TB_CONTACT_BEGIN &&
+                 ((TB_ID_EQUAL(ev[i].a, a) && TB_ID_EQUAL(ev[i].b, b)) ||
+                  (TB_ID_EQUAL(ev[i].a, b) && TB_ID_EQUAL(ev[i].b, a)));
+    return found;
+}
+
+static void jointed_bodies_pass_through_each_other(void **state)
+{
+    int collide;
+    (void)state;
+    for (collide = 0; collide < 2; ++collide) {
+        tb_world *w = world("verlet", G);
+        const double size[3] = { 1, 0.1, 1 }, xa[3] = { 0, 0, 2 }, xb[3] = { 0.8, 0, 2 }, q[4] = { 1, 0, 0, 0 };
+        const double edge[3] = { 0.4, 0, 2 }, axis[3] = { 0, 0, 1 };
+        const tb_body_id none = { 0, 0 };
+        tb_body_id a = box(w, 1, size, xa, q), b = box(w, 1, size, xb, q);
+        tb_shape_def sd = tb_default_shape_def();
+        tb_joint_def jd = tb_default_joint_def();
+        tb_shape_id sa, sb;
+        double e;
+        sd.type = TB_SHAPE_BOX, sd.half_extents[0] = 0.5, sd.half_extents[1] = 0.05, sd.half_extents[2] = 0.5;
+        sd.body = a;
+        assert_int_equal(tb_world_add_shape(w, &sd, &sa), TB_OK);
+        sd.body = b;
+        assert_int_equal(tb_world_add_shape(w, &sd, &sb), TB_OK);
+        joint(w, TB_JOINT_FIXED, a, none, xa, NULL); /* the frame */
+        jd.type = TB_JOINT_HINGE, jd.a = b, jd.b = a, jd.collide = collide;
+        memcpy(jd.anchor, edge, sizeof jd.anchor);
+        memcpy(jd.axis, axis, sizeof jd.axis);
+        {
+            tb_joint_id door;
+            assert_int_equal(tb_world_add_joint(w, &jd, &door), TB_OK);
+            assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+            assert_int_equal(contacts_between(w, sa, sb), collide);
+            if (!collide) {
+                int s;
+                for (s = 0; s < 60; ++s)
+                    assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+                assert_int_equal(tb_joint_error(w, door, &e), TB_OK);
+                assert_below(e, 1e-12);
+                assert_int_equal(tb_world_contact_count(w), 0);
+            }
+        }
+        tb_world_destroy(w);
+    }
+}
+
 /* ---- the API ------------------------------------------------------------------ */
 static void bad_joints_are_refused(void **state)
 {
@@ -435,6 +494,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(joints_hold_every_type),
     cmocka_unit_test(double_pendulum_keeps_its_energy),
     cmocka_unit_test(reaction_carries_the_weight),
+    cmocka_unit_test(jointed_bodies_pass_through_each_other),
     cmocka_unit_test(bad_joints_are_refused),
     cmocka_unit_test(removing_a_body_removes_its_joints),
     cmocka_unit_test(snapshots_keep_the_joints),
