@@ -22,36 +22,13 @@
 
 #include <ode/ode.h>
 
-static const double G = 9.81, PI = 3.14159265358979323846;
+#include "pendulum.h"
 
-static double elliptic_k(double k)
-{
-    double a = 1, b = sqrt(1 - k * k);
-    int i;
-    for (i = 0; i < 40; ++i) {
-        const double m = (a + b) / 2;
-        b = sqrt(a * b);
-        a = m;
-    }
-    return PI / (2 * a);
-}
+static const double G = 9.81, PI = 3.14159265358979323846;
 
 /* ---- part 1 ------------------------------------------------------------------ */
 
 #define SWING_STEPS 1200 /* 20 s at 60 Hz: three periods and more */
-
-/* The period from the first and third downward crossings of the bottom,
-   linear between steps (1e-6 of it at 60 Hz: below every error here but
-   rk4's, whose figure is test_joints') */
-static double period_of(const double *angle, int steps, double h)
-{
-    double at[3];
-    int n = 0, s;
-    for (s = 1; s < steps && n < 3; ++s)
-        if (angle[s - 1] > 0 && angle[s] <= 0)
-            at[n++] = (s - 1 + angle[s - 1] / (angle[s - 1] - angle[s])) * h;
-    return n == 3 ? (at[2] - at[0]) / 2 : NAN;
-}
 
 static void tumble_swing(const char *method, double start, double h, double *angle, double *rod, double *us)
 {
@@ -125,20 +102,20 @@ static void pendulum(void)
     static double angle[SWING_STEPS];
     const char *methods[] = { "verlet", "symplectic_euler", "rk4", "dopri5" };
     const double start = 170 * PI / 180, h = 1.0 / 60;
-    const double closed = 4 * sqrt((0.4 * 0.05 * 0.05 + 1) / G) * elliptic_k(sin(start / 2));
+    const double closed = ref_pendulum_period(0.05, 1, 1, G, start);
     double rod, us, period;
     int m;
     printf("pendulum  170 degrees, 1 m, 60 Hz, closed-form period %.9f s (target: the default within 1e-3)\n",
            closed);
     for (m = 0; m < 4; ++m) {
         tumble_swing(methods[m], start, h, angle, &rod, &us);
-        period = period_of(angle, SWING_STEPS, h);
+        period = ref_crossings_period(angle, SWING_STEPS, h);
         printf("pendulum  tumble %-16s period %+.3e, rod length within %.1e m, %.2f us/step\n", methods[m],
                (period - closed) / closed, rod, us);
     }
     for (m = 0; m < 2; ++m) {
         ode_swing(m, start, h, angle, &rod, &us);
-        period = period_of(angle, SWING_STEPS, h);
+        period = ref_crossings_period(angle, SWING_STEPS, h);
         printf("pendulum  ODE %-19s period %+.3e, rod length within %.1e m, %.2f us/step\n",
                m ? "QuickStep(20)" : "dWorldStep", (period - closed) / closed, rod, us);
     }
@@ -159,6 +136,23 @@ static int compare(const void *a, const void *b)
 {
     const double x = *(const double *)a, y = *(const double *)b;
     return x < y ? -1 : x > y;
+}
+
+/* A step's largest gap into the run; 0 once the chain is lost */
+static int note(chain_run *run, double gap, int s)
+{
+    run->gap = fmax(run->gap, gap);
+    if (!(gap < 1))
+        return 0;
+    run->survived = s + 1;
+    return 1;
+}
+
+/* The median of the steps' times, in microseconds */
+static void finish(chain_run *run, double *times)
+{
+    qsort(times, (size_t)(run->survived ? run->survived : 1), sizeof *times, compare);
+    run->us = 1e6 * times[run->survived / 2];
 }
 
 static void link_position(int i, int across, double x[3])
@@ -201,13 +195,10 @@ static chain_run tumble_chain(double hz, int across)
             tb_joint_error(w, tb_world_joint_at(w, (size_t)i), &e);
             gap = isfinite(e) ? fmax(gap, e) : INFINITY;
         }
-        run.gap = fmax(run.gap, gap);
-        if (!(gap < 1))
+        if (!note(&run, gap, s))
             break;
-        run.survived = s + 1;
     }
-    qsort(times, (size_t)(run.survived ? run.survived : 1), sizeof *times, compare);
-    run.us = 1e6 * times[run.survived / 2];
+    finish(&run, times);
     tb_world_destroy(w);
     return run;
 }
@@ -255,13 +246,10 @@ static chain_run ode_chain(double hz, int across, int quick)
                      (p1[2] - p2[2]) * (p1[2] - p2[2]));
             gap = isfinite(d) ? fmax(gap, d) : INFINITY;
         }
-        run.gap = fmax(run.gap, gap);
-        if (!(gap < 1))
+        if (!note(&run, gap, s))
             break;
-        run.survived = s + 1;
     }
-    qsort(times, (size_t)(run.survived ? run.survived : 1), sizeof *times, compare);
-    run.us = 1e6 * times[run.survived / 2];
+    finish(&run, times);
     dWorldDestroy(world);
     dCloseODE();
     return run;

@@ -4,6 +4,7 @@
    statics, and the API's refusals. */
 #include "test_main.h"
 #include "tumble.h"
+#include "pendulum.h"
 
 #include <math.h>
 #include <string.h>
@@ -58,20 +59,6 @@ static tb_joint_id joint(tb_world *w, tb_joint_type type, tb_body_id a, tb_body_
     return id;
 }
 
-/* K(k), the complete elliptic integral of the first kind, by the
-   arithmetic-geometric mean */
-static double elliptic_k(double k)
-{
-    double a = 1, b = sqrt(1 - k * k);
-    int i;
-    for (i = 0; i < 40; ++i) {
-        const double m = (a + b) / 2;
-        b = sqrt(a * b);
-        a = m;
-    }
-    return PI / (2 * a);
-}
-
 /* ---- the pendulum ------------------------------------------------------------
    A sphere (radius 5 cm, 1 kg) whose centre hangs 1 m from a pivot,
    released at 170 degrees: a physical pendulum, period
@@ -89,7 +76,6 @@ static pendulum_run pendulum(const char *method, double hz, tb_joint_type type)
 {
     const double l = 1, m = 1, r = 0.05, start = 170 * PI / 180, h = 1 / hz;
     const double x0[3] = { l * sin(start), 0, -l * cos(start) }, pivot[3] = { 0, 0, 0 }, axis[3] = { 0, 1, 0 };
-    const double inertia = 0.4 * m * r * r + m * l * l;
     tb_world *w = world(method, G);
     tb_body_id body = sphere(w, m, r, x0);
     const tb_body_id none = { 0, 0 };
@@ -97,7 +83,7 @@ static pendulum_run pendulum(const char *method, double hz, tb_joint_type type)
     pendulum_run run;
     int n = 0, s;
     joint(w, type, body, none, pivot, axis);
-    run.closed = 4 * sqrt(inertia / (m * G * l)) * elliptic_k(sin(start / 2));
+    run.closed = ref_pendulum_period(r, m, l, G, start);
     run.farthest = 0;
     for (s = 0; n < 3 && s < (int)(4 * run.closed * hz); ++s) {
         double x[3], v[3], angle, rate;

@@ -15,6 +15,7 @@
 
 #include "tumble.h"
 #include "test_main.h"
+#include "pendulum.h"
 
 typedef char dreal_is_double[sizeof(dReal) == sizeof(double) ? 1 : -1];
 
@@ -24,18 +25,6 @@ static const double G = 9.81, PI = 3.14159265358979323846;
    centre hangs 1 m from a hinge about y, released at `start` rad */
 static const double R = 0.05, M = 1, LENGTH = 1;
 
-static double elliptic_k(double k)
-{
-    double a = 1, b = sqrt(1 - k * k);
-    int i;
-    for (i = 0; i < 40; ++i) {
-        const double m = (a + b) / 2;
-        b = sqrt(a * b);
-        a = m;
-    }
-    return PI / (2 * a);
-}
-
 /* The angle from the bottom at each step, and the period from the first
    and third downward crossings (linear between steps: at 240 Hz within
    1e-6 of the period; the 60 Hz comparison is of errors of 1e-4 and 0.3) */
@@ -44,16 +33,6 @@ typedef struct swing {
     int steps;
     double period;
 } swing;
-
-static double crossings_period(const double *angle, int steps, double h)
-{
-    double at[3];
-    int n = 0, s;
-    for (s = 1; s < steps && n < 3; ++s)
-        if (angle[s - 1] > 0 && angle[s] <= 0)
-            at[n++] = (s - 1 + angle[s - 1] / (angle[s - 1] - angle[s])) * h;
-    return n == 3 ? (at[2] - at[0]) / 2 : NAN;
-}
 
 static void ode_pendulum(double start, double hz, int steps, swing *out, double *erp, double *cfm)
 {
@@ -81,7 +60,7 @@ static void ode_pendulum(double start, double hz, int steps, swing *out, double 
         out->angle[s] = atan2(x[0], -x[2]);
     }
     out->steps = steps;
-    out->period = crossings_period(out->angle, steps, 1 / hz);
+    out->period = ref_crossings_period(out->angle, steps, 1 / hz);
     dWorldDestroy(world);
     dCloseODE();
 }
@@ -108,14 +87,13 @@ static void tumble_pendulum(double start, double hz, int steps, swing *out)
         out->angle[s] = atan2(x[0], -x[2]);
     }
     out->steps = steps;
-    out->period = crossings_period(out->angle, steps, 1 / hz);
+    out->period = ref_crossings_period(out->angle, steps, 1 / hz);
     tb_world_destroy(w);
 }
 
 static double closed_period(double start)
 {
-    const double inertia = 0.4 * M * R * R + M * LENGTH * LENGTH;
-    return 4 * sqrt(inertia / (M * G * LENGTH)) * elliptic_k(sin(start / 2));
+    return ref_pendulum_period(R, M, LENGTH, G, start);
 }
 
 /* At 240 Hz, released at 60 degrees: the two swing together within 1% of
