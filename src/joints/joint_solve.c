@@ -30,12 +30,15 @@
 /* SHAKE's steps at most: each takes the error down by about the turn of
    the rows over the step */
 #define SHAKE_STEPS 40
+/* halvings of a Newton step that left the error larger, at most */
+#define BACKTRACKS 6
 
 struct tb__joint_work {
     tb__joint_row *rows;
     double (*weighted)[12];  /* [rows] M^-1 J^T: lin_a, ang_a, lin_b, ang_b, each through its body */
     size_t *first, *offset;  /* [rows] the envelope (core.h) */
     double *x;               /* [rows] right side, then multipliers */
+    double *newton, *total;  /* [rows] a Newton step's multipliers; those taken so far */
     unsigned char *use;      /* [rows] 0: left out */
     size_t row_cap;
     size_t *row_start;       /* [joints + 1] */
@@ -50,6 +53,7 @@ struct tb__joint_work {
     unsigned *stamp;         /* [bodies] the set-up that last wrote the two above */
     double *start;           /* [7 bodies] x and q at the start of a drift (tb__joints_hold) */
     int32_t *moved;          /* [bodies] the bodies the joints hold, moved_count of them */
+    double *kept;            /* [7 bodies] a Newton step's starting poses or momenta */
     size_t moved_count;
     size_t body_cap;
     unsigned now;            /* this set-up's stamp */
@@ -65,9 +69,9 @@ struct tb__joint_work {
 
 static tb_status reserve_rows(tb_world *w, struct tb__joint_work *k, size_t rows)
 {
-    void **arrays[6];
-    const size_t sizes[6] = { sizeof(tb__joint_row), 12 * sizeof(double), sizeof(size_t), sizeof(size_t),
-                              sizeof(double), 1 };
+    void **arrays[8];
+    const size_t sizes[8] = { sizeof(tb__joint_row), 12 * sizeof(double), sizeof(size_t), sizeof(size_t),
+                              sizeof(double), 1, sizeof(double), sizeof(double) };
     size_t cap = k->row_cap ? k->row_cap : 16;
     tb_status st;
     if (rows <= k->row_cap)
@@ -76,7 +80,8 @@ static tb_status reserve_rows(tb_world *w, struct tb__joint_work *k, size_t rows
         cap *= 2;
     arrays[0] = (void **)&k->rows, arrays[1] = (void **)&k->weighted, arrays[2] = (void **)&k->first;
     arrays[3] = (void **)&k->offset, arrays[4] = (void **)&k->x, arrays[5] = (void **)&k->use;
-    if ((st = tb__grow(w, arrays, sizes, 6, 0, k->row_cap, cap)) != TB_OK)
+    arrays[6] = (void **)&k->newton, arrays[7] = (void **)&k->total;
+    if ((st = tb__grow(w, arrays, sizes, 8, 0, k->row_cap, cap)) != TB_OK)
         return st;
     k->row_cap = cap;
     return TB_OK;
@@ -103,12 +108,12 @@ static tb_status reserve(tb_world *w, size_t rows)
         k->joint_cap = cap;
     }
     if (w->body_count > k->body_cap) {
-        void **arrays[5] = { (void **)&k->accel, (void **)&k->body_row, (void **)&k->stamp, (void **)&k->start,
-                             (void **)&k->moved };
-        const size_t sizes[5] = { 6 * sizeof(double), sizeof(size_t), sizeof(unsigned), 7 * sizeof(double),
-                                  sizeof(int32_t) };
+        void **arrays[6] = { (void **)&k->accel, (void **)&k->body_row, (void **)&k->stamp, (void **)&k->start,
+                             (void **)&k->moved, (void **)&k->kept };
+        const size_t sizes[6] = { 6 * sizeof(double), sizeof(size_t), sizeof(unsigned), 7 * sizeof(double),
+                                  sizeof(int32_t), 7 * sizeof(double) };
         const size_t cap = 2 * w->body_count;
-        if ((st = tb__grow(w, arrays, sizes, 5, 0, k->body_cap, cap)) != TB_OK)
+        if ((st = tb__grow(w, arrays, sizes, 6, 0, k->body_cap, cap)) != TB_OK)
             return st;
         memset(k->stamp, 0, cap * sizeof *k->stamp);
         k->body_cap = cap;
@@ -342,6 +347,30 @@ static double largest_error(const struct tb__joint_work *k, size_t rows)
     return e;
 }
 
+/* Two state arrays of the moved bodies (n1 and n2 doubles each: a pose,
+   or momenta) kept (keep 1), or put back (keep 0) */
+static void keep_state(tb_world *w, struct tb__joint_work *k, enum tb__quantity q1, int n1, enum tb__quantity q2,
+                       int n2, int keep)
+{
+    size_t i;
+    for (i = 0; i < k->moved_count; ++i) {
+        const int32_t s = k->moved[i];
+        double *a = w->y + w->off[q1] + n1 * s, *b = w->y + w->off[q2] + n2 * s, *kept = k->kept + 7 * s;
+        memcpy(keep ? kept : a, keep ? a : kept, (size_t)n1 * sizeof *a);
+        memcpy(keep ? kept + n1 : b, keep ? b : kept + n1, (size_t)n2 * sizeof *b);
+    }
+}
+
+static void keep_poses(tb_world *w, struct tb__joint_work *k, int keep)
+{
+    keep_state(w, k, TB__BODY_POS, 3, TB__BODY_ROT, 4, keep);
+}
+
+static void keep_momenta(tb_world *w, struct tb__joint_work *k, int keep)
+{
+    keep_state(w, k, TB__BODY_MOM, 3, TB__BODY_ANG, 3, keep);
+}
+
 tb_status tb__joints_project(tb_world *w, double h)
 {
     double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
@@ -354,16 +383,23 @@ tb_status tb__joints_project(tb_world *w, double h)
     if (w->joint_count == 0)
         return TB_OK;
     /* positions: Newton steps while they still halve the error (after
-       that it is rounding) */
+       that it is rounding); a step that left it larger is taken back (a
+       chain whipping its light end round turned its links by more than
+       the step's linear model holds, and the step threw them apart) */
     for (step = 0; step < PROJECTION_STEPS; ++step) {
         double e;
         if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
             return st;
         k = w->joint_work;
         e = largest_error(k, rows);
+        if (step > 0 && !(e < last)) {
+            keep_poses(w, k, 0);
+            break;
+        }
         if (e == 0 || !(e < 0.5 * last))
             break;
         last = e;
+        keep_poses(w, k, 1);
         for (i = 0; i < rows; ++i)
             k->x[i] = -k->rows[i].error;
         solve(k, rows);
@@ -468,22 +504,20 @@ static void drift_again(tb_world *w, const struct tb__joint_work *k, size_t s, d
 tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
 {
     double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
-    double last = INFINITY;
     struct tb__joint_work *k = w->joint_work;
+    double most, next = 0;
     size_t rows, i;
     tb_status st;
-    int step;
+    int step, tries;
     if (w->joint_count == 0 || !k || k->held_count == 0)
         return TB_OK;
-    for (step = 0; step < SHAKE_STEPS; ++step) {
+    if ((st = set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
+        return st;
+    most = largest_error(k, rows);
+    memset(k->total, 0, rows * sizeof *k->total);
+    for (step = 0; step < SHAKE_STEPS && most > 0; ++step) {
+        double share = 1;
         tb__envelope e;
-        double most;
-        if ((st = set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
-            return st;
-        most = largest_error(k, rows);
-        if (most == 0 || !(most < 0.5 * last))
-            break;
-        last = most;
         /* Newton's step: the impulse along the held rows whose drift
            takes C out to first order, through the matrix of the rows now
            times the held ones (not symmetric: with the symmetric one of
@@ -492,13 +526,38 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
         e.first = k->first, e.offset = k->offset, e.a = k->a, e.l = NULL, e.use = k->use, e.drop = DROP;
         (void)tb__envelope_lu(&e, k->upper, 0, rows); /* with drop, no pivot fails */
         for (i = 0; i < rows; ++i)
-            k->x[i] = k->use[i] ? -k->rows[i].error / h : 0;
-        tb__envelope_lu_solve(&e, k->upper, 0, rows, k->x);
-        add_reactions(w, k, k->held, k->held_lever);
-        apply(k->held, rows, k->x, P, L);
-        for (i = 0; i < k->moved_count; ++i)
-            drift_again(w, k, (size_t)k->moved[i], h, rotation);
+            k->newton[i] = k->use[i] ? -k->rows[i].error / h : 0;
+        tb__envelope_lu_solve(&e, k->upper, 0, rows, k->newton);
+        keep_momenta(w, k, 1);
+        /* a step that leaves the error larger goes a share of the way
+           (the links of a chain whipping its light end round turn by more
+           within a step than its linear model holds) */
+        for (tries = 0; tries < BACKTRACKS; ++tries, share /= 2) {
+            for (i = 0; i < rows; ++i)
+                k->x[i] = share * k->newton[i];
+            apply(k->held, rows, k->x, P, L);
+            for (i = 0; i < k->moved_count; ++i)
+                drift_again(w, k, (size_t)k->moved[i], h, rotation);
+            if ((st = set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
+                return st;
+            next = largest_error(k, rows);
+            if (next < most)
+                break;
+            keep_momenta(w, k, 0);
+        }
+        if (!(next < most)) { /* no share helped: the drift as it was */
+            for (i = 0; i < k->moved_count; ++i)
+                drift_again(w, k, (size_t)k->moved[i], h, rotation);
+            break;
+        }
+        for (i = 0; i < rows; ++i)
+            k->total[i] += share * k->newton[i];
+        if (!(next < 0.5 * most)) /* rounding: no step halves it */
+            break;
+        most = next;
     }
+    memcpy(k->x, k->total, rows * sizeof *k->x);
+    add_reactions(w, k, k->held, k->held_lever);
     k->held_count = 0;
     return TB_OK;
 }
@@ -571,6 +630,8 @@ void tb__joint_work_free(tb_world *w)
     tb__alloc(w, k->offset, k->row_cap * sizeof *k->offset, 0);
     tb__alloc(w, k->x, k->row_cap * sizeof *k->x, 0);
     tb__alloc(w, k->use, k->row_cap, 0);
+    tb__alloc(w, k->newton, k->row_cap * sizeof *k->newton, 0);
+    tb__alloc(w, k->total, k->row_cap * sizeof *k->total, 0);
     tb__alloc(w, k->row_start, k->joint_cap * sizeof *k->row_start, 0);
     tb__alloc(w, k->lever, k->joint_cap * 3 * sizeof *k->lever, 0);
     tb__alloc(w, k->held_lever, k->joint_cap * 3 * sizeof *k->held_lever, 0);
@@ -580,6 +641,7 @@ void tb__joint_work_free(tb_world *w)
     tb__alloc(w, k->stamp, k->body_cap * sizeof *k->stamp, 0);
     tb__alloc(w, k->start, k->body_cap * 7 * sizeof *k->start, 0);
     tb__alloc(w, k->moved, k->body_cap * sizeof *k->moved, 0);
+    tb__alloc(w, k->kept, k->body_cap * 7 * sizeof *k->kept, 0);
     tb__alloc(w, k->held, k->held_cap * sizeof *k->held, 0);
     tb__alloc(w, k->apart, k->apart_cap * sizeof *k->apart, 0);
     tb__alloc(w, k->held_weighted, k->held_weighted_cap * sizeof *k->held_weighted, 0);
