@@ -680,6 +680,17 @@ static void blow_up_is_stopped_and_auto_plans(void **state)
    the slop, the heavy crate ends on its column of three within a fifth of
    the slop (its centre at 3.5 m; by the sweeps alone it goes through
    them), and the other three run. */
+/* The joints' scene: the hinge pendulum (the last body) keeps its rod's
+   length, 1 m from its pivot at (4, 0, 0), to the CSV's 17 digits and
+   rounding */
+static void joint_scene(void **state)
+{
+    double last[15];
+    (void)state;
+    run_scene("pendulum", "body", 9, 101, last);
+    assert_below(fabs(sqrt((last[2] - 4) * (last[2] - 4) + last[3] * last[3] + last[4] * last[4]) - 1), 1e-12);
+}
+
 static void contact_scenes(void **state)
 {
     double last[15];
@@ -698,6 +709,7 @@ static void contact_scenes(void **state)
 
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(contact_scenes),
+    cmocka_unit_test(joint_scene),
     cmocka_unit_test(pipes_and_joined_values),
     cmocka_unit_test(shapes_are_written_beside_the_trajectory),
     cmocka_unit_test(plot_is_drawn_with_gnuplot),
