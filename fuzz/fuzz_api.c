@@ -121,6 +121,10 @@ static void add_joint(tb_world *w, fuzz_input *in, made *m)
     d.a = m->body[fuzz_below(in, m->bodies)];
     if (fuzz_below(in, 2))
         d.b = m->body[fuzz_below(in, m->bodies)];
+    if (m->particles && fuzz_below(in, 3) == 0) /* particles in the bodies' places (both: refused) */
+        d.particle_a = m->particle[fuzz_below(in, m->particles)];
+    if (m->particles && fuzz_below(in, 3) == 0)
+        d.particle_b = m->particle[fuzz_below(in, m->particles)];
     fuzz_vector(in, d.anchor);
     if (fuzz_below(in, 2))
         fuzz_vector(in, d.axis);

@@ -407,7 +407,9 @@ TB_API tb_status tb_world_add_force(tb_world *world, tb_force_fn *fn, void *user
 TB_API tb_status tb_world_remove_force(tb_world *world, tb_force_id id);
 
 /* --------------------------------------------------------------- joints -- */
-/* Joints hold bodies together, or a body to the world (tb_joint_def). Each
+/* Joints hold bodies together, or a body to the world, and particles in
+   the bodies' places in ball and distance joints (tb_joint_def;
+   test_joints.particles_hang_on_rods). Each
    force evaluation of every integrator solves their forces from the
    bodies' other forces and motion (the accelerations the joints allow,
    exactly), and after each step the bodies are put back on the joints,

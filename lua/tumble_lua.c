@@ -1399,8 +1399,8 @@ static int world_shape(lua_State *L)
 }
 
 /* world:joint{ type = "ball" | "hinge" | "slider" | "fixed" | "distance",
-   a = body, b = body (none: the world), anchor = {x, y, z}, anchor_b,
-   axis, length, collide = boolean } (tb_joint_def) */
+   a = body or particle, b = body or particle (none: the world), anchor =
+   {x, y, z}, anchor_b, axis, length, collide = boolean } (tb_joint_def) */
 static const char *const joint_options[] = { "type", "a", "b", "anchor", "anchor_b", "axis", "length", "collide",
                                              NULL };
 
@@ -1418,15 +1418,21 @@ static int world_joint(lua_State *L)
     lua_pop(L, 1);
     for (k = 0; k < 2; ++k) {
         if (lua_getfield(L, 2, ends[k]) != LUA_TNIL) {
-            tl_handle *b = check_handle(L, lua_gettop(L), H_BODY, &other);
+            /* a body, or a particle in its place (ball and distance joints) */
+            const int particle = test_handle(L, lua_gettop(L), H_PARTICLE) != NULL;
+            tl_handle *h = check_handle(L, lua_gettop(L), particle ? H_PARTICLE : H_BODY, &other);
             if (other != lw)
-                return luaL_error(L, "world:joint: body %s belongs to another world", ends[k]);
-            if (k)
-                def.b = to_body_id(b);
+                return luaL_error(L, "world:joint: %s belongs to another world", ends[k]);
+            if (particle && k)
+                def.particle_b = to_particle_id(h);
+            else if (particle)
+                def.particle_a = to_particle_id(h);
+            else if (k)
+                def.b = to_body_id(h);
             else
-                def.a = to_body_id(b);
+                def.a = to_body_id(h);
         } else if (k == 0) {
-            return luaL_error(L, "world:joint: 'a' (a body) is required");
+            return luaL_error(L, "world:joint: 'a' (a body or a particle) is required");
         }
         lua_pop(L, 1);
     }

@@ -58,6 +58,8 @@ typedef struct tb__method {
 
 typedef struct tb__contacts tb__contacts;
 enum { TB__HEARS_SHAPES, TB__HEARS_JOINTS };
+enum { TB__HEARS_SPRINGS, TB__HEARS_PARTICLE_JOINTS };
+enum { TB__JOINT_COLLIDE = 1, TB__JOINT_PARTICLE_A = 2, TB__JOINT_PARTICLE_B = 4 };
 struct tb__split_frame;    /* bodies/bodies.h */
 
 struct tb_world {
@@ -161,14 +163,16 @@ struct tb_world {
        nothing here */
     size_t joint_count, joint_cap;
     uint32_t *joint_type;     /* [joint_cap] tb_joint_type */
-    uint32_t *joint_body;     /* [2 * joint_cap] index1 of a, of b (0: the world) */
+    uint32_t *joint_body;     /* [2 * joint_cap] index1 of a, of b (0: the world): a body's, or a
+                                 particle's where joint_flags says so */
     double *joint_anchor;     /* [6 * joint_cap] m: the anchor in a's principal frame, in b's
                                  (or the world) */
     double *joint_frame;      /* [18 * joint_cap] the joint's axes (axis, then two across it,
                                  by rows) in a's principal frame, in b's (or the world) */
     double *joint_length;     /* [joint_cap] m, DISTANCE */
     double *joint_reaction;   /* [6 * joint_cap] N, N m: on a, at the last evaluation */
-    uint32_t *joint_collide;  /* [joint_cap] nonzero: a's and b's shapes collide */
+    uint32_t *joint_flags;    /* [joint_cap] TB__JOINT_COLLIDE (a's and b's shapes collide),
+                                 TB__JOINT_PARTICLE_A, _B (that side is a particle) */
     tb__ids joint_ids;
     struct tb__joint_work *joint_work; /* the solve's rows and factor (joint_solve.c): scratch
                                  that every evaluation writes before it reads */
@@ -180,8 +184,9 @@ struct tb_world {
        removal here (set when they first hold such a reference), so the
        lower tier calls no upper one: springs keep particle slots, shapes
        keep body ids, and so do joints (one listener each: TB__HEARS_SHAPES,
-       TB__HEARS_JOINTS). NULL: nobody listens. */
-    void (*particle_removed)(tb_world *w, uint32_t slot, uint32_t last);
+       TB__HEARS_JOINTS; for particles TB__HEARS_SPRINGS,
+       TB__HEARS_PARTICLE_JOINTS). NULL: nobody listens. */
+    void (*particle_removed[2])(tb_world *w, uint32_t slot, uint32_t last);
     void (*body_removed[2])(tb_world *w, uint32_t body_index1);
 
     /* velocity fields for tracers (tb__field), user forces (tb__force) */

@@ -137,7 +137,12 @@ typedef tb_status tb_force_fn(const tb_force_args *args, void *user);
      b stays on the axis through the anchor of a (5 rows);
    - FIXED: the bodies move as one (6 rows);
    - DISTANCE: a rod: the anchors of the two bodies stay `length` apart
-     (1 row). */
+     (1 row).
+   A particle may take a body's place in a BALL or DISTANCE joint
+   (particle_a for a, particle_b for b): the particle is its own anchor.
+   A ball joint then holds it at `anchor` on the other side (a point of a
+   body, or fixed in the world); a distance joint is a rod between two
+   particles, or from a particle to `anchor_b`. */
 typedef enum tb_joint_type {
     TB_JOINT_BALL,
     TB_JOINT_HINGE,
@@ -148,8 +153,9 @@ typedef enum tb_joint_type {
 
 typedef struct tb_joint_def {
     tb_joint_type type;
-    tb_body_id a;
-    tb_body_id b;            /* null: the joint holds a to the world */
+    tb_body_id a;            /* null when particle_a is given */
+    tb_body_id b;            /* null (and particle_b null): the joint holds a to the world */
+    tb_particle_id particle_a, particle_b; /* a particle in a's or b's place (BALL, DISTANCE) */
     double anchor[3];        /* m, a world point at creation, fixed in a and in b
                                 (or the world); DISTANCE: the end on a */
     double anchor_b[3];      /* m, DISTANCE only: the end on b (or in the world),

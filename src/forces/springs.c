@@ -80,7 +80,7 @@ tb_status tb_world_add_spring(tb_world *w, const tb_spring_def *def, tb_spring_i
         w->spring_cap = cap;
     }
     s = (uint32_t)w->spring_count++;
-    w->particle_removed = particle_removed;
+    w->particle_removed[TB__HEARS_SPRINGS] = particle_removed;
     w->spring_a[s] = a;
     w->spring_b[s] = b;
     memcpy(w->spring_anchor + 3 * s, def->anchor, 3 * sizeof(double));

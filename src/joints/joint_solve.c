@@ -17,6 +17,7 @@
    error, so they keep the method's order. */
 #include "joints/joints.h"
 #include "bodies/bodies.h"
+#include "particles/particles.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -48,14 +49,15 @@ struct tb__joint_work {
     double *a, *l, *upper;   /* the envelope of J M^-1 J^T, its factor; SHAKE's matrix's
                                 upper part (tb__joints_shake): one block */
     size_t env_cap;
-    double *accel;           /* [6 bodies] a0 and alpha0 under the other forces */
-    size_t *body_row;        /* [bodies] the first row that moves the body */
-    unsigned *stamp;         /* [bodies] the set-up that last wrote the two above */
-    double *start;           /* [7 bodies] x and q at the start of a drift (tb__joints_hold) */
-    int32_t *moved;          /* [bodies] the bodies the joints hold, moved_count of them */
-    double *kept;            /* [7 bodies] a Newton step's starting poses or momenta */
+    /* per node (node(): the bodies' slots, then the particles'): */
+    double *accel;           /* [6 nodes] a0 and alpha0 under the other forces */
+    size_t *body_row;        /* [nodes] the first row that moves the node */
+    unsigned *stamp;         /* [nodes] the set-up that last wrote the two above */
+    double *start;           /* [7 nodes] x and q at the start of a drift (tb__joints_hold) */
+    int32_t *moved;          /* [nodes] the ends the joints move, moved_count of them */
+    double *kept;            /* [7 nodes] a Newton step's starting poses or momenta */
     size_t moved_count;
-    size_t body_cap;
+    size_t body_cap;         /* nodes */
     unsigned now;            /* this set-up's stamp */
     int impulses;            /* the reactions hold impulses of this step's drifts
                                 (tb__joints_shake), for the projection to finish */
@@ -107,12 +109,12 @@ static tb_status reserve(tb_world *w, size_t rows)
             return st;
         k->joint_cap = cap;
     }
-    if (w->body_count > k->body_cap) {
+    if (w->body_count + w->particle_count > k->body_cap) {
         void **arrays[6] = { (void **)&k->accel, (void **)&k->body_row, (void **)&k->stamp, (void **)&k->start,
                              (void **)&k->moved, (void **)&k->kept };
         const size_t sizes[6] = { 6 * sizeof(double), sizeof(size_t), sizeof(unsigned), 7 * sizeof(double),
                                   sizeof(int32_t), 7 * sizeof(double) };
-        const size_t cap = 2 * w->body_count;
+        const size_t cap = 2 * (w->body_count + w->particle_count);
         if ((st = tb__grow(w, arrays, sizes, 6, 0, k->body_cap, cap)) != TB_OK)
             return st;
         memset(k->stamp, 0, cap * sizeof *k->stamp);
@@ -121,13 +123,22 @@ static tb_status reserve(tb_world *w, size_t rows)
     return TB_OK;
 }
 
-/* v through body s's inverse mass (lin) or world inverse inertia (ang) */
+/* An end's index in the per-node arrays: the bodies, then the particles */
+static size_t node(const tb_world *w, int32_t end)
+{
+    return end >= 0 ? (size_t)end : w->body_count + tb__joint_particle_slot(end);
+}
+
+/* v through an end's inverse mass (lin) or world inverse inertia (ang; a
+   particle turns not) */
 static void weigh(const tb_world *w, const tb__joint_end *e, const double lin[3], const double ang[3], double out[6])
 {
     double b[3];
     int d;
     if (e->slot < 0) {
-        memset(out, 0, 6 * sizeof *out);
+        const double inv = tb__joint_is_particle(e->slot) ? w->particle_inv_mass[tb__joint_particle_slot(e->slot)] : 0;
+        for (d = 0; d < 3; ++d)
+            out[d] = inv * lin[d], out[3 + d] = 0;
         return;
     }
     for (d = 0; d < 3; ++d)
@@ -138,13 +149,13 @@ static void weigh(const tb_world *w, const tb__joint_end *e, const double lin[3]
     tb__mul(e->R, b, out + 3);
 }
 
-/* Row i's part through body s, against the weighted row j */
+/* Row i's part through its end on `side`, against the weighted row j */
 static double through(const tb__joint_row *ri, int side, const double *wj, const tb__joint_row *rj)
 {
     const int32_t s = side ? ri->b : ri->a;
     const double *lin = side ? ri->lin_b : ri->lin_a, *ang = side ? ri->ang_b : ri->ang_a;
     double sum = 0;
-    if (s < 0)
+    if (s == TB__JOINT_WORLD)
         return 0;
     if (rj->a == s)
         sum += tb__dot3(lin, wj) + tb__dot3(ang, wj + 3);
@@ -194,16 +205,18 @@ static tb_status set_up(tb_world *w, const double *y, const double *seen, int fo
            that moves one of its bodies */
         for (side = 0; side < 2; ++side) {
             const int32_t s = e[side].slot;
-            if (s < 0)
+            size_t at;
+            if (s == TB__JOINT_WORLD)
                 continue;
-            if (k->stamp[s] == k->now) {
-                first = k->body_row[s] < first ? k->body_row[s] : first;
+            at = node(w, s);
+            if (k->stamp[at] == k->now) {
+                first = k->body_row[at] < first ? k->body_row[at] : first;
                 continue;
             }
-            k->stamp[s] = k->now;
-            k->body_row[s] = rows;
+            k->stamp[at] = k->now;
+            k->body_row[at] = rows;
             k->moved[k->moved_count++] = s;
-            if (forces) {
+            if (forces && s >= 0) {
                 const double *P = seen + w->off[TB__BODY_MOM] + 3 * s, *L = seen + w->off[TB__BODY_ANG] + 3 * s;
                 double dP[3], dL[3], wl[3], out[6];
                 int d;
@@ -212,7 +225,10 @@ static tb_status set_up(tb_world *w, const double *y, const double *seen, int fo
                 for (d = 0; d < 3; ++d)
                     dL[d] -= wl[d]; /* I alpha = tau - w x L */
                 weigh(w, &e[side], dP, dL, out);
-                memcpy(k->accel + 6 * s, out, sizeof out);
+                memcpy(k->accel + 6 * at, out, sizeof out);
+            } else if (forces) {
+                tb__particle_acceleration(w, tb__joint_particle_slot(s), e[side].v, k->accel + 6 * at);
+                memset(k->accel + 6 * at + 3, 0, 3 * sizeof *k->accel);
             }
         }
         for (r = 0; r < n; ++r) {
@@ -254,25 +270,38 @@ static void solve(struct tb__joint_work *k, size_t rows)
     tb__envelope_solve(&e, 0, rows, k->x);
 }
 
-/* J^T x added to the bodies' linear (lin) and angular (ang) parts: 3 per
-   body slot each (forces and torques, or momenta) */
-static void apply(const tb__joint_row *rows, size_t count, const double *x, double *lin, double *ang)
+/* J^T x added to the ends: as forces to the evaluation's (forces 1:
+   w->body_force, w->particle_force), or as impulses to the bodies'
+   momenta and the particles' velocities */
+static void apply(tb_world *w, const tb__joint_row *rows, size_t count, const double *x, int forces)
 {
+    double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG], *v = w->y + w->off[TB__PARTICLE_VEL];
     size_t i;
-    int d;
-    for (i = 0; i < count; ++i) {
-        const tb__joint_row *r = &rows[i];
-        for (d = 0; d < 3; ++d) {
-            if (r->a >= 0) {
-                lin[3 * r->a + d] += r->lin_a[d] * x[i];
-                ang[3 * r->a + d] += r->ang_a[d] * x[i];
-            }
-            if (r->b >= 0) {
-                lin[3 * r->b + d] += r->lin_b[d] * x[i];
-                ang[3 * r->b + d] += r->ang_b[d] * x[i];
+    int d, side;
+    for (i = 0; i < count; ++i)
+        for (side = 0; side < 2; ++side) {
+            const int32_t s = side ? rows[i].b : rows[i].a;
+            const double *lin = side ? rows[i].lin_b : rows[i].lin_a, *ang = side ? rows[i].ang_b : rows[i].ang_a;
+            if (s >= 0 && forces) {
+                for (d = 0; d < 3; ++d) {
+                    w->body_force[3 * s + d] += lin[d] * x[i];
+                    w->body_force[3 * w->body_count + 3 * s + d] += ang[d] * x[i];
+                }
+            } else if (s >= 0) {
+                for (d = 0; d < 3; ++d) {
+                    P[3 * s + d] += lin[d] * x[i];
+                    L[3 * s + d] += ang[d] * x[i];
+                }
+            } else if (tb__joint_is_particle(s)) {
+                const uint32_t p = tb__joint_particle_slot(s);
+                for (d = 0; d < 3; ++d) {
+                    if (forces)
+                        w->particle_force[3 * p + d] += lin[d] * x[i];
+                    else
+                        v[3 * p + d] += w->particle_inv_mass[p] * (lin[d] * x[i]);
+                }
             }
         }
-    }
 }
 
 /* Each joint's rows times the multipliers in k->x, added to its reaction:
@@ -297,22 +326,21 @@ static void add_reactions(tb_world *w, const struct tb__joint_work *k, const tb_
     }
 }
 
-/* J times the motion of the bodies in m (6 per body slot: linear, then
+/* J times the motion of the ends in m (6 per node: linear, then
    angular) */
-static double row_times(const tb__joint_row *r, const double *m)
+static double row_times(const tb_world *w, const tb__joint_row *r, const double *m)
 {
     double sum = 0;
-    if (r->a >= 0)
-        sum += tb__dot3(r->lin_a, m + 6 * r->a) + tb__dot3(r->ang_a, m + 6 * r->a + 3);
-    if (r->b >= 0)
-        sum += tb__dot3(r->lin_b, m + 6 * r->b) + tb__dot3(r->ang_b, m + 6 * r->b + 3);
+    if (r->a != TB__JOINT_WORLD)
+        sum += tb__dot3(r->lin_a, m + 6 * node(w, r->a)) + tb__dot3(r->ang_a, m + 6 * node(w, r->a) + 3);
+    if (r->b != TB__JOINT_WORLD)
+        sum += tb__dot3(r->lin_b, m + 6 * node(w, r->b)) + tb__dot3(r->ang_b, m + 6 * node(w, r->b) + 3);
     return sum;
 }
 
 tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen)
 {
     struct tb__joint_work *k;
-    double *force, *torque;
     size_t rows, i;
     tb_status st;
     if (w->joint_count == 0)
@@ -327,13 +355,12 @@ tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen)
         return st;
     k = w->joint_work;
     for (i = 0; i < rows; ++i)
-        k->x[i] = -(row_times(&k->rows[i], k->accel) + k->rows[i].bias);
+        k->x[i] = -(row_times(w, &k->rows[i], k->accel) + k->rows[i].bias);
     solve(k, rows);
-    force = w->body_force, torque = w->body_force + 3 * w->body_count;
     memset(w->joint_reaction, 0, 6 * w->joint_count * sizeof *w->joint_reaction);
     add_reactions(w, k, k->rows, k->lever);
     k->impulses = 0;
-    apply(k->rows, rows, k->x, force, torque);
+    apply(w, k->rows, rows, k->x, 1);
     return TB_OK;
 }
 
@@ -347,34 +374,43 @@ static double largest_error(const struct tb__joint_work *k, size_t rows)
     return e;
 }
 
-/* Two state arrays of the moved bodies (n1 and n2 doubles each: a pose,
-   or momenta) kept (keep 1), or put back (keep 0) */
-static void keep_state(tb_world *w, struct tb__joint_work *k, enum tb__quantity q1, int n1, enum tb__quantity q2,
-                       int n2, int keep)
+/* The moved ends' poses (keep_poses: a body's x and q, a particle's x)
+   or momenta (keep_momenta: a body's P and L, a particle's v) kept (keep
+   1), or put back (keep 0) */
+static void keep_state(tb_world *w, struct tb__joint_work *k, int poses, int keep)
 {
     size_t i;
     for (i = 0; i < k->moved_count; ++i) {
         const int32_t s = k->moved[i];
-        double *a = w->y + w->off[q1] + n1 * s, *b = w->y + w->off[q2] + n2 * s, *kept = k->kept + 7 * s;
+        double *kept = k->kept + 7 * node(w, s), *a, *b = NULL;
+        int n1 = 3, n2 = poses ? 4 : 3;
+        if (s >= 0) {
+            a = w->y + w->off[poses ? TB__BODY_POS : TB__BODY_MOM] + 3 * s;
+            b = w->y + (poses ? w->off[TB__BODY_ROT] + 4 * (size_t)s : w->off[TB__BODY_ANG] + 3 * (size_t)s);
+        } else {
+            a = w->y + w->off[poses ? TB__PARTICLE_POS : TB__PARTICLE_VEL] + 3 * tb__joint_particle_slot(s);
+            n2 = 0;
+        }
         memcpy(keep ? kept : a, keep ? a : kept, (size_t)n1 * sizeof *a);
-        memcpy(keep ? kept + n1 : b, keep ? b : kept + n1, (size_t)n2 * sizeof *b);
+        if (n2)
+            memcpy(keep ? kept + n1 : b, keep ? b : kept + n1, (size_t)n2 * sizeof *b);
     }
 }
 
 static void keep_poses(tb_world *w, struct tb__joint_work *k, int keep)
 {
-    keep_state(w, k, TB__BODY_POS, 3, TB__BODY_ROT, 4, keep);
+    keep_state(w, k, 1, keep);
 }
 
 static void keep_momenta(tb_world *w, struct tb__joint_work *k, int keep)
 {
-    keep_state(w, k, TB__BODY_MOM, 3, TB__BODY_ANG, 3, keep);
+    keep_state(w, k, 0, keep);
 }
 
 tb_status tb__joints_project(tb_world *w, double h)
 {
     double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
-    double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
+    double *px = w->y + w->off[TB__PARTICLE_POS];
     double last = INFINITY;
     struct tb__joint_work *k;
     size_t rows, i;
@@ -410,6 +446,9 @@ tb_status tb__joints_project(tb_world *w, double h)
             for (side = 0; side < 2; ++side) {
                 const int32_t s = side ? r->b : r->a;
                 double turn[3];
+                if (tb__joint_is_particle(s))
+                    for (d = 0; d < 3; ++d)
+                        px[3 * tb__joint_particle_slot(s) + d] += m[6 * side + d] * k->x[i];
                 if (s < 0)
                     continue;
                 for (d = 0; d < 3; ++d) {
@@ -427,15 +466,15 @@ tb_status tb__joints_project(tb_world *w, double h)
     for (i = 0; i < rows; ++i) {
         const tb__joint_row *r = &k->rows[i];
         double rate = 0;
-        if (r->a >= 0) {
-            double v[3], om[3];
-            tb__body_velocity(w, (uint32_t)r->a, v, om);
-            rate += tb__dot3(r->lin_a, v) + tb__dot3(r->ang_a, om);
-        }
-        if (r->b >= 0) {
-            double v[3], om[3];
-            tb__body_velocity(w, (uint32_t)r->b, v, om);
-            rate += tb__dot3(r->lin_b, v) + tb__dot3(r->ang_b, om);
+        int side;
+        for (side = 0; side < 2; ++side) {
+            const int32_t s = side ? r->b : r->a;
+            double v[3] = { 0, 0, 0 }, om[3] = { 0, 0, 0 };
+            if (s >= 0)
+                tb__body_velocity(w, (uint32_t)s, v, om);
+            else if (tb__joint_is_particle(s))
+                memcpy(v, w->y + w->off[TB__PARTICLE_VEL] + 3 * tb__joint_particle_slot(s), sizeof v);
+            rate += tb__dot3(side ? r->lin_b : r->lin_a, v) + tb__dot3(side ? r->ang_b : r->ang_a, om);
         }
         k->x[i] = -rate;
     }
@@ -446,7 +485,7 @@ tb_status tb__joints_project(tb_world *w, double h)
             w->joint_reaction[i] /= h;
         k->impulses = 0;
     }
-    apply(k->rows, rows, k->x, P, L);
+    apply(w, k->rows, rows, k->x, 0);
     return TB_OK;
 }
 
@@ -476,34 +515,47 @@ tb_status tb__joints_hold(tb_world *w)
     }
     for (i = 0; i < k->moved_count; ++i) {
         const int32_t s = k->moved[i];
-        memcpy(k->start + 7 * s, w->y + w->off[TB__BODY_POS] + 3 * s, 3 * sizeof(double));
-        memcpy(k->start + 7 * s + 3, w->y + w->off[TB__BODY_ROT] + 4 * s, 4 * sizeof(double));
+        double *start = k->start + 7 * node(w, s);
+        if (s >= 0) {
+            memcpy(start, w->y + w->off[TB__BODY_POS] + 3 * s, 3 * sizeof(double));
+            memcpy(start + 3, w->y + w->off[TB__BODY_ROT] + 4 * s, 4 * sizeof(double));
+        } else {
+            memcpy(start, w->y + w->off[TB__PARTICLE_POS] + 3 * tb__joint_particle_slot(s), 3 * sizeof(double));
+        }
     }
     return TB_OK;
 }
 
-/* Body s drifted again over h from where the drift started, with the
-   momenta it has now, turned as the drift turned it */
-static void drift_again(tb_world *w, const struct tb__joint_work *k, size_t s, double h, tb__rotation_kind rotation)
+/* End s drifted again over h from where the drift started, with the
+   momenta (velocity) it has now, a body turned as the drift turned it */
+static void drift_again(tb_world *w, const struct tb__joint_work *k, int32_t s, double h, tb__rotation_kind rotation)
 {
-    double *x = w->y + w->off[TB__BODY_POS] + 3 * s, *q = w->y + w->off[TB__BODY_ROT] + 4 * s;
-    const double *P = w->y + w->off[TB__BODY_MOM] + 3 * s, *L = w->y + w->off[TB__BODY_ANG] + 3 * s;
-    const double *inv = w->body_inv_inertia + 3 * s;
+    const double *start = k->start + 7 * node(w, s);
     int d;
-    for (d = 0; d < 3; ++d)
-        x[d] = k->start[7 * s + d] + h * (P[d] * w->body_inv_mass[s]);
-    memcpy(q, k->start + 7 * s + 3, 4 * sizeof(double));
-    if (rotation == TB__ROTATE_FROZEN)
-        tb__rotation_frozen(q, L, inv, h);
-    else if (rotation == TB__ROTATE_ACCURATE)
-        tb__rotation_accurate(q, L, inv, h);
-    else
-        tb__rotation_split2(q, L, inv, h);
+    if (tb__joint_is_particle(s)) {
+        const uint32_t p = tb__joint_particle_slot(s);
+        double *x = w->y + w->off[TB__PARTICLE_POS] + 3 * p;
+        const double *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * p;
+        for (d = 0; d < 3; ++d)
+            x[d] = start[d] + h * v[d];
+    } else {
+        double *x = w->y + w->off[TB__BODY_POS] + 3 * s, *q = w->y + w->off[TB__BODY_ROT] + 4 * s;
+        const double *P = w->y + w->off[TB__BODY_MOM] + 3 * s, *L = w->y + w->off[TB__BODY_ANG] + 3 * s;
+        const double *inv = w->body_inv_inertia + 3 * s;
+        for (d = 0; d < 3; ++d)
+            x[d] = start[d] + h * (P[d] * w->body_inv_mass[s]);
+        memcpy(q, start + 3, 4 * sizeof(double));
+        if (rotation == TB__ROTATE_FROZEN)
+            tb__rotation_frozen(q, L, inv, h);
+        else if (rotation == TB__ROTATE_ACCURATE)
+            tb__rotation_accurate(q, L, inv, h);
+        else
+            tb__rotation_split2(q, L, inv, h);
+    }
 }
 
 tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
 {
-    double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG];
     struct tb__joint_work *k = w->joint_work;
     double most, next = 0;
     size_t rows, i;
@@ -535,9 +587,9 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
         for (tries = 0; tries < BACKTRACKS; ++tries, share /= 2) {
             for (i = 0; i < rows; ++i)
                 k->x[i] = share * k->newton[i];
-            apply(k->held, rows, k->x, P, L);
+            apply(w, k->held, rows, k->x, 0);
             for (i = 0; i < k->moved_count; ++i)
-                drift_again(w, k, (size_t)k->moved[i], h, rotation);
+                drift_again(w, k, k->moved[i], h, rotation);
             if ((st = set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
                 return st;
             next = largest_error(k, rows);
@@ -547,7 +599,7 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
         }
         if (!(next < most)) { /* no share helped: the drift as it was */
             for (i = 0; i < k->moved_count; ++i)
-                drift_again(w, k, (size_t)k->moved[i], h, rotation);
+                drift_again(w, k, k->moved[i], h, rotation);
             break;
         }
         for (i = 0; i < rows; ++i)
@@ -589,7 +641,8 @@ tb_status tb__joints_apart_prepare(tb_world *w)
         return st;
     k->apart_count = 0;
     for (j = 0; j < w->joint_count; ++j)
-        if (!w->joint_collide[j] && w->joint_body[2 * j + 1])
+        if (!(w->joint_flags[j] & (TB__JOINT_COLLIDE | TB__JOINT_PARTICLE_A | TB__JOINT_PARTICLE_B)) &&
+            w->joint_body[2 * j + 1])
             k->apart[k->apart_count++] = pair_key(w->joint_body[2 * j], w->joint_body[2 * j + 1]);
     qsort(k->apart, k->apart_count, sizeof *k->apart, by_key);
     return TB_OK;

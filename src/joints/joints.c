@@ -10,6 +10,7 @@
 #define JOINT_ARRAYS 7
 
 static void body_removed(tb_world *w, uint32_t body_index1);
+static void particle_removed(tb_world *w, uint32_t slot, uint32_t last);
 
 tb_joint_def tb_default_joint_def(void)
 {
@@ -35,7 +36,7 @@ static void arrays_of(tb_world *w, void **arrays[JOINT_ARRAYS], size_t sizes[JOI
     arrays[3] = (void **)&w->joint_frame;    sizes[3] = 18 * sizeof(double);
     arrays[4] = (void **)&w->joint_length;   sizes[4] = sizeof(double);
     arrays[5] = (void **)&w->joint_reaction; sizes[5] = 6 * sizeof(double);
-    arrays[6] = (void **)&w->joint_collide;  sizes[6] = sizeof(uint32_t);
+    arrays[6] = (void **)&w->joint_flags;    sizes[6] = sizeof(uint32_t);
 }
 
 /* The pose of body slot s (x, R), or the world's for s = -1 */
@@ -54,22 +55,41 @@ static void pose_of(const tb_world *w, int32_t s, const double *y, double x[3], 
     tb__matrix_of(q, R);
 }
 
-/* The slot of the body joint j holds on side k (0: a, 1: b); -1: the
-   world. A joint's bodies are live: a removed body takes its joints. */
+static int holds_particle(const tb_world *w, size_t j, int k)
+{
+    return (w->joint_flags[j] & (k ? TB__JOINT_PARTICLE_B : TB__JOINT_PARTICLE_A)) != 0;
+}
+
+/* The end of joint j on side k (0: a, 1: b), as joints.h encodes ends: a
+   body's slot, -1 the world, -2 - slot a particle's. A joint's bodies
+   and particles are live: a removed one takes its joints. */
 static int32_t slot_of(const tb_world *w, size_t j, int k)
 {
     const uint32_t index1 = w->joint_body[2 * j + k];
-    return index1 ? (int32_t)w->body_ids.slot[index1 - 1] : -1;
+    if (!index1)
+        return TB__JOINT_WORLD;
+    return holds_particle(w, j, k) ? tb__joint_particle_end(w->particle_ids.slot[index1 - 1])
+                                   : (int32_t)w->body_ids.slot[index1 - 1];
+}
+
+static int32_t body_slot_of(const tb_world *w, size_t j, int k)
+{
+    const int32_t s = slot_of(w, j, k);
+    return s >= 0 ? s : -1;
 }
 
 void tb__joint_end_at(const tb_world *w, size_t j, int k, const double *y, const double *seen, tb__joint_end *end)
 {
     int d;
     end->slot = slot_of(w, j, k);
-    pose_of(w, end->slot, y, end->x, end->R);
+    pose_of(w, end->slot >= 0 ? end->slot : -1, y, end->x, end->R);
     memset(end->v, 0, sizeof end->v);
     memset(end->w, 0, sizeof end->w);
-    if (end->slot >= 0) {
+    if (tb__joint_is_particle(end->slot)) {
+        const uint32_t p = tb__joint_particle_slot(end->slot);
+        memcpy(end->x, y + w->off[TB__PARTICLE_POS] + 3 * p, sizeof end->x);
+        memcpy(end->v, seen + w->off[TB__PARTICLE_VEL] + 3 * p, sizeof end->v);
+    } else if (end->slot >= 0) {
         const double *P = seen + w->off[TB__BODY_MOM] + 3 * end->slot, *L = seen + w->off[TB__BODY_ANG] + 3 * end->slot;
         const double *inv = w->body_inv_inertia + 3 * end->slot;
         double Lb[3];
@@ -106,24 +126,50 @@ static void into_frame(const double x[3], const double R[9], const double p[3], 
         tb__mul_transposed(R, frame + 3 * k, local_frame + 3 * k);
 }
 
-static tb_status check_def(tb_world *w, const tb_joint_def *def, uint32_t *sa, int32_t *sb)
+/* One side of a joint: a body, a particle, or (side b only) neither: the
+   world. *slot as joints.h encodes ends. */
+static tb_status check_side(tb_world *w, tb_body_id body, tb_particle_id particle, int k, int32_t *slot)
+{
+    const char *side = k ? "b" : "a";
+    uint32_t s;
+    if (!TB_ID_IS_NULL(body) && !TB_ID_IS_NULL(particle))
+        return tb__fail(w, TB_ERR_ARGUMENT, "joint side %s: a body or a particle, not both", side);
+    if (!TB_ID_IS_NULL(particle)) {
+        if (!tb__ids_lookup(&w->particle_ids, particle.index1, particle.generation, &s))
+            return tb__fail(w, TB_ERR_STALE_ID, "joint particle %s: particle id %u.%u is removed or from another "
+                            "world", side, particle.index1, particle.generation);
+        *slot = tb__joint_particle_end(s);
+        return TB_OK;
+    }
+    if (TB_ID_IS_NULL(body)) {
+        if (!k)
+            return tb__fail(w, TB_ERR_STALE_ID, "joint body a: body id %u.%u is null, removed or from another world",
+                            body.index1, body.generation);
+        *slot = TB__JOINT_WORLD;
+        return TB_OK;
+    }
+    if (tb__body_find(w, body, &s) != TB_OK)
+        return tb__fail(w, TB_ERR_STALE_ID, "joint body %s: %s", side, tb_world_message(w));
+    *slot = (int32_t)s;
+    return TB_OK;
+}
+
+static tb_status check_def(tb_world *w, const tb_joint_def *def, int32_t *sa, int32_t *sb)
 {
     tb_status st;
-    uint32_t s;
     if (!def)
         return tb__fail(w, TB_ERR_ARGUMENT, "joint definition must not be NULL");
     if (tb__joint_row_count((uint32_t)def->type) == 0)
         return tb__fail(w, TB_ERR_ARGUMENT, "unknown joint type %d", (int)def->type);
-    if ((st = tb__body_find(w, def->a, sa)) != TB_OK)
-        return tb__fail(w, TB_ERR_STALE_ID, "joint body a: %s", tb_world_message(w));
-    *sb = -1;
-    if (!TB_ID_IS_NULL(def->b)) {
-        if ((st = tb__body_find(w, def->b, &s)) != TB_OK)
-            return tb__fail(w, TB_ERR_STALE_ID, "joint body b: %s", tb_world_message(w));
-        if (s == *sa)
-            return tb__fail(w, TB_ERR_ARGUMENT, "a joint cannot join a body to itself");
-        *sb = (int32_t)s;
-    }
+    if ((st = check_side(w, def->a, def->particle_a, 0, sa)) != TB_OK ||
+        (st = check_side(w, def->b, def->particle_b, 1, sb)) != TB_OK)
+        return st;
+    if (*sa == *sb)
+        return tb__fail(w, TB_ERR_ARGUMENT, "a joint cannot join a %s to itself", *sa >= 0 ? "body" : "particle");
+    if ((tb__joint_is_particle(*sa) || tb__joint_is_particle(*sb)) && def->type != TB_JOINT_BALL &&
+        def->type != TB_JOINT_DISTANCE)
+        return tb__fail(w, TB_ERR_ARGUMENT, "a particle has no orientation: it takes part in ball and distance "
+                        "joints only");
     if ((st = tb__check_values(w, def->anchor, 3, "joint anchor")) != TB_OK)
         return st;
     if (def->type == TB_JOINT_DISTANCE &&
@@ -136,18 +182,28 @@ static tb_status check_def(tb_world *w, const tb_joint_def *def, uint32_t *sa, i
     return TB_OK;
 }
 
+/* Where side k's end of a new joint is: a particle's position, else the
+   anchor it names */
+static const double *end_point(const tb_world *w, int32_t slot, const double *anchor)
+{
+    return tb__joint_is_particle(slot) ? w->y + w->off[TB__PARTICLE_POS] + 3 * tb__joint_particle_slot(slot) : anchor;
+}
+
 tb_status tb_world_add_joint(tb_world *w, const tb_joint_def *def, tb_joint_id *id)
 {
     double frame[9], xa[3], Ra[9], xb[3], Rb[9], n, length = 0;
-    const double *anchor_b;
+    const double *anchor_a, *anchor_b;
     tb_joint_id made;
     tb_status st;
-    uint32_t sa, j;
-    int32_t sb;
+    uint32_t j;
+    int32_t sa, sb;
     TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "add a joint")) != TB_OK || (st = check_def(w, def, &sa, &sb)) != TB_OK)
         return st;
-    anchor_b = def->type == TB_JOINT_DISTANCE ? def->anchor_b : def->anchor;
+    /* a particle is its own anchor; a ball joint holds it at `anchor` on
+       the other side */
+    anchor_a = end_point(w, sa, def->anchor);
+    anchor_b = end_point(w, sb, def->type == TB_JOINT_DISTANCE ? def->anchor_b : def->anchor);
     /* the joint's axes: the axis (z for the types that have none), then two
        square to it */
     n = def->type == TB_JOINT_HINGE || def->type == TB_JOINT_SLIDER ? tb__norm3(def->axis) : 1;
@@ -160,8 +216,7 @@ tb_status tb_world_add_joint(tb_world *w, const tb_joint_def *def, tb_joint_id *
         frame[0] = 0, frame[1] = 0, frame[2] = 1;
     square_to(frame, frame + 3, frame + 6);
     if (def->type == TB_JOINT_DISTANCE) {
-        const double d[3] = { def->anchor[0] - anchor_b[0], def->anchor[1] - anchor_b[1],
-                              def->anchor[2] - anchor_b[2] };
+        const double d[3] = { anchor_a[0] - anchor_b[0], anchor_a[1] - anchor_b[1], anchor_a[2] - anchor_b[2] };
         length = def->length >= 0 ? def->length : tb__norm3(d);
         if (!tb__in_scale(length))
             return tb__fail(w, TB_ERR_ARGUMENT, "distance joint length %g m: it must be from %g to %g m (its ends "
@@ -179,17 +234,25 @@ tb_status tb_world_add_joint(tb_world *w, const tb_joint_def *def, tb_joint_id *
     }
     j = (uint32_t)w->joint_count++;
     w->body_removed[TB__HEARS_JOINTS] = body_removed;
+    w->particle_removed[TB__HEARS_PARTICLE_JOINTS] = particle_removed;
     w->joint_type[j] = (uint32_t)def->type;
-    w->joint_body[2 * j] = def->a.index1;
-    w->joint_body[2 * j + 1] = sb >= 0 ? def->b.index1 : 0;
-    pose_of(w, (int32_t)sa, w->y, xa, Ra);
-    pose_of(w, sb, w->y, xb, Rb);
-    into_frame(xa, Ra, def->anchor, frame, w->joint_anchor + 6 * j, w->joint_frame + 18 * j);
+    w->joint_body[2 * j] = tb__joint_is_particle(sa) ? def->particle_a.index1 : def->a.index1;
+    w->joint_body[2 * j + 1] = tb__joint_is_particle(sb) ? def->particle_b.index1 : sb >= 0 ? def->b.index1 : 0;
+    w->joint_flags[j] = (def->collide ? TB__JOINT_COLLIDE : 0) | (tb__joint_is_particle(sa) ? TB__JOINT_PARTICLE_A : 0) |
+                        (tb__joint_is_particle(sb) ? TB__JOINT_PARTICLE_B : 0);
+    /* a particle's end is the particle: its anchor is 0 in an unturned frame */
+    pose_of(w, sa >= 0 ? sa : -1, w->y, xa, Ra);
+    pose_of(w, sb >= 0 ? sb : -1, w->y, xb, Rb);
+    if (tb__joint_is_particle(sa))
+        memcpy(xa, anchor_a, sizeof xa);
+    if (tb__joint_is_particle(sb))
+        memcpy(xb, anchor_b, sizeof xb);
+    into_frame(xa, Ra, anchor_a, frame, w->joint_anchor + 6 * j, w->joint_frame + 18 * j);
     into_frame(xb, Rb, anchor_b, frame, w->joint_anchor + 6 * j + 3, w->joint_frame + 18 * j + 9);
     w->joint_length[j] = length;
-    w->joint_collide[j] = def->collide != 0;
     memset(w->joint_reaction + 6 * j, 0, 6 * sizeof(double));
-    tb__wake_body(w, sa);
+    if (sa >= 0)
+        tb__wake_body(w, (uint32_t)sa);
     if (sb >= 0)
         tb__wake_body(w, (uint32_t)sb);
     tb__ids_acquire(&w->joint_ids, w->id_tag, j, &made.index1, &made.generation);
@@ -234,8 +297,8 @@ tb_status tb_world_remove_joint(tb_world *w, tb_joint_id id)
     if ((st = tb__check_busy(w, "remove a joint")) != TB_OK || (st = find(w, id, &j)) != TB_OK)
         return st;
     for (k = 0; k < 2; ++k) /* what it held may fall */
-        if (slot_of(w, j, k) >= 0)
-            tb__wake_body(w, (uint32_t)slot_of(w, j, k));
+        if (body_slot_of(w, j, k) >= 0)
+            tb__wake_body(w, (uint32_t)body_slot_of(w, j, k));
     remove_slot(w, j);
     return TB_OK;
 }
@@ -289,13 +352,29 @@ tb_status tb_joint_error(const tb_world *w, tb_joint_id id, double *error)
     return TB_OK;
 }
 
-/* A removed body takes its joints with it */
-static void body_removed(tb_world *w, uint32_t body_index1)
+/* A removed body or particle takes its joints with it */
+static void remove_holding(tb_world *w, uint32_t index1, int particle)
 {
     size_t j = w->joint_count;
+    int k;
     while (j-- > 0)
-        if (w->joint_body[2 * j] == body_index1 || w->joint_body[2 * j + 1] == body_index1)
-            remove_slot(w, (uint32_t)j);
+        for (k = 0; k < 2; ++k)
+            if (w->joint_body[2 * j + k] == index1 && holds_particle(w, j, k) == particle) {
+                remove_slot(w, (uint32_t)j);
+                break;
+            }
+}
+
+static void body_removed(tb_world *w, uint32_t body_index1)
+{
+    remove_holding(w, body_index1, 0);
+}
+
+/* (called before the particle's id is released: its slot names it) */
+static void particle_removed(tb_world *w, uint32_t slot, uint32_t last)
+{
+    (void)last;
+    remove_holding(w, w->particle_ids.owner[slot] + 1, 1);
 }
 
 void tb__joints_free(tb_world *w)

@@ -10,10 +10,27 @@
 /* A joint's most rows (FIXED) */
 #define TB__JOINT_ROWS 6
 
-/* One end of a joint at a state: a body's pose and velocities, or the
-   world's (at rest, at the origin, unturned) */
+/* A joint's end: a body's slot (>= 0), the world (TB__JOINT_WORLD), or a
+   particle's slot p as -2 - p */
+#define TB__JOINT_WORLD (-1)
+static inline int32_t tb__joint_particle_end(uint32_t p)
+{
+    return -2 - (int32_t)p;
+}
+static inline int tb__joint_is_particle(int32_t end)
+{
+    return end <= -2;
+}
+static inline uint32_t tb__joint_particle_slot(int32_t end)
+{
+    return (uint32_t)(-2 - end);
+}
+
+/* One end of a joint at a state: a body's pose and velocities, a
+   particle's (unturned, no spin), or the world's (at rest, at the
+   origin, unturned) */
 typedef struct tb__joint_end {
-    int32_t slot;          /* the body's slot; -1: the world */
+    int32_t slot;          /* as above */
     double x[3], R[9];     /* m: centre of mass; world from principal axes */
     double v[3], w[3];     /* m/s, rad/s */
 } tb__joint_end;
@@ -23,7 +40,7 @@ typedef struct tb__joint_end {
    (the Jacobian J), and its second derivative J times the accelerations
    plus `bias`, what the motion alone adds (dJ/dt times the velocities). */
 typedef struct tb__joint_row {
-    int32_t a, b;          /* body slots; -1: the world */
+    int32_t a, b;          /* ends, as above */
     double lin_a[3], ang_a[3], lin_b[3], ang_b[3];
     double bias;           /* 1/s^2 times C's unit */
     double error;          /* C now: m, or the cosine of axes that should be square */

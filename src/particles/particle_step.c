@@ -60,6 +60,11 @@ static void accelerate(const tb_world *w, size_t b, size_t count, const double *
     }
 }
 
+void tb__particle_acceleration(const tb_world *w, size_t s, const double v[3], double out[3])
+{
+    accelerate(w, s, 1, w->force_ready ? w->particle_force + 3 * s : NULL, v, out, 1, 0);
+}
+
 void tb__particle_derive(tb_world *w, const double *y, double *dy)
 {
     const double *vel = y + w->off[TB__PARTICLE_VEL];

@@ -92,8 +92,12 @@ tb_status tb_world_remove_particle(tb_world *w, tb_particle_id id)
     if ((st = find(w, id, &slot)) != TB_OK)
         return st;
     last = (uint32_t)w->particle_count - 1;
-    if (w->particle_removed)
-        w->particle_removed(w, slot, last);
+    {
+        int k;
+        for (k = 0; k < 2; ++k)
+            if (w->particle_removed[k])
+                w->particle_removed[k](w, slot, last);
+    }
     if (slot != last) {
         tb__state_move(w, TB__PARTICLES, last, slot);
         w->particle_mass[slot] = w->particle_mass[last];

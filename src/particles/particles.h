@@ -12,6 +12,9 @@
    forces) / m, the global forces already in w->particle_force
    (particle_step.c, as the rest of this list). */
 void tb__particle_derive(tb_world *w, const double *y, double *dy);
+/* dv/dt of particle slot s at velocity v: its local forces and, when
+   ready, w->particle_force, over its mass (0 when pinned). */
+void tb__particle_acceleration(const tb_world *w, size_t s, const double v[3], double out[3]);
 /* The split methods' kicks and drifts over every particle: the one-pass
    kernel where it applies, else the general blocked sweep. */
 void tb__particle_sweep(tb_world *w, const tb__split_op *ops, int n);

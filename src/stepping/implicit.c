@@ -15,6 +15,7 @@
    exactly backward Euler, which multiplies v^2 + w^2 x^2 by 1 / (1 + (h w)^2)
    each step (energy x0.535 per period at h w = 0.1). */
 #include "stepping/stepping.h"
+#include "joints/joints.h"
 #include "bodies/bodies.h"
 #include "forces/forces.h"
 #include "particles/particles.h"
@@ -190,14 +191,19 @@ tb_status tb__implicit_particles(tb_world *w, double h)
     return TB_OK;
 }
 
-/* The whole step: particles implicitly, bodies by a kick and a drift. */
+/* The whole step: particles implicitly, bodies by a kick and a drift;
+   both held on their joints through it (tb__joints_hold, shake). */
 tb_status tb__implicit_step(tb_world *w, double h)
 {
     const tb__split_op kick_drift[2] = { { 0, h, TB__ROTATE_SPLIT2, 0 }, { 1, h, TB__ROTATE_SPLIT2, 0 } };
     tb_status st = tb__split_prepare(w, w->time, NULL);
+    if (st == TB_OK && w->joint_count)
+        st = tb__joints_hold(w);
     if (st == TB_OK && w->particle_count)
         st = tb__implicit_particles(w, h);
     if (st == TB_OK && w->body_count)
-        st = tb__split_sweep_bodies(w, kick_drift, 2);
+        tb__body_sweep(w, kick_drift, 2);
+    if (st == TB_OK && w->joint_count)
+        st = tb__joints_shake(w, h, TB__ROTATE_SPLIT2);
     return st;
 }

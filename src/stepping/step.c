@@ -89,29 +89,21 @@ tb_status tb__split_prepare(tb_world *w, double t, const double *seen)
     return tb__global_forces(w, t, w->y, seen ? seen : w->y);
 }
 
-tb_status tb__split_sweep_bodies(tb_world *w, const tb__split_op *ops, int n)
+tb_status tb__split_sweep(tb_world *w, const tb__split_op *ops, int n)
 {
     const tb__split_op *drift = NULL;
     tb_status st;
     int i;
-    for (i = 0; i < n; ++i)
+    for (i = 0; i < n && w->joint_count; ++i)
         if (ops[i].drift)
             drift = &ops[i];
-    if (!w->joint_count || !drift) {
-        tb__body_sweep(w, ops, n);
-        return TB_OK;
-    }
-    if ((st = tb__joints_hold(w)) != TB_OK)
+    if (drift && (st = tb__joints_hold(w)) != TB_OK)
         return st;
-    tb__body_sweep(w, ops, n);
-    return tb__joints_shake(w, drift->h, drift->rotation);
-}
-
-tb_status tb__split_sweep(tb_world *w, const tb__split_op *ops, int n)
-{
     if (w->particle_count)
         tb__particle_sweep(w, ops, n);
-    return w->body_count ? tb__split_sweep_bodies(w, ops, n) : TB_OK;
+    if (w->body_count)
+        tb__body_sweep(w, ops, n);
+    return drift ? tb__joints_shake(w, drift->h, drift->rotation) : TB_OK;
 }
 
 /* RK4 one block of objects at a time through all four stages, when nothing

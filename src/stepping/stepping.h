@@ -40,12 +40,10 @@ int tb__fused_rk4(tb_world *w, double h);
    or NULL for the current state); the kicks of tb__split_sweep add the local
    forces (gravity, drag, damping, held forces), also seeing `seen`. */
 tb_status tb__split_prepare(tb_world *w, double t, const double *seen);
-/* The ops over every object; a list that drifts holds the bodies on
-   their joints through its drift (joints.h: tb__joints_hold, shake),
-   which must be its last op then. tb__split_sweep_bodies: the bodies
-   alone. */
+/* The ops over every object; a list that drifts holds the bodies and
+   particles on their joints through its drift (joints.h:
+   tb__joints_hold, shake), which must be its last op then. */
 tb_status tb__split_sweep(tb_world *w, const tb__split_op *ops, int n);
-tb_status tb__split_sweep_bodies(tb_world *w, const tb__split_op *ops, int n);
 /* Whether any force depends on velocity (drag, damping, callbacks). */
 int tb__split_velocity_dependent(const tb_world *w);
 /* saved = 2 y - saved on the velocities and momenta: with saved = y_n and

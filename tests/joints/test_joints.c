@@ -372,6 +372,86 @@ static void jointed_bodies_pass_through_each_other(void **state)
     }
 }
 
+/* ---- particles on joints ---------------------------------------------------------
+   A rope of ten 50 g particles on 10 cm rods, its first tied to a fixed
+   point, released from the horizontal: every rod holds to rounding under
+   each method at 60 Hz for 5 s, and the energy stays within 0.1 J of its
+   start (the rope's drop is n m g L / 2 = 2.45 J; measured 2.6e-2 J for
+   verlet, 5.5e-2 for symplectic Euler, 4e-7 for rk4: the whip of its
+   free end). A particle tied to the tip of a hinged beam goes round with
+   it. Removing a particle removes its joints. */
+static void particles_hang_on_rods(void **state)
+{
+    const char *methods[] = { "verlet", "rk4", "symplectic_euler" };
+    int m, i, s;
+    (void)state;
+    for (m = 0; m < 3; ++m) {
+        tb_world *w = world(methods[m], G);
+        tb_particle_id previous = { 0, 0 }, first = { 0, 0 };
+        double e0, most = 0, worst = 0;
+        for (i = 0; i < 10; ++i) {
+            tb_particle_def pd = tb_default_particle_def();
+            tb_joint_def jd = tb_default_joint_def();
+            tb_particle_id id;
+            pd.mass = 0.05, pd.position[0] = 0.1 * i;
+            assert_int_equal(tb_world_add_particle(w, &pd, &id), TB_OK);
+            jd.particle_a = id;
+            if (i) {
+                jd.type = TB_JOINT_DISTANCE, jd.particle_b = previous;
+            } else {
+                first = id; /* held where it is: a ball joint at its position */
+            }
+            assert_int_equal(tb_world_add_joint(w, &jd, NULL), TB_OK);
+            previous = id;
+        }
+        e0 = tb_world_energy(w).total;
+        for (s = 0; s < 300; ++s) {
+            size_t j;
+            assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+            for (j = 0; j < tb_world_joint_count(w); ++j) {
+                double e;
+                assert_int_equal(tb_joint_error(w, tb_world_joint_at(w, j), &e), TB_OK);
+                worst = fmax(worst, e);
+            }
+            most = fmax(most, tb_world_energy(w).total - e0);
+        }
+        print_message("%s: rope of 10 particles, rods within %.1e m, energy gained at most %.2e J\n", methods[m],
+                      worst, most);
+        assert_below(worst, 1e-12);
+        assert_below(most, 0.1);
+        assert_int_equal(tb_world_remove_particle(w, first), TB_OK); /* its tie and its first rod go */
+        assert_int_equal(tb_world_joint_count(w), 8);
+        tb_world_destroy(w);
+    }
+    {
+        tb_world *w = world("verlet", G);
+        const double size[3] = { 1, 0.1, 0.1 }, x[3] = { 0.5, 0, 0 }, q[4] = { 1, 0, 0, 0 }, axis[3] = { 0, 1, 0 };
+        const double pivot[3] = { 0, 0, 0 };
+        const tb_body_id none = { 0, 0 };
+        tb_body_id beam = box(w, 2, size, x, q);
+        tb_particle_def pd = tb_default_particle_def();
+        tb_joint_def jd = tb_default_joint_def();
+        tb_particle_id tip;
+        tb_joint_id tie;
+        double p[3], e;
+        joint(w, TB_JOINT_HINGE, beam, none, pivot, axis);
+        pd.mass = 0.5, pd.position[0] = 1;
+        assert_int_equal(tb_world_add_particle(w, &pd, &tip), TB_OK);
+        jd.particle_a = tip, jd.b = beam, jd.anchor[0] = 1;
+        assert_int_equal(tb_world_add_joint(w, &jd, &tie), TB_OK);
+        for (s = 0; s < 30; ++s)
+            assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+        tb_particle_position(w, tip, p);
+        assert_int_equal(tb_joint_error(w, tie, &e), TB_OK);
+        assert_below(e, 1e-12);
+        assert_rel(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]), 1, 1e-12); /* the tip, 1 m from the pivot */
+        assert_true(p[2] < -0.5);                                              /* swung down */
+        jd.type = TB_JOINT_HINGE; /* a particle has no axis to hold */
+        assert_int_equal(tb_world_add_joint(w, &jd, NULL), TB_ERR_ARGUMENT);
+        tb_world_destroy(w);
+    }
+}
+
 /* ---- the API ------------------------------------------------------------------ */
 static void bad_joints_are_refused(void **state)
 {
@@ -481,6 +561,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(double_pendulum_keeps_its_energy),
     cmocka_unit_test(reaction_carries_the_weight),
     cmocka_unit_test(jointed_bodies_pass_through_each_other),
+    cmocka_unit_test(particles_hang_on_rods),
     cmocka_unit_test(bad_joints_are_refused),
     cmocka_unit_test(removing_a_body_removes_its_joints),
     cmocka_unit_test(snapshots_keep_the_joints),

@@ -494,10 +494,18 @@ static void joints_from_lua(void **state)
                  "local fx, fy, fz, tx, ty, tz = h:reaction()\n"
                  "assert(math.abs(fz - 3 * 9.81) < 1e-9 and math.abs(fx) < 1e-9 and tostring(h):find('tumble.joint'))\n"
                  "d = w:joint{ type = 'distance', a = b, b = r, anchor = {1, 0, 0}, anchor_b = {5, 0, -1} }\n"
-                 "d:remove()\n");
+                 "d:remove()\n"
+                 "p = w:particle{ pos = {0, 2, 0}, mass = 0.1 }\n"
+                 "q = w:particle{ pos = {0, 2.5, 0}, mass = 0.1 }\n"
+                 "w:joint{ a = p, anchor = {0, 2, 0} }\n"
+                 "rod = w:joint{ type = 'distance', a = q, b = p }\n"
+                 "for i = 1, 30 do w:step(1/60) end\n"
+                 "local px, py, pz = p:pos(); local qx, qy, qz = q:pos()\n"
+                 "assert(px == 0 and py == 2 and pz == 0 and rod:error() < 1e-12 and qz < -0.1)\n");
+    expect_error(L, "w:joint{ type = 'hinge', a = p }", "ball and distance");
     expect_error(L, "d:error()", "removed");
     expect_error(L, "w:joint{ type = 'rope', a = b }", "invalid option 'rope'");
-    expect_error(L, "w:joint{ type = 'ball' }", "'a' (a body) is required");
+    expect_error(L, "w:joint{ type = 'ball' }", "'a' (a body or a particle) is required");
     expect_error(L, "w:joint{ a = b, b = b }", "itself");
     expect_error(L, "w:joint{ a = b, anchor = {0/0, 0, 0} }", "finite");
     expect_error(L, "w:joint{ type = 'hinge', a = b, axis = {0, 0, 0} }", "no direction");
