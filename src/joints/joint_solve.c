@@ -26,13 +26,17 @@
 /* A row's pivot under DROP times its diagonal: it depends on the rows
    before it (a closed loop's last joint), and is left out */
 #define DROP 1e-10
-/* Newton steps of the projection at most; each doubles the error's digits */
-#define PROJECTION_STEPS 8
+/* Newton steps of the projection at most: each doubles the error's digits
+   near the joints, and from farther (the free drift of an implicit step)
+   each takes off a share */
+#define PROJECTION_STEPS 30
 /* SHAKE's steps at most: each takes the error down by about the turn of
    the rows over the step */
 #define SHAKE_STEPS 40
 /* halvings of a Newton step that left the error larger, at most */
 #define BACKTRACKS 6
+/* m (or the cosine of square axes): SHAKE left more than this unmet */
+#define UNMET 1e-10
 
 struct tb__joint_work {
     tb__joint_row *rows;
@@ -56,6 +60,8 @@ struct tb__joint_work {
     double *start;           /* [7 nodes] x and q at the start of a drift (tb__joints_hold) */
     int32_t *moved;          /* [nodes] the ends the joints move, moved_count of them */
     double *kept;            /* [7 nodes] a Newton step's starting poses or momenta */
+    double *half;            /* [7 nodes] the momenta SHAKE started from; the momenta a
+                                projection step started from */
     size_t moved_count;
     size_t body_cap;         /* nodes */
     unsigned now;            /* this set-up's stamp */
@@ -110,12 +116,12 @@ static tb_status reserve(tb_world *w, size_t rows)
         k->joint_cap = cap;
     }
     if (w->body_count + w->particle_count > k->body_cap) {
-        void **arrays[6] = { (void **)&k->accel, (void **)&k->body_row, (void **)&k->stamp, (void **)&k->start,
-                             (void **)&k->moved, (void **)&k->kept };
-        const size_t sizes[6] = { 6 * sizeof(double), sizeof(size_t), sizeof(unsigned), 7 * sizeof(double),
-                                  sizeof(int32_t), 7 * sizeof(double) };
+        void **arrays[7] = { (void **)&k->accel, (void **)&k->body_row, (void **)&k->stamp, (void **)&k->start,
+                             (void **)&k->moved, (void **)&k->kept, (void **)&k->half };
+        const size_t sizes[7] = { 6 * sizeof(double), sizeof(size_t), sizeof(unsigned), 7 * sizeof(double),
+                                  sizeof(int32_t), 7 * sizeof(double), 7 * sizeof(double) };
         const size_t cap = 2 * (w->body_count + w->particle_count);
-        if ((st = tb__grow(w, arrays, sizes, 6, 0, k->body_cap, cap)) != TB_OK)
+        if ((st = tb__grow(w, arrays, sizes, 7, 0, k->body_cap, cap)) != TB_OK)
             return st;
         memset(k->stamp, 0, cap * sizeof *k->stamp);
         k->body_cap = cap;
@@ -377,12 +383,12 @@ static double largest_error(const struct tb__joint_work *k, size_t rows)
 /* The moved ends' poses (keep_poses: a body's x and q, a particle's x)
    or momenta (keep_momenta: a body's P and L, a particle's v) kept (keep
    1), or put back (keep 0) */
-static void keep_state(tb_world *w, struct tb__joint_work *k, int poses, int keep)
+static void keep_state(tb_world *w, struct tb__joint_work *k, double *buffer, int poses, int keep)
 {
     size_t i;
     for (i = 0; i < k->moved_count; ++i) {
         const int32_t s = k->moved[i];
-        double *kept = k->kept + 7 * node(w, s), *a, *b = NULL;
+        double *kept = buffer + 7 * node(w, s), *a, *b = NULL;
         int n1 = 3, n2 = poses ? 4 : 3;
         if (s >= 0) {
             a = w->y + w->off[poses ? TB__BODY_POS : TB__BODY_MOM] + 3 * s;
@@ -399,66 +405,107 @@ static void keep_state(tb_world *w, struct tb__joint_work *k, int poses, int kee
 
 static void keep_poses(tb_world *w, struct tb__joint_work *k, int keep)
 {
-    keep_state(w, k, 1, keep);
+    keep_state(w, k, k->kept, 1, keep);
 }
 
 static void keep_momenta(tb_world *w, struct tb__joint_work *k, int keep)
 {
-    keep_state(w, k, 0, keep);
+    keep_state(w, k, k->kept, 0, keep);
+}
+
+static void keep_momenta_from(tb_world *w, struct tb__joint_work *k, double *buffer, int keep)
+{
+    keep_state(w, k, buffer, 0, keep);
+}
+
+/* The moved ends put on their joints by Newton steps that move each
+   through its inverse mass and inertia (lowest in kinetic-energy norm),
+   while they still halve the error (after that it is rounding); a step
+   that left it larger is taken back (a chain whipping its light end round
+   turned its links by more than the step's linear model holds, and the
+   step threw them apart). With h > 0, each step's impulse over h (J^T
+   delta / h, what moved the ends) goes to their momenta and the
+   reactions too: the step of an implicit method (tb__joints_shake). */
+static tb_status project_positions(tb_world *w, double h)
+{
+    double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
+    double *px = w->y + w->off[TB__PARTICLE_POS];
+    struct tb__joint_work *k;
+    double most, next = 0;
+    size_t rows, i;
+    tb_status st;
+    int step, tries, d;
+    if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+        return st;
+    k = w->joint_work;
+    most = largest_error(k, rows);
+    for (step = 0; step < PROJECTION_STEPS && most > 0; ++step) {
+        double share = 1;
+        for (i = 0; i < rows; ++i)
+            k->x[i] = -k->rows[i].error;
+        solve(k, rows);
+        memcpy(k->newton, k->x, rows * sizeof *k->newton);
+        /* the rows of this pose, weighted, move the ends: kept aside (in
+           SHAKE's room, unused after it), since each trial below sets the
+           rows up again */
+        if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows, sizeof *k->held)) != TB_OK ||
+            (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows,
+                              sizeof *k->held_weighted)) != TB_OK)
+            return st;
+        memcpy(k->held, k->rows, rows * sizeof *k->held);
+        memcpy(k->held_weighted, k->weighted, rows * sizeof *k->held_weighted);
+        keep_poses(w, k, 1);
+        for (tries = 0; tries < BACKTRACKS; ++tries, share /= 2) {
+            for (i = 0; i < rows; ++i) {
+                const tb__joint_row *r = &k->held[i];
+                const double *m = k->held_weighted[i];
+                int side;
+                for (side = 0; side < 2; ++side) {
+                    const int32_t s = side ? r->b : r->a;
+                    double turn[3];
+                    if (tb__joint_is_particle(s))
+                        for (d = 0; d < 3; ++d)
+                            px[3 * tb__joint_particle_slot(s) + d] += m[6 * side + d] * share * k->newton[i];
+                    if (s < 0)
+                        continue;
+                    for (d = 0; d < 3; ++d) {
+                        x[3 * s + d] += m[6 * side + d] * share * k->newton[i];
+                        turn[d] = m[6 * side + 3 + d] * share * k->newton[i];
+                    }
+                    tb__rotation_isotropic(q + 4 * s, turn, 1, 1);
+                }
+            }
+            if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+                return st;
+            next = largest_error(k, rows);
+            if (next < most)
+                break;
+            keep_poses(w, k, 0);
+        }
+        if (!(next < most))
+            break; /* no share helped: the poses as they were */
+        if (h > 0) { /* what moved the ends, over h */
+            for (i = 0; i < rows; ++i)
+                k->x[i] = share * k->newton[i] / h;
+            apply(w, k->held, rows, k->x, 0);
+            add_reactions(w, k, k->held, k->lever);
+        }
+        if (!(next < 0.5 * most) && next < UNMET)
+            break; /* rounding */
+        most = next;
+    }
+    return TB_OK;
 }
 
 tb_status tb__joints_project(tb_world *w, double h)
 {
-    double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
-    double *px = w->y + w->off[TB__PARTICLE_POS];
-    double last = INFINITY;
     struct tb__joint_work *k;
     size_t rows, i;
     tb_status st;
-    int step, d;
     if (w->joint_count == 0)
         return TB_OK;
-    /* positions: Newton steps while they still halve the error (after
-       that it is rounding); a step that left it larger is taken back (a
-       chain whipping its light end round turned its links by more than
-       the step's linear model holds, and the step threw them apart) */
-    for (step = 0; step < PROJECTION_STEPS; ++step) {
-        double e;
-        if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
-            return st;
-        k = w->joint_work;
-        e = largest_error(k, rows);
-        if (step > 0 && !(e < last)) {
-            keep_poses(w, k, 0);
-            break;
-        }
-        if (e == 0 || !(e < 0.5 * last))
-            break;
-        last = e;
-        keep_poses(w, k, 1);
-        for (i = 0; i < rows; ++i)
-            k->x[i] = -k->rows[i].error;
-        solve(k, rows);
-        for (i = 0; i < rows; ++i) {
-            const tb__joint_row *r = &k->rows[i];
-            const double *m = k->weighted[i];
-            int side;
-            for (side = 0; side < 2; ++side) {
-                const int32_t s = side ? r->b : r->a;
-                double turn[3];
-                if (tb__joint_is_particle(s))
-                    for (d = 0; d < 3; ++d)
-                        px[3 * tb__joint_particle_slot(s) + d] += m[6 * side + d] * k->x[i];
-                if (s < 0)
-                    continue;
-                for (d = 0; d < 3; ++d) {
-                    x[3 * s + d] += m[6 * side + d] * k->x[i];
-                    turn[d] = m[6 * side + 3 + d] * k->x[i];
-                }
-                tb__rotation_isotropic(q + 4 * s, turn, 1, 1);
-            }
-        }
-    }
+    if ((st = project_positions(w, 0)) != TB_OK)
+        return st;
     /* velocities: the rows' rates taken out by an impulse */
     if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
         return st;
@@ -567,6 +614,7 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
         return st;
     most = largest_error(k, rows);
     memset(k->total, 0, rows * sizeof *k->total);
+    keep_momenta_from(w, k, k->half, 1);
     for (step = 0; step < SHAKE_STEPS && most > 0; ++step) {
         double share = 1;
         tb__envelope e;
@@ -604,13 +652,25 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
         }
         for (i = 0; i < rows; ++i)
             k->total[i] += share * k->newton[i];
-        if (!(next < 0.5 * most)) /* rounding: no step halves it */
+        if (!(next < 0.5 * most) && next < UNMET) /* rounding: no step halves it */
             break;
         most = next;
     }
+    k->held_count = 0;
+    if (most > UNMET) {
+        /* no impulses along the held rows meet the joints: a mode of the
+           joints faster than the step holds (a light link spinning under
+           a chain's tension) turned them too far. The step is taken as an
+           implicit method takes it: the free drift put on the joints, its
+           displacement's impulse added to the momenta (backward Euler on
+           the joints: that mode is damped, not followed) */
+        keep_momenta_from(w, k, k->half, 0);
+        for (i = 0; i < k->moved_count; ++i)
+            drift_again(w, k, k->moved[i], h, rotation);
+        return project_positions(w, h);
+    }
     memcpy(k->x, k->total, rows * sizeof *k->x);
     add_reactions(w, k, k->held, k->held_lever);
-    k->held_count = 0;
     return TB_OK;
 }
 
@@ -695,6 +755,7 @@ void tb__joint_work_free(tb_world *w)
     tb__alloc(w, k->start, k->body_cap * 7 * sizeof *k->start, 0);
     tb__alloc(w, k->moved, k->body_cap * sizeof *k->moved, 0);
     tb__alloc(w, k->kept, k->body_cap * 7 * sizeof *k->kept, 0);
+    tb__alloc(w, k->half, k->body_cap * 7 * sizeof *k->half, 0);
     tb__alloc(w, k->held, k->held_cap * sizeof *k->held, 0);
     tb__alloc(w, k->apart, k->apart_cap * sizeof *k->apart, 0);
     tb__alloc(w, k->held_weighted, k->held_weighted_cap * sizeof *k->held_weighted, 0);
