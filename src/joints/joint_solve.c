@@ -37,6 +37,9 @@
 #define BACKTRACKS 6
 /* m (or the cosine of square axes): SHAKE left more than this unmet */
 #define UNMET 1e-10
+/* ... and an error this small is met: rounding on metre-sized joints (a
+   larger world stops where a step no longer halves its error) */
+#define MET 1e-14
 
 struct tb__joint_work {
     tb__joint_row *rows;
@@ -60,8 +63,8 @@ struct tb__joint_work {
     double *start;           /* [7 nodes] x and q at the start of a drift (tb__joints_hold) */
     int32_t *moved;          /* [nodes] the ends the joints move, moved_count of them */
     double *kept;            /* [7 nodes] a Newton step's starting poses or momenta */
-    double *half;            /* [7 nodes] the momenta SHAKE started from; the momenta a
-                                projection step started from */
+    double *half;            /* [7 nodes] the momenta SHAKE started from */
+    tb__joint_end *ends;     /* [nodes] each end at this set-up's state */
     size_t moved_count;
     size_t body_cap;         /* nodes */
     unsigned now;            /* this set-up's stamp */
@@ -116,12 +119,13 @@ static tb_status reserve(tb_world *w, size_t rows)
         k->joint_cap = cap;
     }
     if (w->body_count + w->particle_count > k->body_cap) {
-        void **arrays[7] = { (void **)&k->accel, (void **)&k->body_row, (void **)&k->stamp, (void **)&k->start,
-                             (void **)&k->moved, (void **)&k->kept, (void **)&k->half };
-        const size_t sizes[7] = { 6 * sizeof(double), sizeof(size_t), sizeof(unsigned), 7 * sizeof(double),
-                                  sizeof(int32_t), 7 * sizeof(double), 7 * sizeof(double) };
+        void **arrays[8] = { (void **)&k->accel, (void **)&k->body_row, (void **)&k->stamp, (void **)&k->start,
+                             (void **)&k->moved, (void **)&k->kept, (void **)&k->half, (void **)&k->ends };
+        const size_t sizes[8] = { 6 * sizeof(double), sizeof(size_t), sizeof(unsigned), 7 * sizeof(double),
+                                  sizeof(int32_t), 7 * sizeof(double), 7 * sizeof(double),
+                                  sizeof(tb__joint_end) };
         const size_t cap = 2 * (w->body_count + w->particle_count);
-        if ((st = tb__grow(w, arrays, sizes, 7, 0, k->body_cap, cap)) != TB_OK)
+        if ((st = tb__grow(w, arrays, sizes, 8, 0, k->body_cap, cap)) != TB_OK)
             return st;
         memset(k->stamp, 0, cap * sizeof *k->stamp);
         k->body_cap = cap;
@@ -196,8 +200,16 @@ static tb_status set_up(tb_world *w, const double *y, const double *seen, int fo
         tb__joint_end e[2];
         size_t first = rows;
         int n, r, side;
-        tb__joint_end_at(w, j, 0, y, seen, &e[0]);
-        tb__joint_end_at(w, j, 1, y, seen, &e[1]);
+        for (side = 0; side < 2; ++side) { /* each end once a set-up */
+            const int32_t s = tb__joint_end_slot(w, j, side);
+            if (s == TB__JOINT_WORLD) {
+                tb__joint_end_of(w, s, y, seen, &e[side]);
+                continue;
+            }
+            if (k->stamp[node(w, s)] != k->now)
+                tb__joint_end_of(w, s, y, seen, &k->ends[node(w, s)]);
+            e[side] = k->ends[node(w, s)];
+        }
         k->row_start[j] = rows;
         tb__mul(e[0].R, w->joint_anchor + 6 * j, k->lever + 3 * j);
         n = tb__joint_rows(w, j, &e[0], &e[1], k->rows + rows);
@@ -439,7 +451,7 @@ static tb_status project_positions(tb_world *w, double h)
         return st;
     k = w->joint_work;
     most = largest_error(k, rows);
-    for (step = 0; step < PROJECTION_STEPS && most > 0; ++step) {
+    for (step = 0; step < PROJECTION_STEPS && most > MET; ++step) {
         double share = 1;
         for (i = 0; i < rows; ++i)
             k->x[i] = -k->rows[i].error;
@@ -615,7 +627,7 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
     most = largest_error(k, rows);
     memset(k->total, 0, rows * sizeof *k->total);
     keep_momenta_from(w, k, k->half, 1);
-    for (step = 0; step < SHAKE_STEPS && most > 0; ++step) {
+    for (step = 0; step < SHAKE_STEPS && most > MET; ++step) {
         double share = 1;
         tb__envelope e;
         /* Newton's step: the impulse along the held rows whose drift
@@ -756,6 +768,7 @@ void tb__joint_work_free(tb_world *w)
     tb__alloc(w, k->moved, k->body_cap * sizeof *k->moved, 0);
     tb__alloc(w, k->kept, k->body_cap * 7 * sizeof *k->kept, 0);
     tb__alloc(w, k->half, k->body_cap * 7 * sizeof *k->half, 0);
+    tb__alloc(w, k->ends, k->body_cap * sizeof *k->ends, 0);
     tb__alloc(w, k->held, k->held_cap * sizeof *k->held, 0);
     tb__alloc(w, k->apart, k->apart_cap * sizeof *k->apart, 0);
     tb__alloc(w, k->held_weighted, k->held_weighted_cap * sizeof *k->held_weighted, 0);

@@ -78,10 +78,20 @@ static int32_t body_slot_of(const tb_world *w, size_t j, int k)
     return s >= 0 ? s : -1;
 }
 
+int32_t tb__joint_end_slot(const tb_world *w, size_t j, int k)
+{
+    return slot_of(w, j, k);
+}
+
 void tb__joint_end_at(const tb_world *w, size_t j, int k, const double *y, const double *seen, tb__joint_end *end)
 {
+    tb__joint_end_of(w, slot_of(w, j, k), y, seen, end);
+}
+
+void tb__joint_end_of(const tb_world *w, int32_t slot, const double *y, const double *seen, tb__joint_end *end)
+{
     int d;
-    end->slot = slot_of(w, j, k);
+    end->slot = slot;
     pose_of(w, end->slot >= 0 ? end->slot : -1, y, end->x, end->R);
     memset(end->v, 0, sizeof end->v);
     memset(end->w, 0, sizeof end->w);

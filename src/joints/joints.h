@@ -52,6 +52,9 @@ int tb__joint_row_count(uint32_t type);
 /* The end of joint j's side k (0: a, 1: b) at positions from y and
    momenta from seen */
 void tb__joint_end_at(const tb_world *w, size_t j, int k, const double *y, const double *seen, tb__joint_end *end);
+/* ... in two parts: which end (as above), and that end at a state */
+int32_t tb__joint_end_slot(const tb_world *w, size_t j, int k);
+void tb__joint_end_of(const tb_world *w, int32_t slot, const double *y, const double *seen, tb__joint_end *end);
 void tb__joints_free(tb_world *w);
 
 /* ---- joint_rows.c -------------------------------------------------------- */
