@@ -1,20 +1,29 @@
-/* joint_solve.c: the joints' forces in each force evaluation, and the
-   projection after each step (docs/joints.md).
-   The forces: the joints' rows J at the evaluation's positions and
-   velocities, the bodies' accelerations a0 under their other forces, and
-   the multipliers of (J M^-1 J^T) lambda = -(J a0 + bias), so that every
-   row's C'' = 0: the constrained motion as an ordinary differential
-   equation, which each integrator follows to its own order
-   (test_joints.rk4_pendulum_keeps_its_order). The matrix is solved
-   directly, by its envelope factor with the rows ordered joint by joint
-   (a chain's is a band), so that a light body hung from a heavy one
-   costs no iterations; a row that depends on others (a closed loop) is
-   left out by the factor.
-   The projection: what a step leaves of C, taken out by Newton steps
-   that move each body through its inverse mass and inertia, then the
-   velocities' components along the rows (J v) by an impulse: both
-   lowest in kinetic-energy norm, and of the order of the step's own
-   error, so they keep the method's order. */
+/* joint_solve.c: the joints' rows solved (docs/joints.md), for bodies and
+   for particles in their places (the solver's nodes: the bodies' slots,
+   then the particles').
+   - The forces of the methods that evaluate them (euler, rk4, dopri5):
+     the rows J at the evaluation's positions and velocities, the nodes'
+     accelerations a0 under their other forces, and the multipliers of
+     (J M^-1 J^T) lambda = -(J a0 + bias), so that every row's C'' = 0:
+     the constrained motion as an ordinary differential equation, which
+     each method follows to its own order
+     (test_joints.rk4_pendulum_keeps_its_order).
+   - SHAKE, through the split methods' drifts: the impulses along the rows
+     held at the drift's start that bring the drifted poses onto the
+     joints, by Newton steps on a matrix that is not symmetric (an LU of
+     the envelope); where it finds none (a mode faster than the step),
+     the step taken implicitly: the free drift projected, its impulse
+     added (test_joints.released_chains_hold).
+   - The projection after every step: Newton steps that move each node
+     through its inverse mass and inertia, then the velocities'
+     components along the rows taken out by an impulse: both lowest in
+     kinetic-energy norm, of the order of the step's own error.
+   Every matrix is solved directly, by its envelope factor with the rows
+   ordered joint by joint (a chain's is a band), so that a light body hung
+   from a heavy one costs no iterations; a row that depends on others (a
+   closed loop) is left out by the factor. A Newton step that leaves the
+   error larger goes half the way. And the pairs of bodies whose shapes
+   pass through each other (tb__joints_apart). */
 #include "joints/joints.h"
 #include "bodies/bodies.h"
 #include "particles/particles.h"
