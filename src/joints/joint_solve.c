@@ -375,7 +375,8 @@ tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen)
     if (!w->force_ready) {
         if (w->particle_count)
             memset(w->particle_force, 0, 3 * w->particle_count * sizeof(double));
-        memset(w->body_force, 0, 6 * w->body_count * sizeof(double));
+        if (w->body_count)
+            memset(w->body_force, 0, 6 * w->body_count * sizeof(double));
     }
     w->force_ready = 1; /* (set before the rates: they read body_force from now) */
     if ((st = set_up(w, y, seen, 1, 0, &rows)) != TB_OK)
