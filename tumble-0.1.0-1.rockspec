@@ -37,6 +37,7 @@ build = {
             "src/joints/joints.c",
             "src/joints/joint_rows.c",
             "src/joints/joint_solve.c",
+            "src/joints/joint_shake.c",
             "src/stepping/step.c",
             "src/stepping/integrators.c",
             "src/stepping/implicit.c",

@@ -174,7 +174,7 @@ struct tb_world {
     uint32_t *joint_flags;    /* [joint_cap] TB__JOINT_COLLIDE (a's and b's shapes collide),
                                  TB__JOINT_PARTICLE_A, _B (that side is a particle) */
     tb__ids joint_ids;
-    struct tb__joint_work *joint_work; /* the solve's rows and factor (joint_solve.c): scratch
+    struct tb__joint_work *joint_work; /* the solve's rows and factor (joint_work.h): scratch
                                  that every evaluation writes before it reads */
 
     /* shapes and contacts (contacts/contacts.h); NULL until the first shape */

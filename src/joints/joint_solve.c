@@ -1,91 +1,22 @@
-/* joint_solve.c: the joints' rows solved (docs/joints.md), for bodies and
-   for particles in their places (the solver's nodes: the bodies' slots,
-   then the particles').
-   - The forces of the methods that evaluate them (euler, rk4, dopri5):
-     the rows J at the evaluation's positions and velocities, the nodes'
-     accelerations a0 under their other forces, and the multipliers of
-     (J M^-1 J^T) lambda = -(J a0 + bias), so that every row's C'' = 0:
-     the constrained motion as an ordinary differential equation, which
-     each method follows to its own order
-     (test_joints.rk4_pendulum_keeps_its_order).
-   - SHAKE, through the split methods' drifts: the impulses along the rows
-     held at the drift's start that bring the drifted poses onto the
-     joints, by Newton steps on a matrix that is not symmetric (an LU of
-     the envelope); where it finds none (a mode faster than the step),
-     the step taken implicitly: the free drift projected, its impulse
-     added (test_joints.released_chains_hold).
-   - The projection after every step: Newton steps that move each node
-     through its inverse mass and inertia, then the velocities'
-     components along the rows taken out by an impulse: both lowest in
-     kinetic-energy norm, of the order of the step's own error.
-   Every matrix is solved directly, by its envelope factor with the rows
-   ordered joint by joint (a chain's is a band), so that a light body hung
-   from a heavy one costs no iterations; a row that depends on others (a
-   closed loop) is left out by the factor. A Newton step that leaves the
-   error larger goes half the way. And the pairs of bodies whose shapes
-   pass through each other (tb__joints_apart). */
-#include "joints/joints.h"
+/* joint_solve.c: the joints' rows set up and solved (docs/joints.md), for
+   bodies and for particles in their places (the solver's nodes: the
+   bodies' slots, then the particles'), and the forces of the methods that
+   evaluate them (euler, rk4, dopri5): the rows J at the evaluation's
+   positions and velocities, the nodes' accelerations a0 under their other
+   forces, and the multipliers of (J M^-1 J^T) lambda = -(J a0 + bias), so
+   that every row's C'' = 0: the constrained motion as an ordinary
+   differential equation, which each method follows to its own order
+   (test_joints.rk4_pendulum_keeps_its_order). Every matrix is solved
+   directly, by its envelope factor with the rows ordered joint by joint
+   (a chain's is a band), so that a light body hung from a heavy one costs
+   no iterations; a row that depends on others (a closed loop) is left out
+   by the factor. Putting the bodies on their joints is joint_shake.c's. */
+#include "joints/joint_work.h"
 #include "bodies/bodies.h"
 #include "particles/particles.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
-
-/* A row's pivot under DROP times its diagonal: it depends on the rows
-   before it (a closed loop's last joint), and is left out */
-#define DROP 1e-10
-/* Newton steps of the projection at most: each doubles the error's digits
-   near the joints, and from farther (the free drift of an implicit step)
-   each takes off a share */
-#define PROJECTION_STEPS 30
-/* SHAKE's steps at most: each takes the error down by about the turn of
-   the rows over the step */
-#define SHAKE_STEPS 40
-/* halvings of a Newton step that left the error larger, at most */
-#define BACKTRACKS 6
-/* m (or the cosine of square axes): SHAKE left more than this unmet */
-#define UNMET 1e-10
-/* ... and an error this small is met: rounding on metre-sized joints (a
-   larger world stops where a step no longer halves its error) */
-#define MET 1e-14
-
-struct tb__joint_work {
-    tb__joint_row *rows;
-    double (*weighted)[12];  /* [rows] M^-1 J^T: lin_a, ang_a, lin_b, ang_b, each through its body */
-    size_t *first, *offset;  /* [rows] the envelope (core.h) */
-    double *x;               /* [rows] right side, then multipliers */
-    double *newton, *total;  /* [rows] a Newton step's multipliers; those taken so far */
-    unsigned char *use;      /* [rows] 0: left out */
-    size_t row_cap;
-    size_t *row_start;       /* [joints + 1] */
-    double *lever;           /* [3 joints] the anchor on a from a's centre */
-    double *held_lever;      /* [3 joints] ... at the start of the drift */
-    size_t joint_cap;
-    double *a, *l, *upper;   /* the envelope of J M^-1 J^T, its factor; SHAKE's matrix's
-                                upper part (tb__joints_shake): one block */
-    size_t env_cap;
-    /* per node (node(): the bodies' slots, then the particles'): */
-    double *accel;           /* [6 nodes] a0 and alpha0 under the other forces */
-    size_t *body_row;        /* [nodes] the first row that moves the node */
-    unsigned *stamp;         /* [nodes] the set-up that last wrote the two above */
-    double *start;           /* [7 nodes] x and q at the start of a drift (tb__joints_hold) */
-    int32_t *moved;          /* [nodes] the ends the joints move, moved_count of them */
-    double *kept;            /* [7 nodes] a Newton step's starting poses or momenta */
-    double *half;            /* [7 nodes] the momenta SHAKE started from */
-    tb__joint_end *ends;     /* [nodes] each end at this set-up's state */
-    size_t moved_count;
-    size_t body_cap;         /* nodes */
-    unsigned now;            /* this set-up's stamp */
-    int impulses;            /* the reactions hold impulses of this step's drifts
-                                (tb__joints_shake), for the projection to finish */
-    uint64_t *apart;         /* [apart_count] the body pairs whose shapes pass through each
-                                other (tb__joints_apart), sorted */
-    size_t apart_count, apart_cap;
-    tb__joint_row *held;     /* [rows] the rows at the start of the drift */
-    double (*held_weighted)[12]; /* [rows] ... through the inertia now (SHAKE's) */
-    size_t held_cap, held_weighted_cap, held_count;
-};
 
 static tb_status reserve_rows(tb_world *w, struct tb__joint_work *k, size_t rows)
 {
@@ -107,7 +38,7 @@ static tb_status reserve_rows(tb_world *w, struct tb__joint_work *k, size_t rows
     return TB_OK;
 }
 
-static tb_status reserve(tb_world *w, size_t rows)
+tb_status tb__joint_reserve(tb_world *w, size_t rows)
 {
     struct tb__joint_work *k = w->joint_work;
     tb_status st;
@@ -143,7 +74,7 @@ static tb_status reserve(tb_world *w, size_t rows)
 }
 
 /* An end's index in the per-node arrays: the bodies, then the particles */
-static size_t node(const tb_world *w, int32_t end)
+size_t tb__joint_node(const tb_world *w, int32_t end)
 {
     return end >= 0 ? (size_t)end : w->body_count + tb__joint_particle_slot(end);
 }
@@ -188,14 +119,14 @@ static double through(const tb__joint_row *ri, int side, const double *wj, const
    bodies' accelerations under their other forces too; with `shake`, the
    matrix is the rows now through the inertia now times the held rows
    (tb__joints_shake), not symmetric. The row count. */
-static tb_status set_up(tb_world *w, const double *y, const double *seen, int forces, int shake, size_t *count)
+tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int forces, int shake, size_t *count)
 {
     struct tb__joint_work *k;
     size_t rows = 0, j, i, q, env = 0;
     tb_status st;
     for (j = 0; j < w->joint_count; ++j)
         rows += (size_t)tb__joint_row_count(w->joint_type[j]);
-    if ((st = reserve(w, rows)) != TB_OK)
+    if ((st = tb__joint_reserve(w, rows)) != TB_OK)
         return st;
     k = w->joint_work;
     ++k->now;
@@ -215,9 +146,9 @@ static tb_status set_up(tb_world *w, const double *y, const double *seen, int fo
                 tb__joint_end_of(w, s, y, seen, &e[side]);
                 continue;
             }
-            if (k->stamp[node(w, s)] != k->now)
-                tb__joint_end_of(w, s, y, seen, &k->ends[node(w, s)]);
-            e[side] = k->ends[node(w, s)];
+            if (k->stamp[tb__joint_node(w, s)] != k->now)
+                tb__joint_end_of(w, s, y, seen, &k->ends[tb__joint_node(w, s)]);
+            e[side] = k->ends[tb__joint_node(w, s)];
         }
         k->row_start[j] = rows;
         tb__mul(e[0].R, w->joint_anchor + 6 * j, k->lever + 3 * j);
@@ -235,7 +166,7 @@ static tb_status set_up(tb_world *w, const double *y, const double *seen, int fo
             size_t at;
             if (s == TB__JOINT_WORLD)
                 continue;
-            at = node(w, s);
+            at = tb__joint_node(w, s);
             if (k->stamp[at] == k->now) {
                 first = k->body_row[at] < first ? k->body_row[at] : first;
                 continue;
@@ -285,7 +216,7 @@ static tb_status set_up(tb_world *w, const double *y, const double *seen, int fo
 }
 
 /* x = (J M^-1 J^T)^-1 x over the rows, those the factor leaves out at 0 */
-static void solve(struct tb__joint_work *k, size_t rows)
+void tb__joint_solve(struct tb__joint_work *k, size_t rows)
 {
     tb__envelope e;
     size_t i;
@@ -300,7 +231,7 @@ static void solve(struct tb__joint_work *k, size_t rows)
 /* J^T x added to the ends: as forces to the evaluation's (forces 1:
    w->body_force, w->particle_force), or as impulses to the bodies'
    momenta and the particles' velocities */
-static void apply(tb_world *w, const tb__joint_row *rows, size_t count, const double *x, int forces)
+void tb__joint_apply(tb_world *w, const tb__joint_row *rows, size_t count, const double *x, int forces)
 {
     double *P = w->y + w->off[TB__BODY_MOM], *L = w->y + w->off[TB__BODY_ANG], *v = w->y + w->off[TB__PARTICLE_VEL];
     size_t i;
@@ -334,7 +265,8 @@ static void apply(tb_world *w, const tb__joint_row *rows, size_t count, const do
 /* Each joint's rows times the multipliers in k->x, added to its reaction:
    the force on a, and the torque on a about its anchor (lever from a's
    centre) */
-static void add_reactions(tb_world *w, const struct tb__joint_work *k, const tb__joint_row *rows, const double *lever)
+void tb__joint_add_reactions(tb_world *w, const struct tb__joint_work *k, const tb__joint_row *rows,
+                             const double *lever)
 {
     size_t i, j;
     int d;
@@ -358,10 +290,14 @@ static void add_reactions(tb_world *w, const struct tb__joint_work *k, const tb_
 static double row_times(const tb_world *w, const tb__joint_row *r, const double *m)
 {
     double sum = 0;
-    if (r->a != TB__JOINT_WORLD)
-        sum += tb__dot3(r->lin_a, m + 6 * node(w, r->a)) + tb__dot3(r->ang_a, m + 6 * node(w, r->a) + 3);
-    if (r->b != TB__JOINT_WORLD)
-        sum += tb__dot3(r->lin_b, m + 6 * node(w, r->b)) + tb__dot3(r->ang_b, m + 6 * node(w, r->b) + 3);
+    if (r->a != TB__JOINT_WORLD) {
+        const double *ma = m + 6 * tb__joint_node(w, r->a);
+        sum += tb__dot3(r->lin_a, ma) + tb__dot3(r->ang_a, ma + 3);
+    }
+    if (r->b != TB__JOINT_WORLD) {
+        const double *mb = m + 6 * tb__joint_node(w, r->b);
+        sum += tb__dot3(r->lin_b, mb) + tb__dot3(r->ang_b, mb + 3);
+    }
     return sum;
 }
 
@@ -379,21 +315,21 @@ tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen)
             memset(w->body_force, 0, 6 * w->body_count * sizeof(double));
     }
     w->force_ready = 1; /* (set before the rates: they read body_force from now) */
-    if ((st = set_up(w, y, seen, 1, 0, &rows)) != TB_OK)
+    if ((st = tb__joint_set_up(w, y, seen, 1, 0, &rows)) != TB_OK)
         return st;
     k = w->joint_work;
     for (i = 0; i < rows; ++i)
         k->x[i] = -(row_times(w, &k->rows[i], k->accel) + k->rows[i].bias);
-    solve(k, rows);
+    tb__joint_solve(k, rows);
     memset(w->joint_reaction, 0, 6 * w->joint_count * sizeof *w->joint_reaction);
-    add_reactions(w, k, k->rows, k->lever);
+    tb__joint_add_reactions(w, k, k->rows, k->lever);
     k->impulses = 0;
-    apply(w, k->rows, rows, k->x, 1);
+    tb__joint_apply(w, k->rows, rows, k->x, 1);
     return TB_OK;
 }
 
 /* The largest |C| of the rows */
-static double largest_error(const struct tb__joint_work *k, size_t rows)
+double tb__joint_largest_error(const struct tb__joint_work *k, size_t rows)
 {
     double e = 0;
     size_t i;
@@ -402,15 +338,12 @@ static double largest_error(const struct tb__joint_work *k, size_t rows)
     return e;
 }
 
-/* The moved ends' poses (keep_poses: a body's x and q, a particle's x)
-   or momenta (keep_momenta: a body's P and L, a particle's v) kept (keep
-   1), or put back (keep 0) */
-static void keep_state(tb_world *w, struct tb__joint_work *k, double *buffer, int poses, int keep)
+void tb__joint_keep(tb_world *w, struct tb__joint_work *k, double *buffer, int poses, int keep)
 {
     size_t i;
     for (i = 0; i < k->moved_count; ++i) {
         const int32_t s = k->moved[i];
-        double *kept = buffer + 7 * node(w, s), *a, *b = NULL;
+        double *kept = buffer + 7 * tb__joint_node(w, s), *a, *b = NULL;
         int n1 = 3, n2 = poses ? 4 : 3;
         if (s >= 0) {
             a = w->y + w->off[poses ? TB__BODY_POS : TB__BODY_MOM] + 3 * s;
@@ -423,329 +356,6 @@ static void keep_state(tb_world *w, struct tb__joint_work *k, double *buffer, in
         if (n2)
             memcpy(keep ? kept + n1 : b, keep ? b : kept + n1, (size_t)n2 * sizeof *b);
     }
-}
-
-static void keep_poses(tb_world *w, struct tb__joint_work *k, int keep)
-{
-    keep_state(w, k, k->kept, 1, keep);
-}
-
-static void keep_momenta(tb_world *w, struct tb__joint_work *k, int keep)
-{
-    keep_state(w, k, k->kept, 0, keep);
-}
-
-static void keep_momenta_from(tb_world *w, struct tb__joint_work *k, double *buffer, int keep)
-{
-    keep_state(w, k, buffer, 0, keep);
-}
-
-/* The moved ends put on their joints by Newton steps that move each
-   through its inverse mass and inertia (lowest in kinetic-energy norm),
-   while they still halve the error (after that it is rounding); a step
-   that left it larger is taken back (a chain whipping its light end round
-   turned its links by more than the step's linear model holds, and the
-   step threw them apart). With h > 0, each step's impulse over h (J^T
-   delta / h, what moved the ends) goes to their momenta and the
-   reactions too: the step of an implicit method (tb__joints_shake). */
-static tb_status project_positions(tb_world *w, double h)
-{
-    double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
-    double *px = w->y + w->off[TB__PARTICLE_POS];
-    struct tb__joint_work *k;
-    double most, next = 0;
-    size_t rows, i;
-    tb_status st;
-    int step, tries, d;
-    if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
-        return st;
-    k = w->joint_work;
-    most = largest_error(k, rows);
-    for (step = 0; step < PROJECTION_STEPS && most > MET; ++step) {
-        double share = 1;
-        for (i = 0; i < rows; ++i)
-            k->x[i] = -k->rows[i].error;
-        solve(k, rows);
-        memcpy(k->newton, k->x, rows * sizeof *k->newton);
-        /* the rows of this pose, weighted, move the ends: kept aside (in
-           SHAKE's room, unused after it), since each trial below sets the
-           rows up again */
-        if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows, sizeof *k->held)) != TB_OK ||
-            (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows,
-                              sizeof *k->held_weighted)) != TB_OK)
-            return st;
-        memcpy(k->held, k->rows, rows * sizeof *k->held);
-        memcpy(k->held_weighted, k->weighted, rows * sizeof *k->held_weighted);
-        keep_poses(w, k, 1);
-        for (tries = 0; tries < BACKTRACKS; ++tries, share /= 2) {
-            for (i = 0; i < rows; ++i) {
-                const tb__joint_row *r = &k->held[i];
-                const double *m = k->held_weighted[i];
-                int side;
-                for (side = 0; side < 2; ++side) {
-                    const int32_t s = side ? r->b : r->a;
-                    double turn[3];
-                    if (tb__joint_is_particle(s))
-                        for (d = 0; d < 3; ++d)
-                            px[3 * tb__joint_particle_slot(s) + d] += m[6 * side + d] * share * k->newton[i];
-                    if (s < 0)
-                        continue;
-                    for (d = 0; d < 3; ++d) {
-                        x[3 * s + d] += m[6 * side + d] * share * k->newton[i];
-                        turn[d] = m[6 * side + 3 + d] * share * k->newton[i];
-                    }
-                    tb__rotation_isotropic(q + 4 * s, turn, 1, 1);
-                }
-            }
-            if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
-                return st;
-            next = largest_error(k, rows);
-            if (next < most)
-                break;
-            keep_poses(w, k, 0);
-        }
-        if (!(next < most))
-            break; /* no share helped: the poses as they were */
-        if (h > 0) { /* what moved the ends, over h */
-            for (i = 0; i < rows; ++i)
-                k->x[i] = share * k->newton[i] / h;
-            apply(w, k->held, rows, k->x, 0);
-            add_reactions(w, k, k->held, k->lever);
-        }
-        if (!(next < 0.5 * most) && next < UNMET)
-            break; /* rounding */
-        most = next;
-    }
-    return TB_OK;
-}
-
-tb_status tb__joints_project(tb_world *w, double h)
-{
-    struct tb__joint_work *k;
-    size_t rows, i;
-    tb_status st;
-    if (w->joint_count == 0)
-        return TB_OK;
-    if ((st = project_positions(w, 0)) != TB_OK)
-        return st;
-    /* velocities: the rows' rates taken out by an impulse */
-    if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
-        return st;
-    k = w->joint_work;
-    for (i = 0; i < rows; ++i) {
-        const tb__joint_row *r = &k->rows[i];
-        double rate = 0;
-        int side;
-        for (side = 0; side < 2; ++side) {
-            const int32_t s = side ? r->b : r->a;
-            double v[3] = { 0, 0, 0 }, om[3] = { 0, 0, 0 };
-            if (s >= 0)
-                tb__body_velocity(w, (uint32_t)s, v, om);
-            else if (tb__joint_is_particle(s))
-                memcpy(v, w->y + w->off[TB__PARTICLE_VEL] + 3 * tb__joint_particle_slot(s), sizeof v);
-            rate += tb__dot3(side ? r->lin_b : r->lin_a, v) + tb__dot3(side ? r->ang_b : r->ang_a, om);
-        }
-        k->x[i] = -rate;
-    }
-    solve(k, rows);
-    if (k->impulses) { /* the step's impulses over its length: the force */
-        add_reactions(w, k, k->rows, k->lever);
-        for (i = 0; i < 6 * w->joint_count; ++i)
-            w->joint_reaction[i] /= h;
-        k->impulses = 0;
-    }
-    apply(w, k->rows, rows, k->x, 0);
-    return TB_OK;
-}
-
-/* ---- the split methods' drift (SHAKE, with the velocities' part at the
-   end of the step: RATTLE) ------------------------------------------------------ */
-
-tb_status tb__joints_hold(tb_world *w)
-{
-    struct tb__joint_work *k;
-    size_t rows, i;
-    tb_status st;
-    if (w->joint_count == 0)
-        return TB_OK;
-    if ((st = set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
-        return st;
-    k = w->joint_work;
-    if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows, sizeof *k->held)) != TB_OK ||
-        (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows, sizeof *k->held_weighted)) !=
-            TB_OK)
-        return st;
-    memcpy(k->held, k->rows, rows * sizeof *k->rows);
-    memcpy(k->held_lever, k->lever, 3 * w->joint_count * sizeof *k->lever);
-    k->held_count = rows;
-    if (!k->impulses) { /* the step's first drift */
-        memset(w->joint_reaction, 0, 6 * w->joint_count * sizeof *w->joint_reaction);
-        k->impulses = 1;
-    }
-    for (i = 0; i < k->moved_count; ++i) {
-        const int32_t s = k->moved[i];
-        double *start = k->start + 7 * node(w, s);
-        if (s >= 0) {
-            memcpy(start, w->y + w->off[TB__BODY_POS] + 3 * s, 3 * sizeof(double));
-            memcpy(start + 3, w->y + w->off[TB__BODY_ROT] + 4 * s, 4 * sizeof(double));
-        } else {
-            memcpy(start, w->y + w->off[TB__PARTICLE_POS] + 3 * tb__joint_particle_slot(s), 3 * sizeof(double));
-        }
-    }
-    return TB_OK;
-}
-
-/* End s drifted again over h from where the drift started, with the
-   momenta (velocity) it has now, a body turned as the drift turned it */
-static void drift_again(tb_world *w, const struct tb__joint_work *k, int32_t s, double h, tb__rotation_kind rotation)
-{
-    const double *start = k->start + 7 * node(w, s);
-    int d;
-    if (tb__joint_is_particle(s)) {
-        const uint32_t p = tb__joint_particle_slot(s);
-        double *x = w->y + w->off[TB__PARTICLE_POS] + 3 * p;
-        const double *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * p;
-        for (d = 0; d < 3; ++d)
-            x[d] = start[d] + h * v[d];
-    } else {
-        double *x = w->y + w->off[TB__BODY_POS] + 3 * s, *q = w->y + w->off[TB__BODY_ROT] + 4 * s;
-        const double *P = w->y + w->off[TB__BODY_MOM] + 3 * s, *L = w->y + w->off[TB__BODY_ANG] + 3 * s;
-        const double *inv = w->body_inv_inertia + 3 * s;
-        for (d = 0; d < 3; ++d)
-            x[d] = start[d] + h * (P[d] * w->body_inv_mass[s]);
-        memcpy(q, start + 3, 4 * sizeof(double));
-        if (rotation == TB__ROTATE_FROZEN)
-            tb__rotation_frozen(q, L, inv, h);
-        else if (rotation == TB__ROTATE_ACCURATE)
-            tb__rotation_accurate(q, L, inv, h);
-        else
-            tb__rotation_split2(q, L, inv, h);
-    }
-}
-
-tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
-{
-    struct tb__joint_work *k = w->joint_work;
-    double most, next = 0;
-    size_t rows, i;
-    tb_status st;
-    int step, tries;
-    if (w->joint_count == 0 || !k || k->held_count == 0)
-        return TB_OK;
-    if ((st = set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
-        return st;
-    most = largest_error(k, rows);
-    memset(k->total, 0, rows * sizeof *k->total);
-    keep_momenta_from(w, k, k->half, 1);
-    for (step = 0; step < SHAKE_STEPS && most > MET; ++step) {
-        double share = 1;
-        tb__envelope e;
-        /* Newton's step: the impulse along the held rows whose drift
-           takes C out to first order, through the matrix of the rows now
-           times the held ones (not symmetric: with the symmetric one of
-           the rows now, their turn over the step, times a light body's
-           inverse inertia, stalled it) */
-        e.first = k->first, e.offset = k->offset, e.a = k->a, e.l = NULL, e.use = k->use, e.drop = DROP;
-        (void)tb__envelope_lu(&e, k->upper, 0, rows); /* with drop, no pivot fails */
-        for (i = 0; i < rows; ++i)
-            k->newton[i] = k->use[i] ? -k->rows[i].error / h : 0;
-        tb__envelope_lu_solve(&e, k->upper, 0, rows, k->newton);
-        keep_momenta(w, k, 1);
-        /* a step that leaves the error larger goes a share of the way
-           (the links of a chain whipping its light end round turn by more
-           within a step than its linear model holds) */
-        for (tries = 0; tries < BACKTRACKS; ++tries, share /= 2) {
-            for (i = 0; i < rows; ++i)
-                k->x[i] = share * k->newton[i];
-            apply(w, k->held, rows, k->x, 0);
-            for (i = 0; i < k->moved_count; ++i)
-                drift_again(w, k, k->moved[i], h, rotation);
-            if ((st = set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
-                return st;
-            next = largest_error(k, rows);
-            if (next < most)
-                break;
-            keep_momenta(w, k, 0);
-        }
-        if (!(next < most)) { /* no share helped: the drift as it was */
-            for (i = 0; i < k->moved_count; ++i)
-                drift_again(w, k, k->moved[i], h, rotation);
-            break;
-        }
-        for (i = 0; i < rows; ++i)
-            k->total[i] += share * k->newton[i];
-        if (!(next < 0.5 * most) && next < UNMET) /* rounding: no step halves it */
-            break;
-        most = next;
-    }
-    k->held_count = 0;
-    if (most > UNMET) {
-        /* no impulses along the held rows meet the joints: a mode of the
-           joints faster than the step holds (a light link spinning under
-           a chain's tension) turned them too far. The step is taken as an
-           implicit method takes it: the free drift put on the joints, its
-           displacement's impulse added to the momenta (backward Euler on
-           the joints: that mode is damped, not followed) */
-        keep_momenta_from(w, k, k->half, 0);
-        for (i = 0; i < k->moved_count; ++i)
-            drift_again(w, k, k->moved[i], h, rotation);
-        return project_positions(w, h);
-    }
-    memcpy(k->x, k->total, rows * sizeof *k->x);
-    add_reactions(w, k, k->held, k->held_lever);
-    return TB_OK;
-}
-
-/* ---- which bodies' shapes pass through each other ------------------------------ */
-
-static uint64_t pair_key(uint32_t a, uint32_t b)
-{
-    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
-}
-
-static int by_key(const void *x, const void *y)
-{
-    const uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
-    return a < b ? -1 : a > b;
-}
-
-tb_status tb__joints_apart_prepare(tb_world *w)
-{
-    struct tb__joint_work *k;
-    tb_status st;
-    size_t j;
-    if (w->joint_count == 0)
-        return TB_OK;
-    if ((st = reserve(w, 0)) != TB_OK)
-        return st;
-    k = w->joint_work;
-    if ((st = tb__reserve(w, (void **)&k->apart, &k->apart_cap, w->joint_count, sizeof *k->apart)) != TB_OK)
-        return st;
-    k->apart_count = 0;
-    for (j = 0; j < w->joint_count; ++j)
-        if (!(w->joint_flags[j] & (TB__JOINT_COLLIDE | TB__JOINT_PARTICLE_A | TB__JOINT_PARTICLE_B)) &&
-            w->joint_body[2 * j + 1])
-            k->apart[k->apart_count++] = pair_key(w->joint_body[2 * j], w->joint_body[2 * j + 1]);
-    qsort(k->apart, k->apart_count, sizeof *k->apart, by_key);
-    return TB_OK;
-}
-
-int tb__joints_apart(const tb_world *w, uint32_t a, uint32_t b)
-{
-    const struct tb__joint_work *k = w->joint_work;
-    const uint64_t key = pair_key(a, b);
-    size_t lo = 0, hi;
-    if (w->joint_count == 0 || !k || k->apart_count == 0)
-        return 0;
-    hi = k->apart_count;
-    while (lo < hi) {
-        const size_t mid = lo + (hi - lo) / 2;
-        if (k->apart[mid] < key)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo < k->apart_count && k->apart[lo] == key;
 }
 
 void tb__joints_begin_step(tb_world *w)

@@ -1,10 +1,11 @@
 /* joints.c: joints between bodies, or a body and the world: what each
    holds (kept in the bodies' principal frames, so it moves with them),
    adding, removing, and reading them. */
-#include "joints/joints.h"
+#include "joints/joint_work.h"
 #include "bodies/bodies.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define JOINT_ARRAYS 7
@@ -248,7 +249,8 @@ tb_status tb_world_add_joint(tb_world *w, const tb_joint_def *def, tb_joint_id *
     w->joint_type[j] = (uint32_t)def->type;
     w->joint_body[2 * j] = tb__joint_is_particle(sa) ? def->particle_a.index1 : def->a.index1;
     w->joint_body[2 * j + 1] = tb__joint_is_particle(sb) ? def->particle_b.index1 : sb >= 0 ? def->b.index1 : 0;
-    w->joint_flags[j] = (def->collide ? TB__JOINT_COLLIDE : 0) | (tb__joint_is_particle(sa) ? TB__JOINT_PARTICLE_A : 0) |
+    w->joint_flags[j] = (def->collide ? TB__JOINT_COLLIDE : 0) |
+                        (tb__joint_is_particle(sa) ? TB__JOINT_PARTICLE_A : 0) |
                         (tb__joint_is_particle(sb) ? TB__JOINT_PARTICLE_B : 0);
     /* a particle's end is the particle: its anchor is 0 in an unturned frame */
     pose_of(w, sa >= 0 ? sa : -1, w->y, xa, Ra);
@@ -396,4 +398,56 @@ void tb__joints_free(tb_world *w)
     tb__ids_free(w, &w->joint_ids);
     tb__joint_work_free(w);
     w->joint_count = w->joint_cap = 0;
+}
+
+/* ---- which bodies' shapes pass through each other ------------------------------ */
+
+static uint64_t pair_key(uint32_t a, uint32_t b)
+{
+    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+}
+
+static int by_key(const void *x, const void *y)
+{
+    const uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return a < b ? -1 : a > b;
+}
+
+tb_status tb__joints_apart_prepare(tb_world *w)
+{
+    struct tb__joint_work *k;
+    tb_status st;
+    size_t j;
+    if (w->joint_count == 0)
+        return TB_OK;
+    if ((st = tb__joint_reserve(w, 0)) != TB_OK)
+        return st;
+    k = w->joint_work;
+    if ((st = tb__reserve(w, (void **)&k->apart, &k->apart_cap, w->joint_count, sizeof *k->apart)) != TB_OK)
+        return st;
+    k->apart_count = 0;
+    for (j = 0; j < w->joint_count; ++j)
+        if (!(w->joint_flags[j] & (TB__JOINT_COLLIDE | TB__JOINT_PARTICLE_A | TB__JOINT_PARTICLE_B)) &&
+            w->joint_body[2 * j + 1])
+            k->apart[k->apart_count++] = pair_key(w->joint_body[2 * j], w->joint_body[2 * j + 1]);
+    qsort(k->apart, k->apart_count, sizeof *k->apart, by_key);
+    return TB_OK;
+}
+
+int tb__joints_apart(const tb_world *w, uint32_t a, uint32_t b)
+{
+    const struct tb__joint_work *k = w->joint_work;
+    const uint64_t key = pair_key(a, b);
+    size_t lo = 0, hi;
+    if (w->joint_count == 0 || !k || k->apart_count == 0)
+        return 0;
+    hi = k->apart_count;
+    while (lo < hi) {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (k->apart[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < k->apart_count && k->apart[lo] == key;
 }

@@ -1,7 +1,10 @@
-/* joints.h: joints between bodies (not public): their storage and API
-   (joints.c), the rows each type holds at a pose (joint_rows.c), and
-   their solve in every force evaluation and the projection after each
-   step (joint_solve.c). docs/joints.md has the model. */
+/* joints.h: joints between bodies, and particles in their places (not
+   public): their storage, API and the pairs whose shapes pass through
+   each other (joints.c), the rows each type holds at a pose
+   (joint_rows.c), their rows solved and their forces in every evaluation
+   (joint_solve.c), and the bodies put on them: the projection after each
+   step and SHAKE through the split methods' drifts (joint_shake.c; the
+   three share joint_work.h). docs/joints.md has the model. */
 #ifndef TB_JOINTS_H
 #define TB_JOINTS_H
 
@@ -67,6 +70,12 @@ int tb__joint_rows(const tb_world *w, size_t j, const tb__joint_end *a, const tb
    give the accelerations the joints allow, from the bodies' other forces
    of this evaluation. Each joint's reaction is kept. */
 tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen);
+/* A step begins: no drift's impulses are in the reactions yet (a step
+   that failed may have left some) */
+void tb__joints_begin_step(tb_world *w);
+void tb__joint_work_free(tb_world *w);
+
+/* ---- joint_shake.c --------------------------------------------------------- */
 /* Put the bodies back on their joints after a step: positions (Newton
    steps, each body moved through its inverse mass and inertia), then the
    velocities' components along the rows taken out. After a split
@@ -80,16 +89,14 @@ tb_status tb__joints_project(tb_world *w, double h);
    The velocities' part (RATTLE's) is the projection's at the end of the
    step. */
 tb_status tb__joints_hold(tb_world *w);
-/* A step begins: no drift's impulses are in the reactions yet (a step
-   that failed may have left some) */
-void tb__joints_begin_step(tb_world *w);
 tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation);
+
+/* ---- joints.c: which bodies' shapes pass through each other --------------- */
 /* The pairs of bodies a joint holds whose shapes pass through each other
    (tb_joint_def.collide 0), found once a step before the contacts
    (tb__joints_apart_prepare); whether bodies of id indices a and b are
    such a pair */
 tb_status tb__joints_apart_prepare(tb_world *w);
 int tb__joints_apart(const tb_world *w, uint32_t a, uint32_t b);
-void tb__joint_work_free(tb_world *w);
 
 #endif

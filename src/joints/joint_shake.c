@@ -1,0 +1,289 @@
+/* joint_shake.c: the bodies and particles put on their joints
+   (docs/joints.md): the projection after every step (tb__joints_project:
+   Newton steps that move each node through its inverse mass and inertia,
+   then the velocities' components along the rows taken out by an
+   impulse, both lowest in kinetic-energy norm and of the order of the
+   step's own error), and SHAKE through the split methods' drifts
+   (tb__joints_hold, tb__joints_shake: the impulses along the rows held at
+   the drift's start that bring the drifted poses onto the joints, by
+   Newton steps on a matrix that is not symmetric; where it finds none, a
+   mode faster than the step, the step taken implicitly: the free drift
+   projected, its impulse added; test_joints.released_chains_hold). A
+   Newton step that leaves the error larger goes half the way. */
+#include "joints/joint_work.h"
+#include "bodies/bodies.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Newton steps of the projection at most: each doubles the error's digits
+   near the joints, and from farther (the free drift of an implicit step)
+   each takes off a share */
+#define PROJECTION_STEPS 30
+/* SHAKE's steps at most: each takes the error down by about the turn of
+   the rows over the step */
+#define SHAKE_STEPS 40
+/* halvings of a Newton step that left the error larger, at most */
+#define BACKTRACKS 6
+/* m (or the cosine of square axes): SHAKE left more than this unmet */
+#define UNMET 1e-10
+/* ... and an error this small is met: rounding on metre-sized joints (a
+   larger world stops where a step no longer halves its error) */
+#define MET 1e-14
+
+/* The moved ends put on their joints by Newton steps that move each
+   through its inverse mass and inertia (lowest in kinetic-energy norm),
+   while they still halve the error (after that it is rounding); a step
+   that left it larger is taken back (a chain whipping its light end round
+   turned its links by more than the step's linear model holds, and the
+   step threw them apart). With h > 0, each step's impulse over h (J^T
+   delta / h, what moved the ends) goes to their momenta and the
+   reactions too: the step of an implicit method (tb__joints_shake). */
+static tb_status project_positions(tb_world *w, double h)
+{
+    double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
+    double *px = w->y + w->off[TB__PARTICLE_POS];
+    struct tb__joint_work *k;
+    double most, next = 0;
+    size_t rows, i;
+    tb_status st;
+    int step, tries, d;
+    if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+        return st;
+    k = w->joint_work;
+    most = tb__joint_largest_error(k, rows);
+    for (step = 0; step < PROJECTION_STEPS && most > MET; ++step) {
+        double share = 1;
+        for (i = 0; i < rows; ++i)
+            k->x[i] = -k->rows[i].error;
+        tb__joint_solve(k, rows);
+        memcpy(k->newton, k->x, rows * sizeof *k->newton);
+        /* the rows of this pose, weighted, move the ends: kept aside (in
+           SHAKE's room, unused after it), since each trial below sets the
+           rows up again */
+        if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows, sizeof *k->held)) != TB_OK ||
+            (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows,
+                              sizeof *k->held_weighted)) != TB_OK)
+            return st;
+        memcpy(k->held, k->rows, rows * sizeof *k->held);
+        memcpy(k->held_weighted, k->weighted, rows * sizeof *k->held_weighted);
+        tb__joint_keep(w, k, k->kept, 1, 1);
+        for (tries = 0; tries < BACKTRACKS; ++tries, share /= 2) {
+            for (i = 0; i < rows; ++i) {
+                const tb__joint_row *r = &k->held[i];
+                const double *m = k->held_weighted[i];
+                int side;
+                for (side = 0; side < 2; ++side) {
+                    const int32_t s = side ? r->b : r->a;
+                    double turn[3];
+                    if (tb__joint_is_particle(s))
+                        for (d = 0; d < 3; ++d)
+                            px[3 * tb__joint_particle_slot(s) + d] += m[6 * side + d] * share * k->newton[i];
+                    if (s < 0)
+                        continue;
+                    for (d = 0; d < 3; ++d) {
+                        x[3 * s + d] += m[6 * side + d] * share * k->newton[i];
+                        turn[d] = m[6 * side + 3 + d] * share * k->newton[i];
+                    }
+                    tb__rotation_isotropic(q + 4 * s, turn, 1, 1);
+                }
+            }
+            if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+                return st;
+            next = tb__joint_largest_error(k, rows);
+            if (next < most)
+                break;
+            tb__joint_keep(w, k, k->kept, 1, 0);
+        }
+        if (!(next < most))
+            break; /* no share helped: the poses as they were */
+        if (h > 0) { /* what moved the ends, over h */
+            for (i = 0; i < rows; ++i)
+                k->x[i] = share * k->newton[i] / h;
+            tb__joint_apply(w, k->held, rows, k->x, 0);
+            tb__joint_add_reactions(w, k, k->held, k->lever);
+        }
+        if (!(next < 0.5 * most) && next < UNMET)
+            break; /* rounding */
+        most = next;
+    }
+    return TB_OK;
+}
+
+tb_status tb__joints_project(tb_world *w, double h)
+{
+    struct tb__joint_work *k;
+    size_t rows, i;
+    tb_status st;
+    if (w->joint_count == 0)
+        return TB_OK;
+    if ((st = project_positions(w, 0)) != TB_OK)
+        return st;
+    /* velocities: the rows' rates taken out by an impulse */
+    if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+        return st;
+    k = w->joint_work;
+    for (i = 0; i < rows; ++i) {
+        const tb__joint_row *r = &k->rows[i];
+        double rate = 0;
+        int side;
+        for (side = 0; side < 2; ++side) {
+            const int32_t s = side ? r->b : r->a;
+            double v[3] = { 0, 0, 0 }, om[3] = { 0, 0, 0 };
+            if (s >= 0)
+                tb__body_velocity(w, (uint32_t)s, v, om);
+            else if (tb__joint_is_particle(s))
+                memcpy(v, w->y + w->off[TB__PARTICLE_VEL] + 3 * tb__joint_particle_slot(s), sizeof v);
+            rate += tb__dot3(side ? r->lin_b : r->lin_a, v) + tb__dot3(side ? r->ang_b : r->ang_a, om);
+        }
+        k->x[i] = -rate;
+    }
+    tb__joint_solve(k, rows);
+    if (k->impulses) { /* the step's impulses over its length: the force */
+        tb__joint_add_reactions(w, k, k->rows, k->lever);
+        for (i = 0; i < 6 * w->joint_count; ++i)
+            w->joint_reaction[i] /= h;
+        k->impulses = 0;
+    }
+    tb__joint_apply(w, k->rows, rows, k->x, 0);
+    return TB_OK;
+}
+
+/* ---- the split methods' drift (SHAKE, with the velocities' part at the
+   end of the step: RATTLE) ------------------------------------------------------ */
+
+tb_status tb__joints_hold(tb_world *w)
+{
+    struct tb__joint_work *k;
+    size_t rows, i;
+    tb_status st;
+    if (w->joint_count == 0)
+        return TB_OK;
+    if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+        return st;
+    k = w->joint_work;
+    if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows, sizeof *k->held)) != TB_OK ||
+        (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows, sizeof *k->held_weighted)) !=
+            TB_OK)
+        return st;
+    memcpy(k->held, k->rows, rows * sizeof *k->rows);
+    memcpy(k->held_lever, k->lever, 3 * w->joint_count * sizeof *k->lever);
+    k->held_count = rows;
+    if (!k->impulses) { /* the step's first drift */
+        memset(w->joint_reaction, 0, 6 * w->joint_count * sizeof *w->joint_reaction);
+        k->impulses = 1;
+    }
+    for (i = 0; i < k->moved_count; ++i) {
+        const int32_t s = k->moved[i];
+        double *start = k->start + 7 * tb__joint_node(w, s);
+        if (s >= 0) {
+            memcpy(start, w->y + w->off[TB__BODY_POS] + 3 * s, 3 * sizeof(double));
+            memcpy(start + 3, w->y + w->off[TB__BODY_ROT] + 4 * s, 4 * sizeof(double));
+        } else {
+            memcpy(start, w->y + w->off[TB__PARTICLE_POS] + 3 * tb__joint_particle_slot(s), 3 * sizeof(double));
+        }
+    }
+    return TB_OK;
+}
+
+/* End s drifted again over h from where the drift started, with the
+   momenta (velocity) it has now, a body turned as the drift turned it */
+static void drift_again(tb_world *w, const struct tb__joint_work *k, int32_t s, double h, tb__rotation_kind rotation)
+{
+    const double *start = k->start + 7 * tb__joint_node(w, s);
+    int d;
+    if (tb__joint_is_particle(s)) {
+        const uint32_t p = tb__joint_particle_slot(s);
+        double *x = w->y + w->off[TB__PARTICLE_POS] + 3 * p;
+        const double *v = w->y + w->off[TB__PARTICLE_VEL] + 3 * p;
+        for (d = 0; d < 3; ++d)
+            x[d] = start[d] + h * v[d];
+    } else {
+        double *x = w->y + w->off[TB__BODY_POS] + 3 * s, *q = w->y + w->off[TB__BODY_ROT] + 4 * s;
+        const double *P = w->y + w->off[TB__BODY_MOM] + 3 * s, *L = w->y + w->off[TB__BODY_ANG] + 3 * s;
+        const double *inv = w->body_inv_inertia + 3 * s;
+        for (d = 0; d < 3; ++d)
+            x[d] = start[d] + h * (P[d] * w->body_inv_mass[s]);
+        memcpy(q, start + 3, 4 * sizeof(double));
+        if (rotation == TB__ROTATE_FROZEN)
+            tb__rotation_frozen(q, L, inv, h);
+        else if (rotation == TB__ROTATE_ACCURATE)
+            tb__rotation_accurate(q, L, inv, h);
+        else
+            tb__rotation_split2(q, L, inv, h);
+    }
+}
+
+tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
+{
+    struct tb__joint_work *k = w->joint_work;
+    double most, next = 0;
+    size_t rows, i;
+    tb_status st;
+    int step, tries;
+    if (w->joint_count == 0 || !k || k->held_count == 0)
+        return TB_OK;
+    if ((st = tb__joint_set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
+        return st;
+    most = tb__joint_largest_error(k, rows);
+    memset(k->total, 0, rows * sizeof *k->total);
+    tb__joint_keep(w, k, k->half, 0, 1);
+    for (step = 0; step < SHAKE_STEPS && most > MET; ++step) {
+        double share = 1;
+        tb__envelope e;
+        /* Newton's step: the impulse along the held rows whose drift
+           takes C out to first order, through the matrix of the rows now
+           times the held ones (not symmetric: with the symmetric one of
+           the rows now, their turn over the step, times a light body's
+           inverse inertia, stalled it) */
+        e.first = k->first, e.offset = k->offset, e.a = k->a, e.l = NULL, e.use = k->use, e.drop = DROP;
+        (void)tb__envelope_lu(&e, k->upper, 0, rows); /* with drop, no pivot fails */
+        for (i = 0; i < rows; ++i)
+            k->newton[i] = k->use[i] ? -k->rows[i].error / h : 0;
+        tb__envelope_lu_solve(&e, k->upper, 0, rows, k->newton);
+        tb__joint_keep(w, k, k->kept, 0, 1);
+        /* a step that leaves the error larger goes a share of the way
+           (the links of a chain whipping its light end round turn by more
+           within a step than its linear model holds) */
+        for (tries = 0; tries < BACKTRACKS; ++tries, share /= 2) {
+            for (i = 0; i < rows; ++i)
+                k->x[i] = share * k->newton[i];
+            tb__joint_apply(w, k->held, rows, k->x, 0);
+            for (i = 0; i < k->moved_count; ++i)
+                drift_again(w, k, k->moved[i], h, rotation);
+            if ((st = tb__joint_set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
+                return st;
+            next = tb__joint_largest_error(k, rows);
+            if (next < most)
+                break;
+            tb__joint_keep(w, k, k->kept, 0, 0);
+        }
+        if (!(next < most)) { /* no share helped: the drift as it was */
+            for (i = 0; i < k->moved_count; ++i)
+                drift_again(w, k, k->moved[i], h, rotation);
+            break;
+        }
+        for (i = 0; i < rows; ++i)
+            k->total[i] += share * k->newton[i];
+        if (!(next < 0.5 * most) && next < UNMET) /* rounding: no step halves it */
+            break;
+        most = next;
+    }
+    k->held_count = 0;
+    if (most > UNMET) {
+        /* no impulses along the held rows meet the joints: a mode of the
+           joints faster than the step holds (a light link spinning under
+           a chain's tension) turned them too far. The step is taken as an
+           implicit method takes it: the free drift put on the joints, its
+           displacement's impulse added to the momenta (backward Euler on
+           the joints: that mode is damped, not followed) */
+        tb__joint_keep(w, k, k->half, 0, 0);
+        for (i = 0; i < k->moved_count; ++i)
+            drift_again(w, k, k->moved[i], h, rotation);
+        return project_positions(w, h);
+    }
+    memcpy(k->x, k->total, rows * sizeof *k->x);
+    tb__joint_add_reactions(w, k, k->held, k->held_lever);
+    return TB_OK;
+}
+
