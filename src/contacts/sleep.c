@@ -13,15 +13,14 @@
    leaves it out, and its pose is put back after the integrator's free
    motion. Worlds with force callbacks never sleep. */
 #include "contacts/contacts.h"
+#include "joints/joints.h"
 
 #include <math.h>
 #include <string.h>
 
 static int sleep_allowed(const tb_world *w)
 {
-    /* joints are not in the islands yet: a jointed body would sleep apart
-       from what it holds */
-    return w->contacts && isfinite(w->contacts->settings.sleep_time) && w->forces.count == 0 && w->joint_count == 0;
+    return w->contacts && isfinite(w->contacts->settings.sleep_time) && w->forces.count == 0;
 }
 
 int tb__key_still(const tb_world *w, const tb__contacts *c, uint32_t key)
@@ -190,11 +189,27 @@ void tb__sleep_update(tb_world *w, tb__contacts *c, double h)
         if (a->tier == TB__BODIES && b->tier == TB__BODIES)
             link[root_of(link, a->slot)] = root_of(link, b->slot);
     }
+    /* ... and by joints: an island sleeps whole. A body without shapes
+       (no reach to rest by) or tied to a particle (particles never sleep)
+       keeps its island awake (test_joints.jointed_bodies_sleep_together) */
+    for (i = 0; i < w->joint_count; ++i) {
+        const int32_t a = tb__joint_end_slot(w, i, 0), b = tb__joint_end_slot(w, i, 1);
+        if (a >= 0 && b >= 0)
+            link[root_of(link, (uint32_t)a)] = root_of(link, (uint32_t)b);
+    }
     for (i = 0; i < n; ++i)
         if (!w->body_island[i] && reach[i] > 0) {
             const uint32_t r = root_of(link, (uint32_t)i);
             least[r] = fmin(least[r], w->body_rest[i]);
         }
+    for (i = 0; i < w->joint_count; ++i) {
+        const int32_t a = tb__joint_end_slot(w, i, 0), b = tb__joint_end_slot(w, i, 1);
+        const int32_t ends[2] = { a, b };
+        int k;
+        for (k = 0; k < 2; ++k)
+            if (ends[k] >= 0 && (reach[ends[k]] == 0 || tb__joint_is_particle(ends[1 - k])))
+                least[root_of(link, (uint32_t)ends[k])] = 0;
+    }
     /* islands that all rested long enough fall asleep, tagged by a fresh
        number (kept apart from 0, which means awake) */
     for (i = 0; i < n; ++i) {

@@ -506,6 +506,49 @@ static void particles_hang_on_rods(void **state)
     }
 }
 
+/* ---- sleep ------------------------------------------------------------------------
+   Joints join islands: two boxes hinged at a shared edge lying on a
+   plane fall asleep together, and a ball landing on one wakes both; a
+   box holding a body without shapes on a rod (which has no reach to rest
+   by) never sleeps. */
+static void jointed_bodies_sleep_together(void **state)
+{
+    tb_world *w = world("verlet", G);
+    const double size[3] = { 1, 1, 0.2 }, xa[3] = { 0, 0, 0.1 }, xb[3] = { 1, 0, 0.1 }, q[4] = { 1, 0, 0, 0 };
+    const double edge[3] = { 0.5, 0, 0.1 }, axis[3] = { 0, 1, 0 }, xc[3] = { 5, 0, 0.1 }, xd[3] = { 5, 2, 2 };
+    const double xball[3] = { 1, 0, 0.5 };
+    tb_body_id a = box(w, 1, size, xa, q), b = box(w, 1, size, xb, q), c = box(w, 1, size, xc, q);
+    tb_body_id d = sphere(w, 1, 0.1, xd), ball;
+    tb_shape_def sd = tb_default_shape_def();
+    int asleep_a, asleep_b, asleep_c, s;
+    (void)state;
+    sd.type = TB_SHAPE_PLANE;
+    assert_int_equal(tb_world_add_shape(w, &sd, NULL), TB_OK);
+    sd = tb_default_shape_def();
+    sd.type = TB_SHAPE_BOX, sd.half_extents[0] = 0.5, sd.half_extents[1] = 0.5, sd.half_extents[2] = 0.1;
+    sd.body = a;
+    assert_int_equal(tb_world_add_shape(w, &sd, NULL), TB_OK);
+    sd.body = b;
+    assert_int_equal(tb_world_add_shape(w, &sd, NULL), TB_OK);
+    sd.body = c;
+    assert_int_equal(tb_world_add_shape(w, &sd, NULL), TB_OK);
+    joint(w, TB_JOINT_HINGE, b, a, edge, axis);
+    joint(w, TB_JOINT_DISTANCE, d, c, xd, NULL); /* d: no shapes, hanging off c */
+    for (s = 0; s < 240; ++s)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_asleep(w, a, &asleep_a), tb_body_asleep(w, b, &asleep_b), tb_body_asleep(w, c, &asleep_c);
+    assert_true(asleep_a && asleep_b);
+    assert_false(asleep_c);
+    ball = sphere(w, 1, 0.1, xball);
+    sd.type = TB_SHAPE_SPHERE, sd.radius = 0.1, sd.body = ball;
+    assert_int_equal(tb_world_add_shape(w, &sd, NULL), TB_OK);
+    for (s = 0; s < 20; ++s)
+        assert_int_equal(tb_world_step(w, 1.0 / 60), TB_OK);
+    tb_body_asleep(w, a, &asleep_a), tb_body_asleep(w, b, &asleep_b);
+    assert_false(asleep_a || asleep_b); /* the ball landed on b: a woke with it */
+    tb_world_destroy(w);
+}
+
 /* ---- the API ------------------------------------------------------------------ */
 static void bad_joints_are_refused(void **state)
 {
@@ -617,6 +660,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(jointed_bodies_pass_through_each_other),
     cmocka_unit_test(particles_hang_on_rods),
     cmocka_unit_test(released_chains_hold),
+    cmocka_unit_test(jointed_bodies_sleep_together),
     cmocka_unit_test(bad_joints_are_refused),
     cmocka_unit_test(removing_a_body_removes_its_joints),
     cmocka_unit_test(snapshots_keep_the_joints),
