@@ -33,12 +33,28 @@
 
 /* The moved ends put on their joints by Newton steps that move each
    through its inverse mass and inertia (lowest in kinetic-energy norm),
-   while they still halve the error (after that it is rounding); a step
-   that left it larger is taken back (a chain whipping its light end round
-   turned its links by more than the step's linear model holds, and the
-   step threw them apart). With h > 0, each step's impulse over h (J^T
-   delta / h, what moved the ends) goes to their momenta and the
-   reactions too: the step of an implicit method (tb__joints_shake). */
+   until the error is met (MET), or below UNMET no step halves it
+   (rounding); a step that leaves it larger goes half the way, up to
+   BACKTRACKS times, since the turns of light bodies outrun the step's
+   linear model. With h > 0, each step's impulse over h (J^T delta / h,
+   what moved the ends) goes to their momenta and the reactions too: the
+   step of an implicit method (tb__joints_shake). */
+/* The rows set up last (with their weighted copies, if asked) kept in
+   k->held, which SHAKE's Newton steps and the projection's trials apply
+   while each trial sets the rows up again */
+static tb_status keep_rows(tb_world *w, struct tb__joint_work *k, size_t rows, int weighted)
+{
+    tb_status st;
+    if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows, sizeof *k->held)) != TB_OK ||
+        (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows, sizeof *k->held_weighted)) !=
+            TB_OK)
+        return st;
+    memcpy(k->held, k->rows, rows * sizeof *k->held);
+    if (weighted)
+        memcpy(k->held_weighted, k->weighted, rows * sizeof *k->held_weighted);
+    return TB_OK;
+}
+
 static tb_status project_positions(tb_world *w, double h)
 {
     double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
@@ -58,15 +74,8 @@ static tb_status project_positions(tb_world *w, double h)
             k->x[i] = -k->rows[i].error;
         tb__joint_solve(k, rows);
         memcpy(k->newton, k->x, rows * sizeof *k->newton);
-        /* the rows of this pose, weighted, move the ends: kept aside (in
-           SHAKE's room, unused after it), since each trial below sets the
-           rows up again */
-        if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows, sizeof *k->held)) != TB_OK ||
-            (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows,
-                              sizeof *k->held_weighted)) != TB_OK)
+        if ((st = keep_rows(w, k, rows, 1)) != TB_OK) /* (SHAKE's room, unused after it) */
             return st;
-        memcpy(k->held, k->rows, rows * sizeof *k->held);
-        memcpy(k->held_weighted, k->weighted, rows * sizeof *k->held_weighted);
         tb__joint_keep(w, k, k->kept, 1, 1);
         for (tries = 0; tries < BACKTRACKS; ++tries, share /= 2) {
             for (i = 0; i < rows; ++i) {
@@ -123,21 +132,9 @@ tb_status tb__joints_project(tb_world *w, double h)
     if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
         return st;
     k = w->joint_work;
-    for (i = 0; i < rows; ++i) {
-        const tb__joint_row *r = &k->rows[i];
-        double rate = 0;
-        int side;
-        for (side = 0; side < 2; ++side) {
-            const int32_t s = side ? r->b : r->a;
-            double v[3] = { 0, 0, 0 }, om[3] = { 0, 0, 0 };
-            if (s >= 0)
-                tb__body_velocity(w, (uint32_t)s, v, om);
-            else if (tb__joint_is_particle(s))
-                memcpy(v, w->y + w->off[TB__PARTICLE_VEL] + 3 * tb__joint_particle_slot(s), sizeof v);
-            rate += tb__dot3(side ? r->lin_b : r->lin_a, v) + tb__dot3(side ? r->ang_b : r->ang_a, om);
-        }
-        k->x[i] = -rate;
-    }
+    tb__joint_rates(w, k, rows);
+    for (i = 0; i < rows; ++i)
+        k->x[i] = -k->x[i];
     tb__joint_solve(k, rows);
     if (k->impulses) { /* the step's impulses over its length: the force */
         tb__joint_add_reactions(w, k, k->rows, k->lever);
@@ -155,34 +152,22 @@ tb_status tb__joints_project(tb_world *w, double h)
 tb_status tb__joints_hold(tb_world *w)
 {
     struct tb__joint_work *k;
-    size_t rows, i;
+    size_t rows;
     tb_status st;
     if (w->joint_count == 0)
         return TB_OK;
     if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
         return st;
     k = w->joint_work;
-    if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows, sizeof *k->held)) != TB_OK ||
-        (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows, sizeof *k->held_weighted)) !=
-            TB_OK)
+    if ((st = keep_rows(w, k, rows, 0)) != TB_OK)
         return st;
-    memcpy(k->held, k->rows, rows * sizeof *k->rows);
     memcpy(k->held_lever, k->lever, 3 * w->joint_count * sizeof *k->lever);
     k->held_count = rows;
     if (!k->impulses) { /* the step's first drift */
         memset(w->joint_reaction, 0, 6 * w->joint_count * sizeof *w->joint_reaction);
         k->impulses = 1;
     }
-    for (i = 0; i < k->moved_count; ++i) {
-        const int32_t s = k->moved[i];
-        double *start = k->start + 7 * tb__joint_node(w, s);
-        if (s >= 0) {
-            memcpy(start, w->y + w->off[TB__BODY_POS] + 3 * s, 3 * sizeof(double));
-            memcpy(start + 3, w->y + w->off[TB__BODY_ROT] + 4 * s, 4 * sizeof(double));
-        } else {
-            memcpy(start, w->y + w->off[TB__PARTICLE_POS] + 3 * tb__joint_particle_slot(s), 3 * sizeof(double));
-        }
-    }
+    tb__joint_keep(w, k, k->start, 1, 1); /* the poses the drift starts from */
     return TB_OK;
 }
 
@@ -220,7 +205,7 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
     double most, next = 0;
     size_t rows, i;
     tb_status st;
-    int step, tries;
+    int step, tries, rounding;
     if (w->joint_count == 0 || !k || k->held_count == 0)
         return TB_OK;
     if ((st = tb__joint_set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
@@ -265,9 +250,10 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
         }
         for (i = 0; i < rows; ++i)
             k->total[i] += share * k->newton[i];
-        if (!(next < 0.5 * most) && next < UNMET) /* rounding: no step halves it */
-            break;
+        rounding = !(next < 0.5 * most) && next < UNMET; /* no step halves it */
         most = next;
+        if (rounding)
+            break;
     }
     k->held_count = 0;
     if (most > UNMET) {

@@ -301,6 +301,18 @@ static double row_times(const tb_world *w, const tb__joint_row *r, const double 
     return sum;
 }
 
+void tb__joint_rates(const tb_world *w, struct tb__joint_work *k, size_t rows)
+{
+    size_t i, n;
+    for (i = 0; i < k->moved_count; ++i) { /* the ends' v and w, set up with the rows */
+        n = tb__joint_node(w, k->moved[i]);
+        memcpy(k->accel + 6 * n, k->ends[n].v, 3 * sizeof *k->accel);
+        memcpy(k->accel + 6 * n + 3, k->ends[n].w, 3 * sizeof *k->accel);
+    }
+    for (i = 0; i < rows; ++i)
+        k->x[i] = row_times(w, &k->rows[i], k->accel);
+}
+
 tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen)
 {
     struct tb__joint_work *k;

@@ -28,7 +28,7 @@ struct tb__joint_work {
                                 upper part (tb__joints_shake): one block */
     size_t env_cap;
     /* per node (node(): the bodies' slots, then the particles'): */
-    double *accel;           /* [6 nodes] a0 and alpha0 under the other forces */
+    double *accel;           /* [6 nodes] a0 and alpha0 under the other forces, or v and w */
     size_t *body_row;        /* [nodes] the first row that moves the node */
     unsigned *stamp;         /* [nodes] the set-up that last wrote the two above */
     double *start;           /* [7 nodes] x and q at the start of a drift (tb__joints_hold) */
@@ -67,6 +67,9 @@ void tb__joint_apply(tb_world *w, const tb__joint_row *rows, size_t count, const
    its anchor on a, lever from a's centre) */
 void tb__joint_add_reactions(tb_world *w, const struct tb__joint_work *k, const tb__joint_row *rows,
                              const double *lever);
+/* k->x = J v: the rows' rates at the velocities they were set up with
+   (k->accel holds the ends' motion after it) */
+void tb__joint_rates(const tb_world *w, struct tb__joint_work *k, size_t rows);
 /* The largest |C| of the rows */
 double tb__joint_largest_error(const struct tb__joint_work *k, size_t rows);
 /* The moved ends' poses (poses 1: a body's x and q, a particle's x) or

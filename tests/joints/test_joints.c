@@ -393,8 +393,9 @@ static double worst_error(tb_world *w)
    implicitly (the drift projected onto the joints). Ten links with a
    100 times heavier end and a uniform chain of 30 hold every gap to
    rounding for 10 s at 60 Hz under verlet and symplectic Euler, and gain
-   no energy beyond 1e-2 of their drop's (measured: none for ten links,
-   0.30 J of the 30's 441 J). Without that step they were lost within 2 s
+   no energy beyond 2e-3 of their drop's (the implicit steps only take
+   energy; what the symplectic ones add is their own O(h^2) swing,
+   measured: none for ten links, 0.30 J of the 30's 456 J). Without that step they were lost within 2 s
    (gaps past 1 m; issue 19's heavy chain). */
 static void released_chains_hold(void **state)
 {
@@ -426,7 +427,7 @@ static void released_chains_hold(void **state)
                           "(drop %.0f J), at the end %.0f J\n", methods[m], links[c], end[c], worst, most, drop,
                           tb_world_energy(w).total - e0);
             assert_below(worst, 1e-12);
-            assert_below(most, 1e-2 * drop);
+            assert_below(most, 2e-3 * drop);
             tb_world_destroy(w);
         }
 }

@@ -34,6 +34,17 @@ typedef struct swing {
     double period;
 } swing;
 
+/* ODE started, and a world of its under gravity along -z (dCloseODE
+   after dWorldDestroy ends each run) */
+static dWorldID ode_world(void)
+{
+    dWorldID world;
+    dInitODE2(0);
+    world = dWorldCreate();
+    dWorldSetGravity(world, 0, 0, -G);
+    return world;
+}
+
 static void ode_pendulum(double start, double hz, int steps, swing *out, double *erp, double *cfm)
 {
     dWorldID world;
@@ -41,9 +52,7 @@ static void ode_pendulum(double start, double hz, int steps, swing *out, double 
     dJointID hinge;
     dMass mass;
     int s;
-    dInitODE2(0);
-    world = dWorldCreate();
-    dWorldSetGravity(world, 0, 0, -G);
+    world = ode_world();
     *erp = dWorldGetERP(world), *cfm = dWorldGetCFM(world);
     body = dBodyCreate(world);
     dMassSetSphereTotal(&mass, M, R);
@@ -148,9 +157,7 @@ static void slider_agrees_with_ode(void **state)
         dJointID slider;
         dMass mass;
         int s;
-        dInitODE2(0);
-        world = dWorldCreate();
-        dWorldSetGravity(world, 0, 0, -G);
+        world = ode_world();
         body = dBodyCreate(world);
         dMassSetBoxTotal(&mass, 2, 0.3, 0.2, 0.1);
         dBodySetMass(body, &mass);
@@ -214,9 +221,7 @@ static void ball_chain_agrees_with_ode(void **state)
         dWorldID world;
         dBodyID body[LINKS];
         dMass mass;
-        dInitODE2(0);
-        world = dWorldCreate();
-        dWorldSetGravity(world, 0, 0, -G);
+        world = ode_world();
         for (i = 0; i < LINKS; ++i) {
             dJointID ball = dJointCreateBall(world, 0);
             body[i] = dBodyCreate(world);
