@@ -437,6 +437,20 @@ TB_API tb_status tb_joint_reaction(const tb_world *world, tb_joint_id id, double
    (m for points, and for axes that should be square the cosine between
    them) (test_joints.joints_hold_every_type). */
 TB_API tb_status tb_joint_error(const tb_world *world, tb_joint_id id, double *error);
+/* The joint's free coordinate now and its rate (rate may be NULL): HINGE,
+   the angle (rad) a has turned about the axis relative to b since
+   creation; SLIDER, how far (m) a's anchor has moved along the axis from
+   b's; DISTANCE, the distance (m); BALL, the angle (rad) between a's and
+   b's copies of the axis. A fixed joint has none: TB_ERR_ARGUMENT. */
+TB_API tb_status tb_joint_position(const tb_world *world, tb_joint_id id, double *position, double *rate);
+/* A joint's limit, motor and spring switched and set between steps, as
+   tb_joint_def has them (limits: test_joints.limits_stop_the_swing;
+   motors: motor_turns_at_its_speed; springs: springs_ring_at_their_hz).
+   The bodies are woken. */
+TB_API tb_status tb_joint_set_limit(tb_world *world, tb_joint_id id, int enable, double lower, double upper);
+TB_API tb_status tb_joint_set_motor(tb_world *world, tb_joint_id id, int enable, double speed, double max_force);
+TB_API tb_status tb_joint_set_spring(tb_world *world, tb_joint_id id, int enable, double hz, double damping_ratio,
+                                     double target);
 
 /* ------------------------------------------------------ shapes, contacts -- */
 /* Shapes make bodies and particles collide; a world without shapes pays

@@ -166,6 +166,32 @@ typedef struct tb_joint_def {
                                 default): the distance at creation */
     int collide;             /* nonzero: the shapes of a and b collide with each
                                 other; 0 (the default): they pass through */
+    /* A limit (enable_limit) keeps the joint's free coordinate within
+       [lower, upper] (tb_joint_position): HINGE, the angle (rad, within
+       [-pi, pi]) a has turned about the axis relative to b since
+       creation; SLIDER, how far a's anchor has moved along the axis from
+       b's (m); DISTANCE, the distance (m; the rod's fixed length goes: a
+       rope is lower 0, upper its length); BALL, a cone: the angle between
+       a's and b's copies of `axis` at most upper (rad, within (0, pi);
+       lower unused). */
+    int enable_limit;
+    double lower, upper;
+    /* A motor (HINGE, SLIDER) drives the free coordinate's rate towards
+       motor_speed (rad/s or m/s) with at most max_motor_force (N m or N,
+       >= 0). */
+    int enable_motor;
+    double motor_speed, max_motor_force;
+    /* A spring (HINGE, SLIDER, DISTANCE) pulls the free coordinate towards
+       spring_target (rad or m; DISTANCE: towards `length`, and the rod's
+       fixed length goes) at spring_hz (> 0) with spring_damping_ratio
+       (>= 0): its stiffness and damping are those numbers times the
+       effective mass along the coordinate at creation. */
+    int enable_spring;
+    double spring_hz, spring_damping_ratio, spring_target;
+    /* The joint breaks (is removed after the step; its id turns stale)
+       when its reaction force exceeds break_force (N) or its torque
+       break_torque (N m); 0 (the default): never. */
+    double break_force, break_torque;
 } tb_joint_def;
 
 /* ------------------------------------------------------ shapes, contacts -- */

@@ -10,7 +10,10 @@
    Each row's Jacobian and its bias (what the motion alone adds to the
    second derivative) are the exact derivatives of its C, so that the
    accelerations the solve gives keep C'' = 0
-   (test_joints.joints_hold_every_type). */
+   (test_joints.joints_hold_every_type). A joint's limits and motor add
+   rows along its free coordinate (a hinge's turn, a slider's travel, a
+   distance, a ball joint's angle between axes): LIMIT rows C >= 0 and a
+   MOTOR row on its rate (test_joint_drives). */
 #include "joints/joints.h"
 #include "bodies/bodies.h"
 
@@ -42,6 +45,20 @@ static void twice(const double w[3], const double r[3], double out[3])
 static void row_start(tb__joint_row *row, const ends *e)
 {
     row->a = e->a->slot, row->b = e->b->slot;
+    row->kind = TB__ROW_EQUAL;
+    row->speed = row->most = 0;
+}
+
+/* -C: the same row, asked from the other side (an upper limit) */
+static void negate(tb__joint_row *row)
+{
+    int k;
+    for (k = 0; k < 3; ++k) {
+        row->lin_a[k] = -row->lin_a[k], row->ang_a[k] = -row->ang_a[k];
+        row->lin_b[k] = -row->lin_b[k], row->ang_b[k] = -row->ang_b[k];
+    }
+    row->bias = -row->bias;
+    row->error = -row->error;
 }
 
 /* t.(p_a - p_b), t fixed in the world, or turning with a */
@@ -116,6 +133,25 @@ static int orientation_rows(tb__joint_row *rows, const ends *e)
     return 3;
 }
 
+/* The angle a has turned about the axis relative to b: the angle of a's
+   second axis from b's in the plane of b's two across the axis (0 at
+   creation, right-handed about the axis); its rate is the axis times
+   w_a - w_b, exactly while the hinge holds the axes together */
+static void turn_row(tb__joint_row *row, const ends *e)
+{
+    double wa[3], dw[3];
+    int k;
+    row_start(row, e);
+    for (k = 0; k < 3; ++k) {
+        row->lin_a[k] = row->lin_b[k] = 0;
+        row->ang_a[k] = e->fa[0][k], row->ang_b[k] = -e->fa[0][k];
+        dw[k] = e->a->w[k] - e->b->w[k];
+    }
+    tb__cross(e->a->w, e->fa[0], wa); /* the axis turns with a */
+    row->bias = tb__dot3(wa, dw);
+    row->error = atan2(tb__dot3(e->fa[1], e->fb[2]), tb__dot3(e->fa[1], e->fb[1]));
+}
+
 static int ball_rows(tb__joint_row *rows, const ends *e)
 {
     static const double axes[3][3] = { { 1, 0, 0 }, { 0, 1, 0 }, { 0, 0, 1 } };
@@ -125,29 +161,110 @@ static int ball_rows(tb__joint_row *rows, const ends *e)
     return 3;
 }
 
-int tb__joint_rows(const tb_world *w, size_t j, const tb__joint_end *a, const tb__joint_end *b, tb__joint_row *rows)
+/* Joint j's free coordinate (joints.h, tb__joint_coordinate); 0 for
+   FIXED */
+static int coordinate_row(const tb_world *w, size_t j, const ends *e, tb__joint_row *row)
+{
+    switch (w->joint_type[j]) {
+    case TB_JOINT_HINGE:
+        turn_row(row, e);
+        return 1;
+    case TB_JOINT_SLIDER: /* a's anchor along a's axis from b's */
+        point_row(row, e, e->fa[0], 1);
+        return 1;
+    case TB_JOINT_DISTANCE:
+        distance_row(row, e, 0);
+        return 1;
+    case TB_JOINT_BALL: /* the cosine of the angle between the axes */
+        angle_row(row, e, e->fa[0], e->fb[0]);
+        return 1;
+    default:
+        return 0;
+    }
+}
+
+/* The limits' rows (C = coordinate - lower >= 0, upper - coordinate >= 0;
+   a ball joint's cone: cos(angle) - cos(upper) >= 0) and the motor's
+   row (a rate along the coordinate), after the joint's own */
+static int drive_rows(const tb_world *w, size_t j, const ends *e, tb__joint_row *rows)
+{
+    const double *drive = w->joint_drive + TB__DRIVES * j;
+    const uint32_t flags = w->joint_flags[j];
+    tb__joint_row row;
+    int n = 0;
+    if (!(flags & (TB__JOINT_LIMIT | TB__JOINT_MOTOR)) || !coordinate_row(w, j, e, &row))
+        return 0;
+    if (flags & TB__JOINT_LIMIT) {
+        row.kind = TB__ROW_LIMIT;
+        rows[n] = row;
+        if (w->joint_type[j] == TB_JOINT_BALL) {
+            rows[n++].error -= cos(drive[TB__DRIVE_UPPER]);
+        } else {
+            rows[n++].error -= drive[TB__DRIVE_LOWER];
+            rows[n] = row;
+            negate(&rows[n]);
+            rows[n++].error += drive[TB__DRIVE_UPPER];
+        }
+    }
+    if (flags & TB__JOINT_MOTOR) {
+        row.kind = TB__ROW_MOTOR;
+        row.error = 0;
+        row.speed = drive[TB__DRIVE_SPEED];
+        row.most = drive[TB__DRIVE_MOST];
+        rows[n++] = row;
+    }
+    return n;
+}
+
+double tb__joint_row_violation(const tb__joint_row *row)
+{
+    if (row->kind == TB__ROW_EQUAL)
+        return fabs(row->error);
+    return row->kind == TB__ROW_LIMIT && row->error < 0 ? -row->error : 0;
+}
+
+/* What every row of joint j reads, from its ends */
+static void ends_of(const tb_world *w, size_t j, const tb__joint_end *a, const tb__joint_end *b, ends *out)
 {
     const double *anchor = w->joint_anchor + 6 * j, *frame = w->joint_frame + 18 * j;
     double pa[3], pb[3], va[3], vb[3];
-    ends e;
-    int k, n = 0;
-    e.a = a, e.b = b;
-    tb__mul(a->R, anchor, e.ra);
-    tb__mul(b->R, anchor + 3, e.rb);
+    int k;
+    out->a = a, out->b = b;
+    tb__mul(a->R, anchor, out->ra);
+    tb__mul(b->R, anchor + 3, out->rb);
     for (k = 0; k < 3; ++k) {
-        tb__mul(a->R, frame + 3 * k, e.fa[k]);
-        tb__mul(b->R, frame + 9 + 3 * k, e.fb[k]);
-        pa[k] = a->x[k] + e.ra[k];
-        pb[k] = b->x[k] + e.rb[k];
+        tb__mul(a->R, frame + 3 * k, out->fa[k]);
+        tb__mul(b->R, frame + 9 + 3 * k, out->fb[k]);
+        pa[k] = a->x[k] + out->ra[k];
+        pb[k] = b->x[k] + out->rb[k];
     }
-    sub3(pa, pb, e.d);
-    tb__cross(a->w, e.ra, va);
-    tb__cross(b->w, e.rb, vb);
+    sub3(pa, pb, out->d);
+    tb__cross(a->w, out->ra, va);
+    tb__cross(b->w, out->rb, vb);
     for (k = 0; k < 3; ++k)
-        e.dd[k] = (a->v[k] + va[k]) - (b->v[k] + vb[k]);
-    twice(a->w, e.ra, va);
-    twice(b->w, e.rb, vb);
-    sub3(va, vb, e.centripetal);
+        out->dd[k] = (a->v[k] + va[k]) - (b->v[k] + vb[k]);
+    twice(a->w, out->ra, va);
+    twice(b->w, out->rb, vb);
+    sub3(va, vb, out->centripetal);
+}
+
+int tb__joint_coordinate(const tb_world *w, size_t j, const tb__joint_end *a, const tb__joint_end *b,
+                         tb__joint_row *row)
+{
+    ends e;
+    int n;
+    ends_of(w, j, a, b, &e);
+    n = coordinate_row(w, j, &e, row);
+    if (n && w->joint_type[j] == TB_JOINT_BALL) /* the angle, not its cosine */
+        row->error = acos(fmax(-1, fmin(1, row->error)));
+    return n;
+}
+
+int tb__joint_rows(const tb_world *w, size_t j, const tb__joint_end *a, const tb__joint_end *b, tb__joint_row *rows)
+{
+    ends e;
+    int n = 0;
+    ends_of(w, j, a, b, &e);
     switch (w->joint_type[j]) {
     case TB_JOINT_BALL:
         n = ball_rows(rows, &e);
@@ -166,11 +283,12 @@ int tb__joint_rows(const tb_world *w, size_t j, const tb__joint_end *a, const tb
         n = ball_rows(rows, &e);
         n += orientation_rows(rows + n, &e);
         break;
-    case TB_JOINT_DISTANCE:
-        distance_row(&rows[n++], &e, w->joint_length[j]);
+    case TB_JOINT_DISTANCE: /* a rod, unless limits or a spring hold it instead */
+        if (!(w->joint_flags[j] & (TB__JOINT_LIMIT | TB__JOINT_SPRING)))
+            distance_row(&rows[n++], &e, w->joint_length[j]);
         break;
     default:
         break;
     }
-    return n;
+    return n + drive_rows(w, j, &e, rows + n);
 }

@@ -9,7 +9,9 @@
    Newton steps on a matrix that is not symmetric; where it finds none, a
    mode faster than the step, the step taken implicitly: the free drift
    projected, its impulse added; test_joints.released_chains_hold). A
-   Newton step that leaves the error larger goes half the way. */
+   Newton step that leaves the error larger goes half the way. Limits
+   join where passed (and in SHAKE while they push), motors only in the
+   velocities' projection (test_joint_drives). */
 #include "joints/joint_work.h"
 #include "bodies/bodies.h"
 
@@ -30,6 +32,10 @@
 /* ... and an error this small is met: rounding on metre-sized joints (a
    larger world stops where a step no longer halves its error) */
 #define MET 1e-14
+/* m or rad: a limit this near is reached, and its row holds the
+   velocities (far above what the projection leaves, far below a step's
+   motion) */
+#define REACHED 1e-9
 
 /* The moved ends put on their joints by Newton steps that move each
    through its inverse mass and inertia (lowest in kinetic-energy norm),
@@ -70,32 +76,46 @@ static tb_status project_positions(tb_world *w, double h)
     most = tb__joint_largest_error(k, rows);
     for (step = 0; step < PROJECTION_STEPS && most > MET; ++step) {
         double share = 1;
-        for (i = 0; i < rows; ++i)
+        for (i = 0; i < rows; ++i) { /* the joints, and the limits passed */
             k->x[i] = -k->rows[i].error;
-        tb__joint_solve(k, rows);
+            k->use[i] = k->rows[i].kind == TB__ROW_EQUAL || (k->rows[i].kind == TB__ROW_LIMIT && k->rows[i].error < 0);
+        }
+        tb__joint_solve(k, rows, 0);
         memcpy(k->newton, k->x, rows * sizeof *k->newton);
         if ((st = keep_rows(w, k, rows, 1)) != TB_OK) /* (SHAKE's room, unused after it) */
             return st;
         tb__joint_keep(w, k, k->kept, 1, 1);
         for (tries = 0; tries < BACKTRACKS; ++tries, share /= 2) {
+            /* each node's move summed over the rows, then made as one
+               translation and one turn (turns made row by row would not
+               sum: a light body's rows turn it by radians that cancel) */
+            for (i = 0; i < k->moved_count; ++i)
+                memset(k->accel + 6 * tb__joint_node(w, k->moved[i]), 0, 6 * sizeof *k->accel);
             for (i = 0; i < rows; ++i) {
                 const tb__joint_row *r = &k->held[i];
                 const double *m = k->held_weighted[i];
                 int side;
                 for (side = 0; side < 2; ++side) {
                     const int32_t s = side ? r->b : r->a;
-                    double turn[3];
-                    if (tb__joint_is_particle(s))
-                        for (d = 0; d < 3; ++d)
-                            px[3 * tb__joint_particle_slot(s) + d] += m[6 * side + d] * share * k->newton[i];
-                    if (s < 0)
+                    double *move;
+                    if (s == TB__JOINT_WORLD)
                         continue;
-                    for (d = 0; d < 3; ++d) {
-                        x[3 * s + d] += m[6 * side + d] * share * k->newton[i];
-                        turn[d] = m[6 * side + 3 + d] * share * k->newton[i];
-                    }
-                    tb__rotation_isotropic(q + 4 * s, turn, 1, 1);
+                    move = k->accel + 6 * tb__joint_node(w, s);
+                    for (d = 0; d < 6; ++d)
+                        move[d] += m[6 * side + d] * share * k->newton[i];
                 }
+            }
+            for (i = 0; i < k->moved_count; ++i) {
+                const int32_t s = k->moved[i];
+                const double *move = k->accel + 6 * tb__joint_node(w, s);
+                if (tb__joint_is_particle(s)) {
+                    for (d = 0; d < 3; ++d)
+                        px[3 * tb__joint_particle_slot(s) + d] += move[d];
+                    continue;
+                }
+                for (d = 0; d < 3; ++d)
+                    x[3 * s + d] += move[d];
+                tb__rotation_isotropic(q + 4 * s, move + 3, 1, 1);
             }
             if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
                 return st;
@@ -133,9 +153,12 @@ tb_status tb__joints_project(tb_world *w, double h)
         return st;
     k = w->joint_work;
     tb__joint_rates(w, k, rows);
-    for (i = 0; i < rows; ++i)
-        k->x[i] = -k->x[i];
-    tb__joint_solve(k, rows);
+    for (i = 0; i < rows; ++i) { /* the joints, the limits reached, the motors' speeds */
+        const tb__joint_row *r = &k->rows[i];
+        k->x[i] = (r->kind == TB__ROW_MOTOR ? r->speed : 0) - k->x[i];
+        k->use[i] = r->kind != TB__ROW_LIMIT || r->error <= REACHED;
+    }
+    tb__joint_solve(k, rows, h);
     if (k->impulses) { /* the step's impulses over its length: the force */
         tb__joint_add_reactions(w, k, k->rows, k->lever);
         for (i = 0; i < 6 * w->joint_count; ++i)
@@ -222,10 +245,16 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
            the rows now, their turn over the step, times a light body's
            inverse inertia, stalled it) */
         e.first = k->first, e.offset = k->offset, e.a = k->a, e.l = NULL, e.use = k->use, e.drop = DROP;
+        for (i = 0; i < rows; ++i) /* the joints, and the limits passed or pushing */
+            k->use[i] = k->rows[i].kind == TB__ROW_EQUAL ||
+                        (k->rows[i].kind == TB__ROW_LIMIT && (k->rows[i].error < 0 || k->total[i] > 0));
         (void)tb__envelope_lu(&e, k->upper, 0, rows); /* with drop, no pivot fails */
         for (i = 0; i < rows; ++i)
             k->newton[i] = k->use[i] ? -k->rows[i].error / h : 0;
         tb__envelope_lu_solve(&e, k->upper, 0, rows, k->newton);
+        for (i = 0; i < rows; ++i) /* a limit pushes only: one that would pull lets go */
+            if (k->rows[i].kind == TB__ROW_LIMIT && k->total[i] + k->newton[i] < 0)
+                k->newton[i] = -k->total[i];
         tb__joint_keep(w, k, k->kept, 0, 1);
         /* a step that leaves the error larger goes a share of the way
            (the links of a chain whipping its light end round turn by more

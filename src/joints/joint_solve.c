@@ -20,9 +20,9 @@
 
 static tb_status reserve_rows(tb_world *w, struct tb__joint_work *k, size_t rows)
 {
-    void **arrays[8];
-    const size_t sizes[8] = { sizeof(tb__joint_row), 12 * sizeof(double), sizeof(size_t), sizeof(size_t),
-                              sizeof(double), 1, sizeof(double), sizeof(double) };
+    void **arrays[11];
+    const size_t sizes[11] = { sizeof(tb__joint_row), 12 * sizeof(double), sizeof(size_t), sizeof(size_t),
+                               sizeof(double), 1, sizeof(double), sizeof(double), sizeof(double), sizeof(double), 1 };
     size_t cap = k->row_cap ? k->row_cap : 16;
     tb_status st;
     if (rows <= k->row_cap)
@@ -32,7 +32,8 @@ static tb_status reserve_rows(tb_world *w, struct tb__joint_work *k, size_t rows
     arrays[0] = (void **)&k->rows, arrays[1] = (void **)&k->weighted, arrays[2] = (void **)&k->first;
     arrays[3] = (void **)&k->offset, arrays[4] = (void **)&k->x, arrays[5] = (void **)&k->use;
     arrays[6] = (void **)&k->newton, arrays[7] = (void **)&k->total;
-    if ((st = tb__grow(w, arrays, sizes, 8, 0, k->row_cap, cap)) != TB_OK)
+    arrays[8] = (void **)&k->rhs, arrays[9] = (void **)&k->clamped, arrays[10] = (void **)&k->state;
+    if ((st = tb__grow(w, arrays, sizes, 11, 0, k->row_cap, cap)) != TB_OK)
         return st;
     k->row_cap = cap;
     return TB_OK;
@@ -99,6 +100,47 @@ static void weigh(const tb_world *w, const tb__joint_end *e, const double lin[3]
     tb__mul(e->R, b, out + 3);
 }
 
+/* Row p times M^-1 times row q, through ends a and b */
+static double row_product(const tb_world *w, const tb__joint_row *p, const tb__joint_row *q, const tb__joint_end *a,
+                          const tb__joint_end *b)
+{
+    double m[12];
+    weigh(w, a, q->lin_a, q->ang_a, m);
+    weigh(w, b, q->lin_b, q->ang_b, m + 6);
+    return tb__dot3(p->lin_a, m) + tb__dot3(p->ang_a, m + 3) + tb__dot3(p->lin_b, m + 6) + tb__dot3(p->ang_b, m + 9);
+}
+
+double tb__joint_effective_mass(const tb_world *w, size_t j, const tb__joint_row *row, const tb__joint_end *a,
+                                const tb__joint_end *b)
+{
+    tb__joint_row rows[TB__JOINT_ROWS];
+    double A[TB__JOINT_ROWS][TB__JOINT_ROWS + 1], inverse = row_product(w, row, row, a, b);
+    int n = 0, all = tb__joint_rows(w, j, a, b, rows), r, c, p;
+    for (r = 0; r < all; ++r) /* the rows the joint holds (not its limits or motor) */
+        if (rows[r].kind == TB__ROW_EQUAL)
+            rows[n++] = rows[r];
+    /* inverse - (R M^-1 J^T)^T (R M^-1 R^T)^-1 (R M^-1 J^T): the coordinate's
+       inverse mass with the joint's rows holding (Gauss-Jordan; a row that
+       depends on those before it is left out, as the solve leaves it) */
+    for (r = 0; r < n; ++r) {
+        for (c = 0; c < n; ++c)
+            A[r][c] = row_product(w, &rows[r], &rows[c], a, b);
+        A[r][n] = row_product(w, &rows[r], row, a, b);
+    }
+    for (p = 0; p < n; ++p) {
+        const double pivot = A[p][p];
+        if (!(pivot > DROP * row_product(w, &rows[p], &rows[p], a, b)))
+            continue;
+        for (r = p + 1; r < n; ++r) {
+            const double f = A[r][p] / pivot;
+            for (c = p; c <= n; ++c)
+                A[r][c] -= f * A[p][c];
+        }
+        inverse -= A[p][n] * A[p][n] / pivot;
+    }
+    return inverse > 0 ? 1 / inverse : 0;
+}
+
 /* Row i's part through its end on `side`, against the weighted row j */
 static double through(const tb__joint_row *ri, int side, const double *wj, const tb__joint_row *rj)
 {
@@ -125,7 +167,7 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
     size_t rows = 0, j, i, q, env = 0;
     tb_status st;
     for (j = 0; j < w->joint_count; ++j)
-        rows += (size_t)tb__joint_row_count(w->joint_type[j]);
+        rows += (size_t)tb__joint_rows_of(w, j);
     if ((st = tb__joint_reserve(w, rows)) != TB_OK)
         return st;
     k = w->joint_work;
@@ -215,8 +257,8 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
     return TB_OK;
 }
 
-/* x = (J M^-1 J^T)^-1 x over the rows, those the factor leaves out at 0 */
-void tb__joint_solve(struct tb__joint_work *k, size_t rows)
+/* x = A^-1 x over the rows k->use keeps, those left out at 0 */
+static void solve_kept(struct tb__joint_work *k, size_t rows)
 {
     tb__envelope e;
     size_t i;
@@ -226,6 +268,91 @@ void tb__joint_solve(struct tb__joint_work *k, size_t rows)
         if (!k->use[i])
             k->x[i] = 0;
     tb__envelope_solve(&e, 0, rows, k->x);
+}
+
+/* out = A x for the symmetric A whose lower envelope is k->a */
+static void times_matrix(const struct tb__joint_work *k, size_t rows, const double *x, double *out)
+{
+    size_t i, q;
+    memset(out, 0, rows * sizeof *out);
+    for (i = 0; i < rows; ++i) {
+        const double *ai = k->a + k->offset[i] - k->first[i];
+        for (q = k->first[i]; q < i; ++q) {
+            out[i] += ai[q] * x[q];
+            out[q] += ai[q] * x[i];
+        }
+        out[i] += ai[i] * x[i];
+    }
+}
+
+/* A bounded solve's row states */
+enum { FREE, HELD_OUT, AT_UPPER, AT_LOWER, NOT_ASKED };
+
+void tb__joint_solve(struct tb__joint_work *k, size_t rows, double h)
+{
+    size_t i, bounded = 0, pass, passes;
+    double scale = 0, tolerance;
+    for (i = 0; i < rows; ++i) {
+        k->state[i] = k->use[i] ? FREE : NOT_ASKED;
+        bounded += k->use[i] && k->rows[i].kind != TB__ROW_EQUAL;
+    }
+    if (!bounded) {
+        solve_kept(k, rows);
+        return;
+    }
+    /* an active set: each pass solves the free rows with those at a bound
+       held there; rows past a bound are held at it, and held rows whose
+       rate the others' multipliers break (a limit pulled through, a
+       motor past its speed) are freed, until no row moves: a few passes
+       for the few rows at a bound */
+    memcpy(k->rhs, k->x, rows * sizeof *k->rhs);
+    for (i = 0; i < rows; ++i)
+        scale = fmax(scale, fabs(k->rhs[i]));
+    tolerance = 1e-12 * scale;
+    passes = 8 + 2 * bounded;
+    for (pass = 0; pass < passes; ++pass) {
+        int changed = 0;
+        for (i = 0; i < rows; ++i) {
+            const double most = k->rows[i].most * h;
+            k->clamped[i] = k->state[i] == AT_UPPER ? most : k->state[i] == AT_LOWER ? -most : 0;
+        }
+        times_matrix(k, rows, k->clamped, k->x);
+        for (i = 0; i < rows; ++i) {
+            k->use[i] = k->state[i] == FREE;
+            k->x[i] = k->use[i] ? k->rhs[i] - k->x[i] : 0;
+        }
+        solve_kept(k, rows);
+        for (i = 0; i < rows; ++i) {
+            const tb__joint_row *r = &k->rows[i];
+            if (k->state[i] == AT_UPPER || k->state[i] == AT_LOWER)
+                k->x[i] = k->clamped[i];
+            else if (k->state[i] == FREE && k->use[i] && r->kind == TB__ROW_LIMIT && k->x[i] < 0)
+                k->state[i] = HELD_OUT, changed = 1;
+            else if (k->state[i] == FREE && k->use[i] && r->kind == TB__ROW_MOTOR && fabs(k->x[i]) > r->most * h)
+                k->state[i] = k->x[i] > 0 ? AT_UPPER : AT_LOWER, changed = 1;
+        }
+        if (!changed) { /* the held rows' rates under these multipliers */
+            times_matrix(k, rows, k->x, k->clamped);
+            for (i = 0; i < rows; ++i) {
+                const double left = k->clamped[i] - k->rhs[i]; /* what the row's rate misses */
+                if ((k->state[i] == HELD_OUT && left < -tolerance) || (k->state[i] == AT_UPPER && left > tolerance) ||
+                    (k->state[i] == AT_LOWER && left < -tolerance))
+                    k->state[i] = FREE, changed = 1;
+            }
+        }
+        if (!changed)
+            break;
+        if (pass + 1 == passes) /* cycling: the last multipliers, within bounds */
+            for (i = 0; i < rows; ++i) {
+                const double most = k->rows[i].most * h;
+                if (k->state[i] == FREE && k->rows[i].kind == TB__ROW_LIMIT)
+                    k->x[i] = fmax(k->x[i], 0);
+                else if (k->state[i] == FREE && k->rows[i].kind == TB__ROW_MOTOR)
+                    k->x[i] = fmax(-most, fmin(most, k->x[i]));
+            }
+    }
+    for (i = 0; i < rows; ++i)
+        k->use[i] = k->state[i] != NOT_ASKED;
 }
 
 /* J^T x added to the ends: as forces to the evaluation's (forces 1:
@@ -313,6 +440,58 @@ void tb__joint_rates(const tb_world *w, struct tb__joint_work *k, size_t rows)
         k->x[i] = row_times(w, &k->rows[i], k->accel);
 }
 
+double tb__joint_row_rate(const tb_world *w, const struct tb__joint_work *k, const tb__joint_row *r)
+{
+    double sum = 0;
+    if (r->a != TB__JOINT_WORLD) {
+        const tb__joint_end *a = &k->ends[tb__joint_node(w, r->a)];
+        sum += tb__dot3(r->lin_a, a->v) + tb__dot3(r->ang_a, a->w);
+    }
+    if (r->b != TB__JOINT_WORLD) {
+        const tb__joint_end *b = &k->ends[tb__joint_node(w, r->b)];
+        sum += tb__dot3(r->lin_b, b->v) + tb__dot3(r->ang_b, b->w);
+    }
+    return sum;
+}
+
+/* The evaluation's forces ready to be added to (w->force_ready), from 0
+   if nothing had made them */
+static void forces_ready(tb_world *w)
+{
+    if (!w->force_ready) {
+        if (w->particle_count)
+            memset(w->particle_force, 0, 3 * w->particle_count * sizeof(double));
+        if (w->body_count)
+            memset(w->body_force, 0, 6 * w->body_count * sizeof(double));
+    }
+    w->force_ready = 1;
+}
+
+void tb__joint_spring_forces(tb_world *w, const double *y, const double *seen)
+{
+    size_t j;
+    for (j = 0; j < w->joint_count; ++j) {
+        const double *drive = w->joint_drive + TB__DRIVES * j;
+        tb__joint_end a, b;
+        tb__joint_row row;
+        double off, rate, force;
+        if (!(w->joint_flags[j] & TB__JOINT_SPRING))
+            continue;
+        forces_ready(w);
+        tb__joint_end_at(w, j, 0, y, seen, &a);
+        tb__joint_end_at(w, j, 1, y, seen, &b);
+        if (!tb__joint_coordinate(w, j, &a, &b, &row))
+            continue;
+        off = row.error - drive[TB__DRIVE_TARGET];
+        if (w->joint_type[j] == TB_JOINT_HINGE) /* the shorter way round */
+            off = remainder(off, 2 * 3.14159265358979323846);
+        rate = tb__dot3(row.lin_a, a.v) + tb__dot3(row.ang_a, a.w) + tb__dot3(row.lin_b, b.v) +
+               tb__dot3(row.ang_b, b.w);
+        force = -(drive[TB__DRIVE_STIFFNESS] * off + drive[TB__DRIVE_DAMPING] * rate);
+        tb__joint_apply(w, &row, 1, &force, 1);
+    }
+}
+
 tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen)
 {
     struct tb__joint_work *k;
@@ -320,19 +499,20 @@ tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen)
     tb_status st;
     if (w->joint_count == 0)
         return TB_OK;
-    if (!w->force_ready) {
-        if (w->particle_count)
-            memset(w->particle_force, 0, 3 * w->particle_count * sizeof(double));
-        if (w->body_count)
-            memset(w->body_force, 0, 6 * w->body_count * sizeof(double));
-    }
-    w->force_ready = 1; /* (set before the rates: they read body_force from now) */
+    forces_ready(w); /* (before the rates: they read body_force from now) */
+    tb__joint_spring_forces(w, y, seen);
     if ((st = tb__joint_set_up(w, y, seen, 1, 0, &rows)) != TB_OK)
         return st;
     k = w->joint_work;
-    for (i = 0; i < rows; ++i)
-        k->x[i] = -(row_times(w, &k->rows[i], k->accel) + k->rows[i].bias);
-    tb__joint_solve(k, rows);
+    for (i = 0; i < rows; ++i) {
+        const tb__joint_row *r = &k->rows[i];
+        k->x[i] = -(row_times(w, r, k->accel) + r->bias);
+        /* a limit holds where it is reached and not leaving; a motor acts
+           on the velocities after the step (tb__joints_project) */
+        if (r->kind == TB__ROW_MOTOR || (r->kind == TB__ROW_LIMIT && (r->error > 0 || tb__joint_row_rate(w, k, r) > 0)))
+            k->use[i] = 0;
+    }
+    tb__joint_solve(k, rows, 1);
     memset(w->joint_reaction, 0, 6 * w->joint_count * sizeof *w->joint_reaction);
     tb__joint_add_reactions(w, k, k->rows, k->lever);
     k->impulses = 0;
@@ -346,7 +526,7 @@ double tb__joint_largest_error(const struct tb__joint_work *k, size_t rows)
     double e = 0;
     size_t i;
     for (i = 0; i < rows; ++i)
-        e = fmax(e, fabs(k->rows[i].error));
+        e = fmax(e, tb__joint_row_violation(&k->rows[i]));
     return e;
 }
 
@@ -389,6 +569,9 @@ void tb__joint_work_free(tb_world *w)
     tb__alloc(w, k->use, k->row_cap, 0);
     tb__alloc(w, k->newton, k->row_cap * sizeof *k->newton, 0);
     tb__alloc(w, k->total, k->row_cap * sizeof *k->total, 0);
+    tb__alloc(w, k->rhs, k->row_cap * sizeof *k->rhs, 0);
+    tb__alloc(w, k->clamped, k->row_cap * sizeof *k->clamped, 0);
+    tb__alloc(w, k->state, k->row_cap, 0);
     tb__alloc(w, k->row_start, k->joint_cap * sizeof *k->row_start, 0);
     tb__alloc(w, k->lever, k->joint_cap * 3 * sizeof *k->lever, 0);
     tb__alloc(w, k->held_lever, k->joint_cap * 3 * sizeof *k->held_lever, 0);

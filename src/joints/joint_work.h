@@ -19,6 +19,8 @@ struct tb__joint_work {
     double *x;               /* [rows] right side, then multipliers */
     double *newton, *total;  /* [rows] a Newton step's multipliers; those taken so far */
     unsigned char *use;      /* [rows] 0: left out */
+    double *rhs, *clamped;   /* [rows] a bounded solve's right side; the multipliers held at bounds */
+    unsigned char *state;    /* [rows] a bounded solve's: free, at a bound, left out */
     size_t row_cap;
     size_t *row_start;       /* [joints + 1] */
     double *lever;           /* [3 joints] the anchor on a from a's centre */
@@ -59,8 +61,14 @@ size_t tb__joint_node(const tb_world *w, int32_t end);
    is the rows now through the inertia now times the held rows
    (tb__joints_shake), not symmetric. *count: the rows. */
 tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int forces, int shake, size_t *count);
-/* k->x = (J M^-1 J^T)^-1 k->x over the rows, those the factor leaves out at 0 */
-void tb__joint_solve(struct tb__joint_work *k, size_t rows);
+/* k->x = (J M^-1 J^T)^-1 k->x over the rows k->use keeps, those left out
+   (or that the factor leaves out) at 0; each within what its row allows:
+   a LIMIT row's at least 0, a MOTOR row's within +-most h (an active
+   set: rows past a bound held there, rows held whose rates the others
+   break taken back) */
+void tb__joint_solve(struct tb__joint_work *k, size_t rows, double h);
+/* A row's rate at the velocities of the ends set up with it */
+double tb__joint_row_rate(const tb_world *w, const struct tb__joint_work *k, const tb__joint_row *row);
 /* J^T x added to the ends: as forces (forces 1), or as impulses */
 void tb__joint_apply(tb_world *w, const tb__joint_row *rows, size_t count, const double *x, int forces);
 /* Each joint's rows times k->x added to its reaction (the torque about

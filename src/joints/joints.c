@@ -8,9 +8,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define JOINT_ARRAYS 7
+#define JOINT_ARRAYS 8
+#define PI 3.14159265358979323846
 
 static void body_removed(tb_world *w, uint32_t body_index1);
+static void wake_ends(tb_world *w, uint32_t j);
+static tb_status check_drive(tb_world *w, const tb_joint_def *def, int particle);
 static void particle_removed(tb_world *w, uint32_t slot, uint32_t last);
 
 tb_joint_def tb_default_joint_def(void)
@@ -29,6 +32,19 @@ int tb__joint_row_count(uint32_t type)
     return type < sizeof rows / sizeof rows[0] ? rows[type] : 0;
 }
 
+int tb__joint_rows_of(const tb_world *w, size_t j)
+{
+    const uint32_t type = w->joint_type[j], flags = w->joint_flags[j];
+    int n = tb__joint_row_count(type);
+    if (type == TB_JOINT_DISTANCE && (flags & (TB__JOINT_LIMIT | TB__JOINT_SPRING)))
+        n = 0;
+    if (flags & TB__JOINT_LIMIT)
+        n += type == TB_JOINT_BALL ? 1 : 2;
+    if (flags & TB__JOINT_MOTOR)
+        n += 1;
+    return n;
+}
+
 static void arrays_of(tb_world *w, void **arrays[JOINT_ARRAYS], size_t sizes[JOINT_ARRAYS])
 {
     arrays[0] = (void **)&w->joint_type;     sizes[0] = sizeof(uint32_t);
@@ -38,6 +54,7 @@ static void arrays_of(tb_world *w, void **arrays[JOINT_ARRAYS], size_t sizes[JOI
     arrays[4] = (void **)&w->joint_length;   sizes[4] = sizeof(double);
     arrays[5] = (void **)&w->joint_reaction; sizes[5] = 6 * sizeof(double);
     arrays[6] = (void **)&w->joint_flags;    sizes[6] = sizeof(uint32_t);
+    arrays[7] = (void **)&w->joint_drive;    sizes[7] = TB__DRIVES * sizeof(double);
 }
 
 /* The pose of body slot s (x, R), or the world's for s = -1 */
@@ -187,10 +204,104 @@ static tb_status check_def(tb_world *w, const tb_joint_def *def, int32_t *sa, in
         ((st = tb__check_values(w, def->anchor_b, 3, "joint anchor_b")) != TB_OK ||
          (st = tb__check_values(w, &def->length, 1, "joint length")) != TB_OK))
         return st;
-    if ((def->type == TB_JOINT_HINGE || def->type == TB_JOINT_SLIDER) &&
+    if ((def->type == TB_JOINT_HINGE || def->type == TB_JOINT_SLIDER || def->type == TB_JOINT_BALL) &&
         (st = tb__check_values(w, def->axis, 3, "joint axis")) != TB_OK)
         return st;
+    return check_drive(w, def, tb__joint_is_particle(*sa) || tb__joint_is_particle(*sb));
+}
+
+/* A joint's limits, motor, spring and breaking figures as the types and
+   their units allow (tb_joint_def) */
+static tb_status check_limit(tb_world *w, uint32_t type, int particle, int enable, double lower, double upper)
+{
+    const double both[2] = { lower, upper };
+    tb_status st;
+    if (!enable)
+        return TB_OK;
+    if (type == TB_JOINT_FIXED || (type == TB_JOINT_BALL && particle))
+        return tb__fail(w, TB_ERR_ARGUMENT, "a %s joint has no limit", type == TB_JOINT_FIXED ? "fixed" : "particle's "
+                        "ball");
+    if ((st = tb__check_values(w, type == TB_JOINT_BALL ? &upper : both, type == TB_JOINT_BALL ? 1 : 2,
+                               "joint limit")) != TB_OK)
+        return st;
+    if (type == TB_JOINT_BALL)
+        return upper > 0 && upper < PI ? TB_OK
+                                       : tb__fail(w, TB_ERR_ARGUMENT, "ball joint cone %g rad: it must be above 0 and "
+                                                  "below pi", upper);
+    if (lower > upper)
+        return tb__fail(w, TB_ERR_ARGUMENT, "joint limit: lower %g above upper %g", lower, upper);
+    if (type == TB_JOINT_HINGE && (lower < -PI || upper > PI))
+        return tb__fail(w, TB_ERR_ARGUMENT, "hinge limits %g to %g rad: they must be within -pi to pi", lower, upper);
+    if (type == TB_JOINT_DISTANCE && (lower < 0 || upper > TB_LIMIT))
+        return tb__fail(w, TB_ERR_ARGUMENT, "distance joint limits %g to %g m: they must be from 0 to %g m", lower,
+                        upper, TB_LIMIT);
     return TB_OK;
+}
+
+static tb_status check_motor(tb_world *w, uint32_t type, int enable, double speed, double most)
+{
+    tb_status st;
+    if (!enable)
+        return TB_OK;
+    if (type != TB_JOINT_HINGE && type != TB_JOINT_SLIDER)
+        return tb__fail(w, TB_ERR_ARGUMENT, "only hinge and slider joints have motors");
+    if ((st = tb__check_values(w, &speed, 1, "joint motor speed")) != TB_OK ||
+        (st = tb__check_values(w, &most, 1, "joint max_motor_force")) != TB_OK)
+        return st;
+    return most >= 0 ? TB_OK : tb__fail(w, TB_ERR_ARGUMENT, "joint max_motor_force %g: it must be 0 or more", most);
+}
+
+static tb_status check_spring(tb_world *w, uint32_t type, int enable, double hz, double ratio, double target)
+{
+    const double v[3] = { hz, ratio, target };
+    tb_status st;
+    if (!enable)
+        return TB_OK;
+    if (type != TB_JOINT_HINGE && type != TB_JOINT_SLIDER && type != TB_JOINT_DISTANCE)
+        return tb__fail(w, TB_ERR_ARGUMENT, "only hinge, slider and distance joints have springs");
+    if ((st = tb__check_values(w, v, 3, "joint spring")) != TB_OK)
+        return st;
+    if (!(hz > 0) || !(ratio >= 0))
+        return tb__fail(w, TB_ERR_ARGUMENT, "joint spring: spring_hz %g must be above 0 and spring_damping_ratio %g "
+                        "0 or more", hz, ratio);
+    if (type == TB_JOINT_HINGE && fabs(target) > PI)
+        return tb__fail(w, TB_ERR_ARGUMENT, "hinge spring target %g rad: it must be within -pi to pi", target);
+    return TB_OK;
+}
+
+static tb_status check_drive(tb_world *w, const tb_joint_def *def, int particle)
+{
+    const double breaking[2] = { def->break_force, def->break_torque };
+    tb_status st;
+    if ((st = check_limit(w, (uint32_t)def->type, particle, def->enable_limit, def->lower, def->upper)) != TB_OK ||
+        (st = check_motor(w, (uint32_t)def->type, def->enable_motor, def->motor_speed, def->max_motor_force)) !=
+            TB_OK ||
+        (st = check_spring(w, (uint32_t)def->type, def->enable_spring, def->spring_hz, def->spring_damping_ratio,
+                           def->spring_target)) != TB_OK ||
+        (st = tb__check_values(w, breaking, 2, "joint break_force and break_torque")) != TB_OK)
+        return st;
+    if (breaking[0] < 0 || breaking[1] < 0)
+        return tb__fail(w, TB_ERR_ARGUMENT, "joint break_force %g and break_torque %g must be 0 or more",
+                        breaking[0], breaking[1]);
+    return TB_OK;
+}
+
+/* Joint j's spring's stiffness and damping from its frequency and ratio
+   and the effective mass along its coordinate now; 0 when nothing can
+   move along it */
+static void spring_from_hz(tb_world *w, uint32_t j)
+{
+    double *drive = w->joint_drive + TB__DRIVES * j;
+    const double omega = 2 * PI * drive[TB__DRIVE_HZ];
+    tb__joint_end a, b;
+    tb__joint_row row;
+    double mass = 0;
+    tb__joint_end_at(w, j, 0, w->y, w->y, &a);
+    tb__joint_end_at(w, j, 1, w->y, w->y, &b);
+    if (tb__joint_coordinate(w, j, &a, &b, &row))
+        mass = tb__joint_effective_mass(w, j, &row, &a, &b);
+    drive[TB__DRIVE_STIFFNESS] = mass * omega * omega;
+    drive[TB__DRIVE_DAMPING] = 2 * mass * drive[TB__DRIVE_RATIO] * omega;
 }
 
 /* Where side k's end of a new joint is: a particle's position, else the
@@ -198,6 +309,26 @@ static tb_status check_def(tb_world *w, const tb_joint_def *def, int32_t *sa, in
 static const double *end_point(const tb_world *w, int32_t slot, const double *anchor)
 {
     return tb__joint_is_particle(slot) ? w->y + w->off[TB__PARTICLE_POS] + 3 * tb__joint_particle_slot(slot) : anchor;
+}
+
+/* Joint j's drive from def: limits, motor, spring (its stiffness from the
+   effective mass now), breaking */
+static void set_drive(tb_world *w, uint32_t j, const tb_joint_def *def)
+{
+    double *drive = w->joint_drive + TB__DRIVES * j;
+    memset(drive, 0, TB__DRIVES * sizeof *drive);
+    w->joint_flags[j] |= (def->enable_limit ? TB__JOINT_LIMIT : 0) | (def->enable_motor ? TB__JOINT_MOTOR : 0) |
+                         (def->enable_spring ? TB__JOINT_SPRING : 0);
+    if (def->enable_limit)
+        drive[TB__DRIVE_LOWER] = def->lower, drive[TB__DRIVE_UPPER] = def->upper;
+    if (def->enable_motor)
+        drive[TB__DRIVE_SPEED] = def->motor_speed, drive[TB__DRIVE_MOST] = def->max_motor_force;
+    if (def->enable_spring) {
+        drive[TB__DRIVE_HZ] = def->spring_hz, drive[TB__DRIVE_RATIO] = def->spring_damping_ratio;
+        drive[TB__DRIVE_TARGET] = def->type == TB_JOINT_DISTANCE ? w->joint_length[j] : def->spring_target;
+        spring_from_hz(w, j);
+    }
+    drive[TB__DRIVE_BREAK_FORCE] = def->break_force, drive[TB__DRIVE_BREAK_TORQUE] = def->break_torque;
 }
 
 tb_status tb_world_add_joint(tb_world *w, const tb_joint_def *def, tb_joint_id *id)
@@ -208,6 +339,7 @@ tb_status tb_world_add_joint(tb_world *w, const tb_joint_def *def, tb_joint_id *
     tb_status st;
     uint32_t j;
     int32_t sa, sb;
+    int axial;
     TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "add a joint")) != TB_OK || (st = check_def(w, def, &sa, &sb)) != TB_OK)
         return st;
@@ -217,11 +349,12 @@ tb_status tb_world_add_joint(tb_world *w, const tb_joint_def *def, tb_joint_id *
     anchor_b = end_point(w, sb, def->type == TB_JOINT_DISTANCE ? def->anchor_b : def->anchor);
     /* the joint's axes: the axis (z for the types that have none), then two
        square to it */
-    n = def->type == TB_JOINT_HINGE || def->type == TB_JOINT_SLIDER ? tb__norm3(def->axis) : 1;
+    axial = def->type == TB_JOINT_HINGE || def->type == TB_JOINT_SLIDER || def->type == TB_JOINT_BALL;
+    n = axial ? tb__norm3(def->axis) : 1;
     if (!(n > 0) || !isfinite(n))
         return tb__fail(w, TB_ERR_ARGUMENT, "joint axis (%g, %g, %g) has no direction", def->axis[0], def->axis[1],
                         def->axis[2]);
-    if (def->type == TB_JOINT_HINGE || def->type == TB_JOINT_SLIDER)
+    if (axial)
         frame[0] = def->axis[0] / n, frame[1] = def->axis[1] / n, frame[2] = def->axis[2] / n;
     else
         frame[0] = 0, frame[1] = 0, frame[2] = 1;
@@ -263,6 +396,7 @@ tb_status tb_world_add_joint(tb_world *w, const tb_joint_def *def, tb_joint_id *
     into_frame(xb, Rb, anchor_b, frame, w->joint_anchor + 6 * j + 3, w->joint_frame + 18 * j + 9);
     w->joint_length[j] = length;
     memset(w->joint_reaction + 6 * j, 0, 6 * sizeof(double));
+    set_drive(w, j, def);
     if (sa >= 0)
         tb__wake_body(w, (uint32_t)sa);
     if (sb >= 0)
@@ -304,13 +438,10 @@ tb_status tb_world_remove_joint(tb_world *w, tb_joint_id id)
 {
     tb_status st;
     uint32_t j;
-    int k;
     TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     if ((st = tb__check_busy(w, "remove a joint")) != TB_OK || (st = find(w, id, &j)) != TB_OK)
         return st;
-    for (k = 0; k < 2; ++k) /* what it held may fall */
-        if (body_slot_of(w, j, k) >= 0)
-            tb__wake_body(w, (uint32_t)body_slot_of(w, j, k));
+    wake_ends(w, j); /* what it held may fall */
     remove_slot(w, j);
     return TB_OK;
 }
@@ -360,8 +491,121 @@ tb_status tb_joint_error(const tb_world *w, tb_joint_id id, double *error)
     n = tb__joint_rows(w, j, &a, &b, rows);
     *error = 0;
     for (k = 0; k < n; ++k)
-        *error = fmax(*error, fabs(rows[k].error));
+        *error = fmax(*error, tb__joint_row_violation(&rows[k]));
     return TB_OK;
+}
+
+tb_status tb_joint_position(const tb_world *w, tb_joint_id id, double *position, double *rate)
+{
+    tb__joint_end a, b;
+    tb__joint_row row;
+    tb_status st;
+    uint32_t j;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if (!position)
+        return tb__null((tb_world *)w, "tb_joint_position", "position");
+    if ((st = find(w, id, &j)) != TB_OK)
+        return st;
+    tb__joint_end_at(w, j, 0, w->y, w->y, &a);
+    tb__joint_end_at(w, j, 1, w->y, w->y, &b);
+    if (!tb__joint_coordinate(w, j, &a, &b, &row))
+        return tb__fail((tb_world *)w, TB_ERR_ARGUMENT, "a fixed joint has no free coordinate");
+    *position = row.error;
+    if (rate) {
+        *rate = tb__dot3(row.lin_a, a.v) + tb__dot3(row.ang_a, a.w) + tb__dot3(row.lin_b, b.v) +
+                tb__dot3(row.ang_b, b.w);
+        if (w->joint_type[j] == TB_JOINT_BALL) /* d(acos c)/dt */
+            *rate = row.error > 0 ? -*rate / sin(row.error) : 0;
+    }
+    return TB_OK;
+}
+
+/* The bodies joint j holds, woken: what drives them changed */
+static void wake_ends(tb_world *w, uint32_t j)
+{
+    int k;
+    for (k = 0; k < 2; ++k)
+        if (body_slot_of(w, j, k) >= 0)
+            tb__wake_body(w, (uint32_t)body_slot_of(w, j, k));
+}
+
+/* A setter's joint: found, not during a step */
+static tb_status settable(tb_world *w, tb_joint_id id, const char *what, uint32_t *j)
+{
+    tb_status st;
+    if ((st = tb__check_busy(w, what)) != TB_OK || (st = find(w, id, j)) != TB_OK)
+        return st;
+    return TB_OK;
+}
+
+static int holds_a_particle(const tb_world *w, uint32_t j)
+{
+    return (w->joint_flags[j] & (TB__JOINT_PARTICLE_A | TB__JOINT_PARTICLE_B)) != 0;
+}
+
+tb_status tb_joint_set_limit(tb_world *w, tb_joint_id id, int enable, double lower, double upper)
+{
+    tb_status st;
+    uint32_t j;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if ((st = settable(w, id, "set a joint's limit", &j)) != TB_OK ||
+        (st = check_limit(w, w->joint_type[j], holds_a_particle(w, j), enable, lower, upper)) != TB_OK)
+        return st;
+    w->joint_flags[j] = (w->joint_flags[j] & ~(uint32_t)TB__JOINT_LIMIT) | (enable ? TB__JOINT_LIMIT : 0);
+    w->joint_drive[TB__DRIVES * j + TB__DRIVE_LOWER] = enable ? lower : 0;
+    w->joint_drive[TB__DRIVES * j + TB__DRIVE_UPPER] = enable ? upper : 0;
+    wake_ends(w, j);
+    return TB_OK;
+}
+
+tb_status tb_joint_set_motor(tb_world *w, tb_joint_id id, int enable, double speed, double max_force)
+{
+    tb_status st;
+    uint32_t j;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if ((st = settable(w, id, "set a joint's motor", &j)) != TB_OK ||
+        (st = check_motor(w, w->joint_type[j], enable, speed, max_force)) != TB_OK)
+        return st;
+    w->joint_flags[j] = (w->joint_flags[j] & ~(uint32_t)TB__JOINT_MOTOR) | (enable ? TB__JOINT_MOTOR : 0);
+    w->joint_drive[TB__DRIVES * j + TB__DRIVE_SPEED] = enable ? speed : 0;
+    w->joint_drive[TB__DRIVES * j + TB__DRIVE_MOST] = enable ? max_force : 0;
+    wake_ends(w, j);
+    return TB_OK;
+}
+
+tb_status tb_joint_set_spring(tb_world *w, tb_joint_id id, int enable, double hz, double damping_ratio,
+                              double target)
+{
+    double *drive;
+    tb_status st;
+    uint32_t j;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if ((st = settable(w, id, "set a joint's spring", &j)) != TB_OK ||
+        (st = check_spring(w, w->joint_type[j], enable, hz, damping_ratio, target)) != TB_OK)
+        return st;
+    drive = w->joint_drive + TB__DRIVES * j;
+    w->joint_flags[j] = (w->joint_flags[j] & ~(uint32_t)TB__JOINT_SPRING) | (enable ? TB__JOINT_SPRING : 0);
+    drive[TB__DRIVE_HZ] = enable ? hz : 0;
+    drive[TB__DRIVE_RATIO] = enable ? damping_ratio : 0;
+    drive[TB__DRIVE_TARGET] = !enable ? 0 : w->joint_type[j] == TB_JOINT_DISTANCE ? w->joint_length[j] : target;
+    drive[TB__DRIVE_STIFFNESS] = drive[TB__DRIVE_DAMPING] = 0;
+    if (enable)
+        spring_from_hz(w, j);
+    wake_ends(w, j);
+    return TB_OK;
+}
+
+void tb__joints_break(tb_world *w)
+{
+    size_t j = w->joint_count;
+    while (j-- > 0) {
+        const double *drive = w->joint_drive + TB__DRIVES * j, *reaction = w->joint_reaction + 6 * j;
+        const double force = drive[TB__DRIVE_BREAK_FORCE], torque = drive[TB__DRIVE_BREAK_TORQUE];
+        if ((force > 0 && tb__norm3(reaction) > force) || (torque > 0 && tb__norm3(reaction + 3) > torque)) {
+            wake_ends(w, (uint32_t)j);
+            remove_slot(w, (uint32_t)j);
+        }
+    }
 }
 
 /* A removed body or particle takes its joints with it */

@@ -10,8 +10,8 @@
 
 #include "world.h"
 
-/* A joint's most rows (FIXED) */
-#define TB__JOINT_ROWS 6
+/* A joint's most rows (HINGE or SLIDER with limits and a motor) */
+#define TB__JOINT_ROWS 8
 
 /* A joint's end: a body's slot (>= 0), the world (TB__JOINT_WORLD), or a
    particle's slot p as -2 - p */
@@ -42,16 +42,25 @@ typedef struct tb__joint_end {
    at 0. Its rate is dC/dt = lin_a.v_a + ang_a.w_a + lin_b.v_b + ang_b.w_b
    (the Jacobian J), and its second derivative J times the accelerations
    plus `bias`, what the motion alone adds (dJ/dt times the velocities). */
+/* What a row asks: EQUAL, C = 0 (its multiplier either way); LIMIT,
+   C >= 0 (it only pushes); MOTOR, a rate of `speed` (a velocity row, its
+   force within +-most) */
+enum { TB__ROW_EQUAL, TB__ROW_LIMIT, TB__ROW_MOTOR };
+
 typedef struct tb__joint_row {
     int32_t a, b;          /* ends, as above */
+    int kind;              /* TB__ROW_... */
+    double speed, most;    /* MOTOR: the rate asked; the force's bound (N or N m) */
     double lin_a[3], ang_a[3], lin_b[3], ang_b[3];
     double bias;           /* 1/s^2 times C's unit */
     double error;          /* C now: m, or the cosine of axes that should be square */
 } tb__joint_row;
 
 /* ---- joints.c ------------------------------------------------------------ */
-/* The rows a joint of this type holds */
+/* The rows a joint of this type holds without limits or motors (0: no
+   such type); the rows joint j holds */
 int tb__joint_row_count(uint32_t type);
+int tb__joint_rows_of(const tb_world *w, size_t j);
 /* The end of joint j's side k (0: a, 1: b) at positions from y and
    momenta from seen */
 void tb__joint_end_at(const tb_world *w, size_t j, int k, const double *y, const double *seen, tb__joint_end *end);
@@ -63,6 +72,16 @@ void tb__joints_free(tb_world *w);
 /* ---- joint_rows.c -------------------------------------------------------- */
 /* Joint j's rows between ends a and b; returns how many */
 int tb__joint_rows(const tb_world *w, size_t j, const tb__joint_end *a, const tb__joint_end *b, tb__joint_row *rows);
+/* The row of joint j's free coordinate (tb_joint_position: HINGE, the
+   angle a has turned about the axis relative to b; SLIDER, a's anchor
+   along the axis from b's; DISTANCE, the distance; BALL, the angle
+   between a's and b's copies of the axis), its value as the row's error;
+   0 for FIXED, which has none */
+int tb__joint_coordinate(const tb_world *w, size_t j, const tb__joint_end *a, const tb__joint_end *b,
+                         tb__joint_row *row);
+/* How far a row is from what it asks: |C| (EQUAL), the overshoot of a
+   limit (LIMIT), 0 (MOTOR) */
+double tb__joint_row_violation(const tb__joint_row *row);
 
 /* ---- joint_solve.c --------------------------------------------------------- */
 /* Add the joints' forces at positions from y and momenta from seen to
@@ -70,6 +89,17 @@ int tb__joint_rows(const tb_world *w, size_t j, const tb__joint_end *a, const tb
    give the accelerations the joints allow, from the bodies' other forces
    of this evaluation. Each joint's reaction is kept. */
 tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen);
+/* The joints' springs' forces at positions from y and momenta from seen
+   added to w->body_force and w->particle_force (making them ready if
+   nothing else had) */
+void tb__joint_spring_forces(tb_world *w, const double *y, const double *seen);
+/* The effective mass along a row at the ends' poses with joint j's own
+   rows holding: 1 / (J M^-1 J^T) after those rows take their part */
+double tb__joint_effective_mass(const tb_world *w, size_t j, const tb__joint_row *row, const tb__joint_end *a,
+                                const tb__joint_end *b);
+/* The joints whose reactions over the last step exceed their breaking
+   force or torque are removed (the bodies they held woken) */
+void tb__joints_break(tb_world *w);
 /* A step begins: no drift's impulses are in the reactions yet (a step
    that failed may have left some) */
 void tb__joints_begin_step(tb_world *w);

@@ -126,6 +126,7 @@ static size_t list_blocks(tb_world *w, tb__contacts *c, block *b)
         add(b, &n, &w->joint_length, nj * sizeof(double), jc * sizeof(double), 1);
         add(b, &n, &w->joint_reaction, 6 * nj * sizeof(double), 6 * jc * sizeof(double), 0);
         add(b, &n, &w->joint_flags, nj * sizeof(uint32_t), jc * sizeof(uint32_t), 1);
+        add(b, &n, &w->joint_drive, TB__DRIVES * nj * sizeof(double), TB__DRIVES * jc * sizeof(double), 1);
         ids_blocks(b, &n, &w->joint_ids);
     }
 

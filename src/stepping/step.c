@@ -84,9 +84,14 @@ tb_status tb__split_prepare(tb_world *w, double t, const double *seen)
 {
     w->kick_seen = seen;
     ++w->work.evaluations;
-    /* (no joint forces: the split methods' drifts hold the joints,
-       tb__split_sweep) */
-    return tb__global_forces(w, t, w->y, seen ? seen : w->y);
+    tb_status st;
+    /* (no joint forces but the springs': the split methods' drifts hold
+       the joints, tb__split_sweep) */
+    if ((st = tb__global_forces(w, t, w->y, seen ? seen : w->y)) != TB_OK)
+        return st;
+    if (w->joint_count)
+        tb__joint_spring_forces(w, w->y, seen ? seen : w->y);
+    return TB_OK;
 }
 
 tb_status tb__split_sweep(tb_world *w, const tb__split_op *ops, int n)
@@ -219,6 +224,8 @@ tb_status tb_world_step(tb_world *w, double h)
         w->work = work;
         return st; /* rolled back, held forces kept */
     }
+    if (w->joint_count) /* over their breaking force in this step */
+        tb__joints_break(w);
     if (w->body_count && w->body_held) /* held forces last one step, as in ODE */
         memset(w->body_applied, 0, 6 * w->body_count * sizeof(double));
     {   /* compensated sum: t after n steps of h is n h to the last bit */
