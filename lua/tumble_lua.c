@@ -697,8 +697,75 @@ static int joint_error(lua_State *L)
     return 1;
 }
 
+/* joint:position(): the free coordinate (rad or m) and its rate
+   (tb_joint_position) */
+static int joint_position(lua_State *L)
+{
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_JOINT, &lw);
+    double at, rate;
+    if (tb_joint_position(lw->world, to_joint_id(h), &at, &rate) != TB_OK)
+        return raise_world_error(L, lw, "joint:position");
+    lua_pushnumber(L, at);
+    lua_pushnumber(L, rate);
+    return 2;
+}
+
+/* Argument i of a joint setter: a number */
+static double setter_number(lua_State *L, int i, const char *fname)
+{
+    int isnum;
+    const double v = lua_tonumberx(L, i, &isnum);
+    if (!isnum)
+        luaL_error(L, "%s: argument %d must be a number (got %s)", fname, i - 1, luaL_typename(L, i));
+    return v;
+}
+
+/* joint:set_limit(lower, upper) (a ball joint's cone: set_limit(0,
+   angle)); joint:set_limit(nil): no limit */
+static int joint_set_limit(lua_State *L)
+{
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_JOINT, &lw);
+    const int on = !lua_isnoneornil(L, 2);
+    const double lower = on ? setter_number(L, 2, "joint:set_limit") : 0;
+    const double upper = on ? setter_number(L, 3, "joint:set_limit") : 0;
+    if (tb_joint_set_limit(lw->world, to_joint_id(h), on, lower, upper) != TB_OK)
+        return raise_world_error(L, lw, "joint:set_limit");
+    return 0;
+}
+
+/* joint:set_motor(speed, max_force); joint:set_motor(nil): no motor */
+static int joint_set_motor(lua_State *L)
+{
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_JOINT, &lw);
+    const int on = !lua_isnoneornil(L, 2);
+    const double speed = on ? setter_number(L, 2, "joint:set_motor") : 0;
+    const double most = on ? setter_number(L, 3, "joint:set_motor") : 0;
+    if (tb_joint_set_motor(lw->world, to_joint_id(h), on, speed, most) != TB_OK)
+        return raise_world_error(L, lw, "joint:set_motor");
+    return 0;
+}
+
+/* joint:set_spring(hz, damping_ratio, target); joint:set_spring(nil): no
+   spring */
+static int joint_set_spring(lua_State *L)
+{
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_JOINT, &lw);
+    const int on = !lua_isnoneornil(L, 2);
+    const double hz = on ? setter_number(L, 2, "joint:set_spring") : 0;
+    const double ratio = on && !lua_isnoneornil(L, 3) ? setter_number(L, 3, "joint:set_spring") : 0;
+    const double target = on && !lua_isnoneornil(L, 4) ? setter_number(L, 4, "joint:set_spring") : 0;
+    if (tb_joint_set_spring(lw->world, to_joint_id(h), on, hz, ratio, target) != TB_OK)
+        return raise_world_error(L, lw, "joint:set_spring");
+    return 0;
+}
+
 static const luaL_Reg joint_methods[] = {
-    { "reaction", joint_reaction }, { "error", joint_error },
+    { "reaction", joint_reaction }, { "error", joint_error }, { "position", joint_position },
+    { "set_limit", joint_set_limit }, { "set_motor", joint_set_motor }, { "set_spring", joint_set_spring },
     { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
 };
 
@@ -1400,9 +1467,43 @@ static int world_shape(lua_State *L)
 
 /* world:joint{ type = "ball" | "hinge" | "slider" | "fixed" | "distance",
    a = body or particle, b = body or particle (none: the world), anchor =
-   {x, y, z}, anchor_b, axis, length, collide = boolean } (tb_joint_def) */
+   {x, y, z}, anchor_b, axis, length, collide = boolean, lower, upper (a
+   limit: hinge lower and upper default to -pi and pi, distance lower to
+   0; slider needs both), cone (a ball joint's limit), motor_speed and
+   max_motor_force (a motor: both), spring_hz, damping_ratio, target (a
+   spring), break_force, break_torque } (tb_joint_def) */
 static const char *const joint_options[] = { "type", "a", "b", "anchor", "anchor_b", "axis", "length", "collide",
-                                             NULL };
+                                             "lower", "upper", "cone", "motor_speed", "max_motor_force", "spring_hz",
+                                             "damping_ratio", "target", "break_force", "break_torque", NULL };
+
+/* The limit, motor, spring and breaking options of world:joint */
+static void joint_drive_options(lua_State *L, tb_joint_def *def)
+{
+    const char *fname = "world:joint";
+    const double pi = 3.14159265358979323846;
+    int lower, upper, speed, most;
+    def->lower = def->type == TB_JOINT_HINGE ? -pi : 0;
+    def->upper = def->type == TB_JOINT_HINGE ? pi : 0;
+    lower = opt_number(L, 2, "lower", fname, &def->lower);
+    upper = opt_number(L, 2, "upper", fname, &def->upper);
+    if (opt_number(L, 2, "cone", fname, &def->upper))
+        upper = lower = 1;
+    if ((lower || upper) && def->type == TB_JOINT_SLIDER && !(lower && upper))
+        luaL_error(L, "%s: a slider's limit needs both 'lower' and 'upper'", fname);
+    if ((lower || upper) && def->type == TB_JOINT_DISTANCE && !upper)
+        luaL_error(L, "%s: a distance joint's limit needs 'upper'", fname);
+    def->enable_limit = lower || upper;
+    speed = opt_number(L, 2, "motor_speed", fname, &def->motor_speed);
+    most = opt_number(L, 2, "max_motor_force", fname, &def->max_motor_force);
+    if (speed != most)
+        luaL_error(L, "%s: a motor needs both 'motor_speed' and 'max_motor_force'", fname);
+    def->enable_motor = speed;
+    def->enable_spring = opt_number(L, 2, "spring_hz", fname, &def->spring_hz);
+    opt_number(L, 2, "damping_ratio", fname, &def->spring_damping_ratio);
+    opt_number(L, 2, "target", fname, &def->spring_target);
+    opt_number(L, 2, "break_force", fname, &def->break_force);
+    opt_number(L, 2, "break_torque", fname, &def->break_torque);
+}
 
 static int world_joint(lua_State *L)
 {
@@ -1443,6 +1544,7 @@ static int world_joint(lua_State *L)
     lua_getfield(L, 2, "collide");
     def.collide = lua_toboolean(L, -1);
     lua_pop(L, 1);
+    joint_drive_options(L, &def);
     if (tb_world_add_joint(lw->world, &def, &id) != TB_OK)
         return raise_world_error(L, lw, "world:joint");
     push_handle(L, 1, H_JOINT, id.index1, id.generation, 0);

@@ -338,6 +338,10 @@ void tb__joint_solve(struct tb__joint_work *k, size_t rows, double h)
                 if ((k->state[i] == HELD_OUT && left < -tolerance) || (k->state[i] == AT_UPPER && left > tolerance) ||
                     (k->state[i] == AT_LOWER && left < -tolerance))
                     k->state[i] = FREE, changed = 1;
+                else if (k->state[i] == FREE && !k->use[i] && k->rows[i].kind == TB__ROW_MOTOR &&
+                         fabs(left) > tolerance) /* a motor the factor left out, on the coordinate of a
+                                                    limit that holds: it pushes as it can */
+                    k->state[i] = left < 0 ? AT_UPPER : AT_LOWER, changed = 1;
             }
         }
         if (!changed)

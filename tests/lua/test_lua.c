@@ -513,6 +513,44 @@ static void joints_from_lua(void **state)
     lua_close(L);
 }
 
+/* A door from Lua: a hinge with a limit and a motor, set and switched by
+   the handle's setters; a rope; a spring; bad figures are errors naming
+   them. The motor's speed is exact once reached (test_joint_drives has
+   the closed forms). */
+static void joint_drives_from_lua(void **state)
+{
+    lua_State *L = new_state();
+    (void)state;
+    expect_ok(L, "w = tumble.world{ gravity = {0, 0, -9.81} }\n"
+                 "leaf = w:body{ box = {1, 0.05, 2}, mass = 20, pos = {0.5, 0, 1} }\n"
+                 "door = w:joint{ type = 'hinge', a = leaf, anchor = {0, 0, 1}, lower = -1.5, upper = 1.5,\n"
+                 "                motor_speed = 1, max_motor_force = 50 }\n"
+                 "for i = 1, 60 do w:step(1/60) end\n"
+                 "local at, rate = door:position()\n"
+                 "assert(math.abs(rate - 1) < 1e-12 and at > 0.9, at .. ' ' .. rate)\n"
+                 "for i = 1, 60 do w:step(1/60) end\n"
+                 "at, rate = door:position()\n"
+                 "assert(math.abs(at - 1.5) < 1e-9 and math.abs(rate) < 1e-12, at .. ' ' .. rate)\n"
+                 "door:set_motor(-2, 5000)\n"
+                 "w:step(1/60); at, rate = door:position(); assert(math.abs(rate + 2) < 1e-12, rate)\n"
+                 "door:set_motor(nil); door:set_limit(nil); door:set_spring(1, 0.5, 0)\n"
+                 "w:step(1/60)\n"
+                 "weight = w:body{ sphere = 0.1, mass = 1, pos = {3, 0, 0} }\n"
+                 "rope = w:joint{ type = 'distance', a = weight, anchor = {3, 0, 0}, anchor_b = {3, 0, 0.5}, upper = 1,\n"
+                 "                break_force = 1000 }\n"
+                 "for i = 1, 60 do w:step(1/60) end\n"
+                 "local d = rope:position(); assert(d <= 1 + 1e-9 and d > 0.999, d)\n");
+    expect_error(L, "w:joint{ type = 'hinge', a = leaf, lower = 1, upper = 0 }", "lower 1 above upper 0");
+    expect_error(L, "w:joint{ type = 'slider', a = leaf, upper = 1 }", "needs both");
+    expect_error(L, "w:joint{ type = 'hinge', a = leaf, motor_speed = 1 }", "needs both");
+    expect_error(L, "w:joint{ type = 'ball', a = leaf, cone = 4 }", "cone");
+    expect_error(L, "w:joint{ type = 'hinge', a = leaf, spring_hz = -1 }", "spring_hz");
+    expect_error(L, "door:set_motor(1, -1)", "max_motor_force");
+    expect_error(L, "door:set_limit(1, 'x')", "must be a number");
+    expect_error(L, "rope:remove(); rope:position()", "removed");
+    lua_close(L);
+}
+
 /* A Lua force sees the bodies and pushes them: a constant force and torque
    from Lua match the same held through the C API. */
 static void lua_force_moves_bodies(void **state)
@@ -716,6 +754,7 @@ static const struct CMUnitTest tests[] = {
     cmocka_unit_test(shapes_and_events),
     cmocka_unit_test(bodies_from_lua),
     cmocka_unit_test(joints_from_lua),
+    cmocka_unit_test(joint_drives_from_lua),
     cmocka_unit_test(lua_force_moves_bodies),
     cmocka_unit_test(bad_input_from_lua_is_refused),
     cmocka_unit_test(random_calls_never_crash),
