@@ -158,7 +158,8 @@ tb_status tb__joints_project(tb_world *w, double h)
         k->x[i] = (r->kind == TB__ROW_MOTOR ? r->speed : 0) - k->x[i];
         k->use[i] = r->kind != TB__ROW_LIMIT || r->error <= REACHED;
     }
-    tb__joint_solve(k, rows, h);
+    /* (a split method's motors have their first half before its drift) */
+    tb__joint_solve(k, rows, k->impulses ? h / 2 : h);
     if (k->impulses) { /* the step's impulses over its length: the force */
         tb__joint_add_reactions(w, k, k->rows, k->lever);
         for (i = 0; i < 6 * w->joint_count; ++i)
@@ -172,7 +173,36 @@ tb_status tb__joints_project(tb_world *w, double h)
 /* ---- the split methods' drift (SHAKE, with the velocities' part at the
    end of the step: RATTLE) ------------------------------------------------------ */
 
-tb_status tb__joints_hold(tb_world *w)
+/* The motors' first half before a drift of h: each motor row's rate
+   brought to its speed with at most half the step's impulse (most h / 2),
+   with the joints' rows' rates taken out together, so that the drift
+   moves at the motor's speed (a motor acting only after the step let the
+   kick's forces slow the drift through the joints: an arm lifted against
+   its weight turned 6% slower than its motor's speed at 240 Hz;
+   test_ode_joints.motorised_hinge_agrees_with_ode). The joints' part is
+   along the rows SHAKE then acts on, so SHAKE's total impulse, and the
+   step, are as they were. The second half is the velocities'
+   projection's. */
+static void motors_before_drift(tb_world *w, struct tb__joint_work *k, size_t rows, double h)
+{
+    size_t i;
+    int motors = 0;
+    for (i = 0; i < rows; ++i)
+        motors |= k->rows[i].kind == TB__ROW_MOTOR;
+    if (!motors)
+        return;
+    tb__joint_rates(w, k, rows);
+    for (i = 0; i < rows; ++i) {
+        const tb__joint_row *r = &k->rows[i];
+        k->x[i] = (r->kind == TB__ROW_MOTOR ? r->speed : 0) - k->x[i];
+        k->use[i] = r->kind != TB__ROW_LIMIT;
+    }
+    tb__joint_solve(k, rows, h / 2);
+    tb__joint_apply(w, k->rows, rows, k->x, 0);
+    tb__joint_add_reactions(w, k, k->rows, k->lever);
+}
+
+tb_status tb__joints_hold(tb_world *w, double h)
 {
     struct tb__joint_work *k;
     size_t rows;
@@ -190,6 +220,7 @@ tb_status tb__joints_hold(tb_world *w)
         memset(w->joint_reaction, 0, 6 * w->joint_count * sizeof *w->joint_reaction);
         k->impulses = 1;
     }
+    motors_before_drift(w, k, rows, h);
     tb__joint_keep(w, k, k->start, 1, 1); /* the poses the drift starts from */
     return TB_OK;
 }

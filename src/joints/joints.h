@@ -117,8 +117,8 @@ tb_status tb__joints_project(tb_world *w, double h);
    impulses along those rows that bring the drifted poses onto the joints
    (SHAKE), drifting the bodies again from the kept poses with rotation.
    The velocities' part (RATTLE's) is the projection's at the end of the
-   step. */
-tb_status tb__joints_hold(tb_world *w);
+   step. Motors act half before the drift of h, half in the projection. */
+tb_status tb__joints_hold(tb_world *w, double h);
 tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation);
 
 /* ---- joints.c: which bodies' shapes pass through each other --------------- */

@@ -198,7 +198,7 @@ tb_status tb__implicit_step(tb_world *w, double h)
     const tb__split_op kick_drift[2] = { { 0, h, TB__ROTATE_SPLIT2, 0 }, { 1, h, TB__ROTATE_SPLIT2, 0 } };
     tb_status st = tb__split_prepare(w, w->time, NULL);
     if (st == TB_OK && w->joint_count)
-        st = tb__joints_hold(w);
+        st = tb__joints_hold(w, h);
     if (st == TB_OK && w->particle_count)
         st = tb__implicit_particles(w, h);
     if (st == TB_OK && w->body_count)

@@ -94,21 +94,29 @@ tb_status tb__split_prepare(tb_world *w, double t, const double *seen)
     return TB_OK;
 }
 
+/* The ops in one pass over the particles and one over the bodies */
+static void sweep(tb_world *w, const tb__split_op *ops, int n)
+{
+    if (n > 0 && w->particle_count)
+        tb__particle_sweep(w, ops, n);
+    if (n > 0 && w->body_count)
+        tb__body_sweep(w, ops, n);
+}
+
 tb_status tb__split_sweep(tb_world *w, const tb__split_op *ops, int n)
 {
-    const tb__split_op *drift = NULL;
     tb_status st;
     int i;
     for (i = 0; i < n && w->joint_count; ++i)
-        if (ops[i].drift)
-            drift = &ops[i];
-    if (drift && (st = tb__joints_hold(w)) != TB_OK)
-        return st;
-    if (w->particle_count)
-        tb__particle_sweep(w, ops, n);
-    if (w->body_count)
-        tb__body_sweep(w, ops, n);
-    return drift ? tb__joints_shake(w, drift->h, drift->rotation) : TB_OK;
+        if (ops[i].drift) { /* (the last op) the kicks before it, then the drift held on the joints */
+            sweep(w, ops, i);
+            if ((st = tb__joints_hold(w, ops[i].h)) != TB_OK)
+                return st;
+            sweep(w, ops + i, n - i);
+            return tb__joints_shake(w, ops[i].h, ops[i].rotation);
+        }
+    sweep(w, ops, n);
+    return TB_OK;
 }
 
 /* RK4 one block of objects at a time through all four stages, when nothing
