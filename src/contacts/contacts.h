@@ -196,6 +196,10 @@ struct tb__contacts {
 /* ---- around the integrator's step (contact.c, shapes.c) --------------------- */
 /* Whether the world has shapes to collide. */
 int tb__contacts_active(const tb_world *w);
+/* joint_contacts.c: after this step's solve, the contact points of the
+   islands with joints handed to the joints' projection (joints.h,
+   tb__joint_contact) */
+tb_status tb__contacts_for_joints(tb_world *w);
 /* Before the integrator: find this step's contacts at the start positions. */
 tb_status tb__contacts_prepare(tb_world *w, double h);
 /* After the integrator's free motion: solve the contacts (the soft

@@ -1051,9 +1051,9 @@ static void store(tb_world *w, tb__contacts *c, int n)
        test_snapshot.contact_scene_hash_is_recorded); a point touches if
        its normal row pushed in some substep */
     for (i = 0; i < c->soft_row_count; ++i) {
-        const tb__soft_row *o = &c->soft_rows[i];
+        tb__soft_row *o = &c->soft_rows[i];
         tb__point *p = o->point;
-        p->normal_impulse = n * tb__most(o->impulse - o->settled, 0) + 0.0;
+        p->normal_impulse = o->step_impulse = n * tb__most(o->impulse - o->settled, 0) + 0.0;
         p->active = o->most > 0 || o->bounced; /* a bounce alone touched too */
         p->speed = o->struck && o->approach < 0 && p->active ? -o->approach : 0;
     }

@@ -86,6 +86,7 @@ typedef struct tb__soft_row {
     double most;                /* N s: the largest normal impulse of any substep */
     int struck;                 /* the normal row has pushed in some substep */
     double settled;             /* N s: what settle added */
+    double step_impulse;        /* N s: the step's normal impulse, as store keeps it */
     double bounce;              /* N s: this substep's impact impulse (impacts) */
     int bounced;                /* bounced by impacts in some substep */
 } tb__soft_row;

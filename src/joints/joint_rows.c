@@ -18,6 +18,7 @@
 #include "bodies/bodies.h"
 
 #include <math.h>
+#include <string.h>
 
 /* What every row of a joint reads: its ends, their anchors and axes in
    the world */
@@ -42,11 +43,17 @@ static void twice(const double w[3], const double r[3], double out[3])
     tb__cross(w, t, out);
 }
 
+/* m or rad: a limit this near is reached, and its row holds the
+   velocities (far above what the projection leaves, far below a step's
+   motion) */
+#define REACHED 1e-9
+
 static void row_start(tb__joint_row *row, const ends *e)
 {
     row->a = e->a->slot, row->b = e->b->slot;
     row->kind = TB__ROW_EQUAL;
     row->speed = row->most = 0;
+    row->reach = REACHED;
 }
 
 /* -C: the same row, asked from the other side (an upper limit) */
@@ -246,6 +253,34 @@ static void ends_of(const tb_world *w, size_t j, const tb__joint_end *a, const t
     twice(a->w, out->ra, va);
     twice(b->w, out->rb, vb);
     sub3(va, vb, out->centripetal);
+}
+
+void tb__joint_contact_row(const tb__joint_contact *contact, const tb__joint_end *a, const tb__joint_end *b,
+                           tb__joint_row *row)
+{
+    const double t[3] = { -contact->normal[0], -contact->normal[1], -contact->normal[2] };
+    double va[3], vb[3];
+    ends e;
+    int k;
+    memset(&e, 0, sizeof e);
+    e.a = a, e.b = b;
+    tb__mul(a->R, contact->anchor_a, e.ra);
+    tb__mul(b->R, contact->anchor_b, e.rb);
+    for (k = 0; k < 3; ++k)
+        e.d[k] = (a->x[k] + e.ra[k]) - (b->x[k] + e.rb[k]);
+    tb__cross(a->w, e.ra, va);
+    tb__cross(b->w, e.rb, vb);
+    for (k = 0; k < 3; ++k)
+        e.dd[k] = (a->v[k] + va[k]) - (b->v[k] + vb[k]);
+    twice(a->w, e.ra, va);
+    twice(b->w, e.rb, vb);
+    sub3(va, vb, e.centripetal);
+    point_row(row, &e, t, 0); /* n.(p_b - p_a) */
+    row->kind = contact->kind;
+    row->error += contact->offset;
+    row->reach = contact->reach;
+    if (contact->kind == TB__ROW_FRICTION) /* a velocity row only */
+        row->error = 0, row->most = contact->most;
 }
 
 int tb__joint_coordinate(const tb_world *w, size_t j, const tb__joint_end *a, const tb__joint_end *b,

@@ -32,10 +32,7 @@
 /* ... and an error this small is met: rounding on metre-sized joints (a
    larger world stops where a step no longer halves its error) */
 #define MET 1e-14
-/* m or rad: a limit this near is reached, and its row holds the
-   velocities (far above what the projection leaves, far below a step's
-   motion) */
-#define REACHED 1e-9
+
 
 /* The moved ends put on their joints by Newton steps that move each
    through its inverse mass and inertia (lowest in kinetic-energy norm),
@@ -156,7 +153,7 @@ tb_status tb__joints_project(tb_world *w, double h)
     for (i = 0; i < rows; ++i) { /* the joints, the limits reached, the motors' speeds */
         const tb__joint_row *r = &k->rows[i];
         k->x[i] = (r->kind == TB__ROW_MOTOR ? r->speed : 0) - k->x[i];
-        k->use[i] = r->kind != TB__ROW_LIMIT || r->error <= REACHED;
+        k->use[i] = r->kind != TB__ROW_LIMIT || r->error <= r->reach; /* (friction too) */
     }
     /* (a split method's motors have their first half before its drift) */
     tb__joint_solve(k, rows, k->impulses ? h / 2 : h);
@@ -167,6 +164,7 @@ tb_status tb__joints_project(tb_world *w, double h)
         k->impulses = 0;
     }
     tb__joint_apply(w, k->rows, rows, k->x, 0);
+    k->contact_count = 0; /* (the contacts' points are this projection's) */
     return TB_OK;
 }
 

@@ -168,6 +168,8 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
     tb_status st;
     for (j = 0; j < w->joint_count; ++j)
         rows += (size_t)tb__joint_rows_of(w, j);
+    if (w->joint_work)
+        rows += w->joint_work->contact_count;
     if ((st = tb__joint_reserve(w, rows)) != TB_OK)
         return st;
     k = w->joint_work;
@@ -178,12 +180,13 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
     }
     rows = 0;
     k->moved_count = 0;
-    for (j = 0; j < w->joint_count; ++j) {
+    for (j = 0; j < w->joint_count + k->contact_count; ++j) { /* the joints, then the contacts */
+        const tb__joint_contact *contact = j < w->joint_count ? NULL : &k->contacts[j - w->joint_count];
         tb__joint_end e[2];
         size_t first = rows;
         int n, r, side;
         for (side = 0; side < 2; ++side) { /* each end once a set-up */
-            const int32_t s = tb__joint_end_slot(w, j, side);
+            const int32_t s = contact ? (side ? contact->b : contact->a) : tb__joint_end_slot(w, j, side);
             if (s == TB__JOINT_WORLD) {
                 tb__joint_end_of(w, s, y, seen, &e[side]);
                 continue;
@@ -192,9 +195,14 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
                 tb__joint_end_of(w, s, y, seen, &k->ends[tb__joint_node(w, s)]);
             e[side] = k->ends[tb__joint_node(w, s)];
         }
-        k->row_start[j] = rows;
-        tb__mul(e[0].R, w->joint_anchor + 6 * j, k->lever + 3 * j);
-        n = tb__joint_rows(w, j, &e[0], &e[1], k->rows + rows);
+        if (contact) {
+            tb__joint_contact_row(contact, &e[0], &e[1], k->rows + rows);
+            n = 1;
+        } else {
+            k->row_start[j] = rows;
+            tb__mul(e[0].R, w->joint_anchor + 6 * j, k->lever + 3 * j);
+            n = tb__joint_rows(w, j, &e[0], &e[1], k->rows + rows);
+        }
         for (r = 0; r < n; ++r) {
             const tb__joint_row *row = shake ? &k->held[rows + r] : &k->rows[rows + r];
             double (*out)[12] = shake ? k->held_weighted : k->weighted;
@@ -237,8 +245,11 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
             env += rows + r - first + 1;
         }
         rows += (size_t)n;
+        if (j + 1 == w->joint_count)
+            k->row_start[w->joint_count] = rows;
     }
-    k->row_start[w->joint_count] = rows;
+    if (w->joint_count == 0)
+        k->row_start[0] = 0;
     if ((st = tb__reserve(w, (void **)&k->a, &k->env_cap, 3 * env, sizeof(double))) != TB_OK)
         return st;
     k->l = k->a + env, k->upper = k->l + env;
@@ -285,6 +296,18 @@ static void times_matrix(const struct tb__joint_work *k, size_t rows, const doub
     }
 }
 
+/* The most a MOTOR row's (its force over h) or a FRICTION row's (its
+   impulse) multiplier may be either way */
+static double bound(const tb__joint_row *r, double h)
+{
+    return r->kind == TB__ROW_MOTOR ? r->most * h : r->most;
+}
+
+static int two_sided(const tb__joint_row *r)
+{
+    return r->kind == TB__ROW_MOTOR || r->kind == TB__ROW_FRICTION;
+}
+
 /* A bounded solve's row states */
 enum { FREE, HELD_OUT, AT_UPPER, AT_LOWER, NOT_ASKED };
 
@@ -313,7 +336,7 @@ void tb__joint_solve(struct tb__joint_work *k, size_t rows, double h)
     for (pass = 0; pass < passes; ++pass) {
         int changed = 0;
         for (i = 0; i < rows; ++i) {
-            const double most = k->rows[i].most * h;
+            const double most = bound(&k->rows[i], h);
             k->clamped[i] = k->state[i] == AT_UPPER ? most : k->state[i] == AT_LOWER ? -most : 0;
         }
         times_matrix(k, rows, k->clamped, k->x);
@@ -328,7 +351,7 @@ void tb__joint_solve(struct tb__joint_work *k, size_t rows, double h)
                 k->x[i] = k->clamped[i];
             else if (k->state[i] == FREE && k->use[i] && r->kind == TB__ROW_LIMIT && k->x[i] < 0)
                 k->state[i] = HELD_OUT, changed = 1;
-            else if (k->state[i] == FREE && k->use[i] && r->kind == TB__ROW_MOTOR && fabs(k->x[i]) > r->most * h)
+            else if (k->state[i] == FREE && k->use[i] && two_sided(r) && fabs(k->x[i]) > bound(r, h))
                 k->state[i] = k->x[i] > 0 ? AT_UPPER : AT_LOWER, changed = 1;
         }
         if (!changed) { /* the held rows' rates under these multipliers */
@@ -338,7 +361,7 @@ void tb__joint_solve(struct tb__joint_work *k, size_t rows, double h)
                 if ((k->state[i] == HELD_OUT && left < -tolerance) || (k->state[i] == AT_UPPER && left > tolerance) ||
                     (k->state[i] == AT_LOWER && left < -tolerance))
                     k->state[i] = FREE, changed = 1;
-                else if (k->state[i] == FREE && !k->use[i] && k->rows[i].kind == TB__ROW_MOTOR &&
+                else if (k->state[i] == FREE && !k->use[i] && two_sided(&k->rows[i]) &&
                          fabs(left) > tolerance) /* a motor the factor left out, on the coordinate of a
                                                     limit that holds: it pushes as it can */
                     k->state[i] = left < 0 ? AT_UPPER : AT_LOWER, changed = 1;
@@ -348,10 +371,10 @@ void tb__joint_solve(struct tb__joint_work *k, size_t rows, double h)
             break;
         if (pass + 1 == passes) /* cycling: the last multipliers, within bounds */
             for (i = 0; i < rows; ++i) {
-                const double most = k->rows[i].most * h;
+                const double most = bound(&k->rows[i], h);
                 if (k->state[i] == FREE && k->rows[i].kind == TB__ROW_LIMIT)
                     k->x[i] = fmax(k->x[i], 0);
-                else if (k->state[i] == FREE && k->rows[i].kind == TB__ROW_MOTOR)
+                else if (k->state[i] == FREE && two_sided(&k->rows[i]))
                     k->x[i] = fmax(-most, fmin(most, k->x[i]));
             }
     }
@@ -513,7 +536,7 @@ tb_status tb__joint_forces(tb_world *w, const double *y, const double *seen)
         k->x[i] = -(row_times(w, r, k->accel) + r->bias);
         /* a limit holds where it is reached and not leaving; a motor acts
            on the velocities after the step (tb__joints_project) */
-        if (r->kind == TB__ROW_MOTOR || (r->kind == TB__ROW_LIMIT && (r->error > 0 || tb__joint_row_rate(w, k, r) > 0)))
+        if (two_sided(r) || (r->kind == TB__ROW_LIMIT && (r->error > 0 || tb__joint_row_rate(w, k, r) > 0)))
             k->use[i] = 0;
     }
     tb__joint_solve(k, rows, 1);
@@ -557,7 +580,7 @@ void tb__joint_keep(tb_world *w, struct tb__joint_work *k, double *buffer, int p
 void tb__joints_begin_step(tb_world *w)
 {
     if (w->joint_work)
-        w->joint_work->impulses = 0;
+        w->joint_work->impulses = 0, w->joint_work->contact_count = 0;
 }
 
 void tb__joint_work_free(tb_world *w)
@@ -589,6 +612,8 @@ void tb__joint_work_free(tb_world *w)
     tb__alloc(w, k->half, k->body_cap * 7 * sizeof *k->half, 0);
     tb__alloc(w, k->ends, k->body_cap * sizeof *k->ends, 0);
     tb__alloc(w, k->held, k->held_cap * sizeof *k->held, 0);
+    tb__alloc(w, k->contacts, k->contact_cap * sizeof *k->contacts, 0);
+    tb__alloc(w, k->island, k->island_cap * sizeof *k->island, 0);
     tb__alloc(w, k->apart, k->apart_cap * sizeof *k->apart, 0);
     tb__alloc(w, k->held_weighted, k->held_weighted_cap * sizeof *k->held_weighted, 0);
     tb__alloc(w, k, sizeof *k, 0);

@@ -46,6 +46,11 @@ struct tb__joint_work {
     uint64_t *apart;         /* [apart_count] the body pairs whose shapes pass through each
                                 other (tb__joints_apart), sorted */
     size_t apart_count, apart_cap;
+    tb__joint_contact *contacts; /* [contact_count] contact points set up after the joints' rows,
+                                    each a row (the projection's, after the contacts' solve) */
+    size_t contact_count, contact_cap;
+    int32_t *island;         /* [2 contacts' solver bodies] scratch of tb__contacts_for_joints */
+    size_t island_cap;
     tb__joint_row *held;     /* [rows] the rows at the start of the drift */
     double (*held_weighted)[12]; /* [rows] ... through the inertia now (SHAKE's) */
     size_t held_cap, held_weighted_cap, held_count;
@@ -63,9 +68,9 @@ size_t tb__joint_node(const tb_world *w, int32_t end);
 tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int forces, int shake, size_t *count);
 /* k->x = (J M^-1 J^T)^-1 k->x over the rows k->use keeps, those left out
    (or that the factor leaves out) at 0; each within what its row allows:
-   a LIMIT row's at least 0, a MOTOR row's within +-most h (an active
-   set: rows past a bound held there, rows held whose rates the others
-   break taken back) */
+   a LIMIT row's at least 0, a MOTOR row's within +-most h, a FRICTION
+   row's within +-most (an active set: rows past a bound held there,
+   rows held whose rates the others break taken back) */
 void tb__joint_solve(struct tb__joint_work *k, size_t rows, double h);
 /* A row's rate at the velocities of the ends set up with it */
 double tb__joint_row_rate(const tb_world *w, const struct tb__joint_work *k, const tb__joint_row *row);

@@ -44,17 +44,36 @@ typedef struct tb__joint_end {
    plus `bias`, what the motion alone adds (dJ/dt times the velocities). */
 /* What a row asks: EQUAL, C = 0 (its multiplier either way); LIMIT,
    C >= 0 (it only pushes); MOTOR, a rate of `speed` (a velocity row, its
-   force within +-most) */
-enum { TB__ROW_EQUAL, TB__ROW_LIMIT, TB__ROW_MOTOR };
+   force within +-most); FRICTION, a contact's slip of 0 (a velocity row,
+   its impulse within +-most) */
+enum { TB__ROW_EQUAL, TB__ROW_LIMIT, TB__ROW_MOTOR, TB__ROW_FRICTION };
 
 typedef struct tb__joint_row {
     int32_t a, b;          /* ends, as above */
     int kind;              /* TB__ROW_... */
+    double reach;          /* LIMIT: the error at or below which it holds the velocities */
     double speed, most;    /* MOTOR: the rate asked; the force's bound (N or N m) */
     double lin_a[3], ang_a[3], lin_b[3], ang_b[3];
     double bias;           /* 1/s^2 times C's unit */
     double error;          /* C now: m, or the cosine of axes that should be square */
 } tb__joint_row;
+
+/* A contact point of an island that has joints, handed to the joints'
+   projection after the contacts' solve (contacts/joint_contacts.c) as a
+   LIMIT row that only pushes: n.(p_b - p_a) + offset >= 0 for the point
+   p fixed in each end at the end of the solve and the normal n (a to b)
+   fixed in the world, so that a body on a jointed one is carried by the
+   joints in the same solve (test_joint_drives.jointed_bodies_carry_loads) */
+typedef struct tb__joint_contact {
+    int32_t a, b;          /* ends, as joint ends */
+    int kind;              /* TB__ROW_LIMIT: a point's normal; TB__ROW_FRICTION: a patch's
+                              slip along `normal` (a tangent), its impulse within +-most */
+    double most;           /* N s */
+    double anchor_a[3], anchor_b[3]; /* m: the point in a's principal frame, in b's */
+    double normal[3];
+    double offset;         /* m: the separation the points start at, plus the overlap left alone */
+    double reach;          /* m: at or below this C the velocities are held (a touching point) */
+} tb__joint_contact;
 
 /* ---- joints.c ------------------------------------------------------------ */
 /* The rows a joint of this type holds without limits or motors (0: no
@@ -70,6 +89,9 @@ void tb__joint_end_of(const tb_world *w, int32_t slot, const double *y, const do
 void tb__joints_free(tb_world *w);
 
 /* ---- joint_rows.c -------------------------------------------------------- */
+/* A contact's row between its ends (tb__joint_contact) */
+void tb__joint_contact_row(const tb__joint_contact *contact, const tb__joint_end *a, const tb__joint_end *b,
+                           tb__joint_row *row);
 /* Joint j's rows between ends a and b; returns how many */
 int tb__joint_rows(const tb_world *w, size_t j, const tb__joint_end *a, const tb__joint_end *b, tb__joint_row *rows);
 /* The row of joint j's free coordinate (tb_joint_position: HINGE, the

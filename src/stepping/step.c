@@ -215,8 +215,10 @@ tb_status tb_world_step(tb_world *w, double h)
         tb__contacts_solve(w, h);
         w->work.contact_work += tb__contacts_energy(w) - before;
     }
-    /* the bodies back on their joints (joint_solve.c) */
-    if (w->joint_count && (st = tb__joints_project(w, h)) != TB_OK) {
+    /* the bodies back on their joints, with the contact points of their
+       islands (joint_shake.c, joint_contacts.c) */
+    if (w->joint_count && ((tb__contacts_active(w) && (st = tb__contacts_for_joints(w)) != TB_OK) ||
+                           (st = tb__joints_project(w, h)) != TB_OK)) {
         w->work = work;
         if (guard && tb__rollback(w) != TB_OK)
             tb__state_copy(w, w->y, tb__rollback_state(w));
