@@ -21,13 +21,21 @@ struct tb__joint_work {
     unsigned char *use;      /* [rows] 0: left out */
     double *rhs, *clamped;   /* [rows] a bounded solve's right side; the multipliers held at bounds */
     unsigned char *state;    /* [rows] a bounded solve's: free, at a bound, left out */
+    size_t *packed, *packed_first, *packed_offset; /* [rows] the kept rows packed (solve_kept): each
+                                                      row's place, and the packed envelope */
+    unsigned char *packed_use;
+    double *packed_x;
+    double *kept_a, *kept_l; /* the packed matrix and factor (in a's block) */
     size_t row_cap;
-    size_t *row_start;       /* [joints + 1] */
+    size_t *row_start, *row_end; /* [joints] each joint's rows */
+    size_t *order;           /* the items (joints, then contacts) in the order set up, and the
+                                walk's scratch (order_items) */
+    size_t order_cap;
     double *lever;           /* [3 joints] the anchor on a from a's centre */
     double *held_lever;      /* [3 joints] ... at the start of the drift */
     size_t joint_cap;
     double *a, *l, *upper;   /* the envelope of J M^-1 J^T, its factor; SHAKE's matrix's
-                                upper part (tb__joints_shake): one block */
+                                upper part (tb__joints_shake); kept_a and kept_l: one block */
     size_t env_cap;
     /* per node (node(): the bodies' slots, then the particles'): */
     double *accel;           /* [6 nodes] a0 and alpha0 under the other forces, or v and w */
