@@ -691,6 +691,40 @@ static void joint_scene(void **state)
     assert_below(fabs(sqrt((last[2] - 4) * (last[2] - 4) + last[3] * last[3] + last[4] * last[4]) - 1), 1e-12);
 }
 
+/* The other joints' scenes, each by its last body: the chain's 10 kg end
+   within its 3 m of the pivot; the double pendulum's lower sphere within
+   its 2 m, and its energy within 1e-6 J of the start (dopri5 at 1e-10:
+   1.3e-10 J); the car's last wheel past the planks (2.07 m/s for 8 s);
+   the bridge's last crate on the deck, not through it (the ground is at
+   0.15 m); the slider door within its stop (its centre at most 8 m); a
+   ragdoll's last foot above the ground by at most the slop into it. */
+static void joint_scenes(void **state)
+{
+    double last[15], energy = 1;
+    const char *arrow;
+    char args[1024];
+    (void)state;
+    run_scene("chain", "body", 30, 181, last);
+    assert_true(sqrt(last[2] * last[2] + last[3] * last[3] + (last[4] - 3) * (last[4] - 3)) < 3 + 1e-12);
+    run_scene("double_pendulum", "body", 2, 301, last);
+    assert_true(sqrt(last[2] * last[2] + last[3] * last[3] + last[4] * last[4]) < 2 + 1e-12);
+    assert_non_null(arrow = strstr(out_text, "0 J -> "));
+    energy = strtod(arrow + 7, NULL);
+    assert_below(fabs(energy), 1e-6);
+    run_scene("car", "body", 13, 161, last);
+    assert_true(last[2] > 14);
+    run_scene("bridge", "body", 28, 121, last);
+    assert_true(last[4] > 1);
+    run_scene("door", "body", 4, 161, last);
+    assert_true(last[2] < 8 + 1e-9 && last[2] > 6);
+    snprintf(args, sizeof args, "run '%s/ragdoll.lua' --until 1 --out ragdoll.csv", SCENES_DIR);
+    assert_int_equal(tumble(args), 0);
+    work_path(args, sizeof args, "ragdoll");
+    strcat(args, ".csv");
+    assert_int_equal(parse_csv(args, "body", last), 39 * 21);
+    assert_true(last[4] > 0.04 - 0.005 - 1e-3);
+}
+
 static void contact_scenes(void **state)
 {
     double last[15];
@@ -710,6 +744,7 @@ static void contact_scenes(void **state)
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(contact_scenes),
     cmocka_unit_test(joint_scene),
+    cmocka_unit_test(joint_scenes),
     cmocka_unit_test(pipes_and_joined_values),
     cmocka_unit_test(shapes_are_written_beside_the_trajectory),
     cmocka_unit_test(plot_is_drawn_with_gnuplot),
