@@ -132,6 +132,15 @@ static void add_joint(tb_world *w, fuzz_input *in, made *m)
         fuzz_vector(in, d.anchor_b);
         d.length = fuzz_below(in, 2) ? fuzz_double(in) : -1;
     }
+    if (fuzz_below(in, 3) == 0) /* drives: limits, a motor, a spring, breaking */
+        d.enable_limit = 1, d.lower = fuzz_double(in), d.upper = fuzz_double(in);
+    if (fuzz_below(in, 3) == 0)
+        d.enable_motor = 1, d.motor_speed = fuzz_double(in), d.max_motor_force = fuzz_double(in);
+    if (fuzz_below(in, 3) == 0)
+        d.enable_spring = 1, d.spring_hz = fuzz_double(in), d.spring_damping_ratio = fuzz_double(in),
+        d.spring_target = fuzz_double(in);
+    if (fuzz_below(in, 4) == 0)
+        d.break_force = fuzz_double(in), d.break_torque = fuzz_double(in);
     if (tb_world_add_joint(w, &d, &id) == TB_OK && m->joints < MOST)
         m->joint[m->joints++] = id;
 }
@@ -175,6 +184,14 @@ static void set_something(tb_world *w, fuzz_input *in, made *m)
         case 4: (void)tb_body_apply_force(w, id, v, v + 1); break;
         case 5: (void)tb_body_apply_torque(w, id, v); break;
         default: (void)tb_body_wake(w, id);
+        }
+    } else if (m->joints && fuzz_below(in, 3) == 0) { /* a joint's drive, on or off (it may be gone) */
+        const tb_joint_id id = m->joint[fuzz_below(in, m->joints)];
+        const int on = (int)fuzz_below(in, 2);
+        switch (fuzz_below(in, 3)) {
+        case 0: (void)tb_joint_set_limit(w, id, on, v[0], v[1]); break;
+        case 1: (void)tb_joint_set_motor(w, id, on, v[0], v[1]); break;
+        default: (void)tb_joint_set_spring(w, id, on, v[0], v[1], v[2]);
         }
     } else if (m->particles && fuzz_below(in, 2)) {
         const tb_particle_id id = m->particle[fuzz_below(in, m->particles)];

@@ -366,6 +366,28 @@ static tb_status joint_length(scene *s, double length)
     return tb_world_add_joint(s->w, &d, NULL);
 }
 
+/* the scene's body on a hinge to the world with a limit, a motor, a
+   spring or a breaking force of the value given */
+static tb_status hinge_with(scene *s, double value, int what)
+{
+    tb_joint_def d = tb_default_joint_def();
+    d.type = TB_JOINT_HINGE, d.a = s->body, d.anchor[2] = 0.5;
+    switch (what) {
+    case 0: d.enable_limit = 1, d.lower = -value, d.upper = value; break;
+    case 1: d.enable_motor = 1, d.motor_speed = value, d.max_motor_force = 10; break;
+    case 2: d.enable_motor = 1, d.motor_speed = 1, d.max_motor_force = value; break;
+    case 3: d.enable_spring = 1, d.spring_hz = value, d.spring_damping_ratio = 0.5; break;
+    default: d.break_force = value; break;
+    }
+    return tb_world_add_joint(s->w, &d, NULL);
+}
+
+static tb_status joint_limit(scene *s, double x) { return hinge_with(s, x, 0); }
+static tb_status joint_motor_speed(scene *s, double x) { return hinge_with(s, x, 1); }
+static tb_status joint_motor_force(scene *s, double x) { return hinge_with(s, x, 2); }
+static tb_status joint_spring_hz(scene *s, double x) { return hinge_with(s, x, 3); }
+static tb_status joint_break_force(scene *s, double x) { return hinge_with(s, x, 4); }
+
 static tb_status shape_radius(scene *s, double r)
 {
     tb_shape_def d = tb_default_shape_def();
@@ -521,6 +543,16 @@ static const probe probes[] = {
     { "hinge axis 1e-300 long", joint_axis, 1e-300, NULL, NULL },
     { "distance joint length 1e200", joint_length, 1e200, "length", NULL },
     { "distance joint length 1e90", joint_length, 1e90, NULL, NULL },
+    { "hinge limits +-1e200 rad", joint_limit, 1e200, "joint limit", NULL },
+    { "hinge limits +-4 rad", joint_limit, 4, "within -pi to pi", NULL },
+    { "hinge limits +-1e-300 rad", joint_limit, 1e-300, NULL, NULL },
+    { "hinge motor 1e200 rad/s", joint_motor_speed, 1e200, "motor speed", NULL },
+    { "hinge motor 1e50 N m", joint_motor_force, 1e50, NULL, NULL },
+    { "hinge motor 1e200 N m", joint_motor_force, 1e200, "max_motor_force", NULL },
+    { "hinge spring 1e200 Hz", joint_spring_hz, 1e200, "joint spring", NULL },
+    { "hinge spring 1e-300 Hz", joint_spring_hz, 1e-300, NULL, NULL },
+    { "breaking force 1e200 N", joint_break_force, 1e200, "break_force", NULL },
+    { "breaking force 1e-300 N", joint_break_force, 1e-300, NULL, NULL },
     /* shapes */
     { "sphere radius 1e-320", shape_radius, 1e-320, "radius", NULL },
     { "sphere radius 1e200", shape_radius, 1e200, "radius", NULL },
