@@ -48,8 +48,8 @@
 static tb_status keep_rows(tb_world *w, struct tb__joint_work *k, size_t rows, int weighted)
 {
     tb_status st;
-    if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows, sizeof *k->held)) != TB_OK ||
-        (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows, sizeof *k->held_weighted)) !=
+    if ((st = tb__reserve(w, (void **)&k->held, &k->held_cap, rows + 1, sizeof *k->held)) != TB_OK ||
+        (st = tb__reserve(w, (void **)&k->held_weighted, &k->held_weighted_cap, rows + 1, sizeof *k->held_weighted)) !=
             TB_OK)
         return st;
     memcpy(k->held, k->rows, rows * sizeof *k->held);

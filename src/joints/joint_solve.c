@@ -26,7 +26,7 @@ static tb_status reserve_rows(tb_world *w, struct tb__joint_work *k, size_t rows
                                sizeof(size_t), sizeof(size_t), sizeof(size_t), 1, sizeof(double) };
     size_t cap = k->row_cap ? k->row_cap : 16;
     tb_status st;
-    if (rows <= k->row_cap)
+    if (rows <= k->row_cap && k->rows) /* (room always: a joint of no rows, a spring, still points into it) */
         return TB_OK;
     while (cap < rows)
         cap *= 2;
@@ -124,7 +124,7 @@ double tb__joint_effective_mass(const tb_world *w, size_t j, const tb__joint_row
         if (rows[r].kind == TB__ROW_EQUAL)
             rows[n++] = rows[r];
     /* inverse - (R M^-1 J^T)^T (R M^-1 R^T)^-1 (R M^-1 J^T): the coordinate's
-       inverse mass with the joint's rows holding (Gauss-Jordan; a row that
+       inverse mass with the joint's rows holding (Gaussian elimination; a row that
        depends on those before it is left out, as the solve leaves it) */
     for (r = 0; r < n; ++r) {
         for (c = 0; c < n; ++c)
@@ -339,7 +339,7 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
         if (!contact)
             k->row_end[j] = rows;
     }
-    if ((st = tb__reserve(w, (void **)&k->a, &k->env_cap, 5 * env, sizeof(double))) != TB_OK)
+    if ((st = tb__reserve(w, (void **)&k->a, &k->env_cap, 5 * env + 1, sizeof(double))) != TB_OK)
         return st;
     k->l = k->a + env, k->upper = k->l + env, k->kept_a = k->upper + env, k->kept_l = k->kept_a + env;
     for (i = 0; i < rows; ++i) {

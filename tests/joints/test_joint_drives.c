@@ -102,6 +102,35 @@ static void springs_ring_at_their_hz(void **state)
         assert_below(error, 1e-12);
         tb_world_destroy(w);
     }
+    { /* a distance spring of 1 Hz between two free boxes (3 and 1 kg,
+         anchors at their centres): the spring alone, no rows, rings at
+         1 Hz with the reduced mass; rk4 at 60 Hz */
+        const double size[3] = { 0.1, 0.1, 0.1 }, xa[3] = { 0, 0, 0 }, xb[3] = { 1, 0, 0 };
+        tb_world *w = world("rk4", 0);
+        tb_body_id a = box(w, 3, size, xa), b = box(w, 1, size, xb);
+        tb_joint_def def = joint_to_world(TB_JOINT_DISTANCE, a, 0, 0, 1);
+        const double push[3] = { 0.3, 0, 0 };
+        double before = 0, now, t = 0, cross[3], period;
+        tb_joint_id id;
+        int n = 0, s;
+        def.b = b;
+        memcpy(def.anchor_b, xb, sizeof def.anchor_b);
+        def.enable_spring = 1, def.spring_hz = 1;
+        id = add(w, &def);
+        assert_int_equal(tb_body_set_velocity(w, b, push), TB_OK);
+        for (s = 0; s < 300 && n < 3; ++s) {
+            assert_int_equal(tb_world_step(w, H), TB_OK);
+            t += H;
+            assert_int_equal(tb_joint_position(w, id, &now, NULL), TB_OK);
+            n += upward(before, now - 1, t, &cross[n]);
+            before = now - 1;
+        }
+        assert_int_equal(n, 3);
+        period = (cross[2] - cross[0]) / 2;
+        print_message("distance spring 1 Hz between free boxes: period %.7f s\n", period);
+        assert_below(fabs(period - 1), 1e-5);
+        tb_world_destroy(w);
+    }
     { /* a damped slider spring, zeta 0.1, rk4 at 960 Hz: peaks of the
          offset from the target, each within (omega h)^2 / 2 = 8.6e-5 of
          its height by sampling */
