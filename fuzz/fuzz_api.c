@@ -141,6 +141,8 @@ static void add_joint(tb_world *w, fuzz_input *in, made *m)
         d.spring_target = fuzz_double(in);
     if (fuzz_below(in, 4) == 0)
         d.break_force = fuzz_double(in), d.break_torque = fuzz_double(in);
+    if (fuzz_below(in, 4) == 0)
+        d.enable_twist = 1, d.twist_lower = fuzz_double(in), d.twist_upper = fuzz_double(in);
     if (tb_world_add_joint(w, &d, &id) == TB_OK && m->joints < MOST)
         m->joint[m->joints++] = id;
 }
@@ -188,9 +190,10 @@ static void set_something(tb_world *w, fuzz_input *in, made *m)
     } else if (m->joints && fuzz_below(in, 3) == 0) { /* a joint's drive, on or off (it may be gone) */
         const tb_joint_id id = m->joint[fuzz_below(in, m->joints)];
         const int on = (int)fuzz_below(in, 2);
-        switch (fuzz_below(in, 3)) {
+        switch (fuzz_below(in, 4)) {
         case 0: (void)tb_joint_set_limit(w, id, on, v[0], v[1]); break;
         case 1: (void)tb_joint_set_motor(w, id, on, v[0], v[1]); break;
+        case 2: (void)tb_joint_set_twist_limit(w, id, on, v[0], v[1]); break;
         default: (void)tb_joint_set_spring(w, id, on, v[0], v[1], v[2]);
         }
     } else if (m->particles && fuzz_below(in, 2)) {

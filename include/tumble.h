@@ -444,10 +444,12 @@ TB_API tb_status tb_joint_error(const tb_world *world, tb_joint_id id, double *e
    b's copies of the axis. A fixed joint has none: TB_ERR_ARGUMENT. */
 TB_API tb_status tb_joint_position(const tb_world *world, tb_joint_id id, double *position, double *rate);
 /* A joint's limit, motor and spring switched and set between steps, as
-   tb_joint_def has them (limits: test_joints.limits_stop_the_swing;
+   tb_joint_def has them (limits: test_joint_drives.limits_stop_the_swing,
+   twist_stops_the_turn;
    motors: motor_turns_at_its_speed; springs: springs_ring_at_their_hz).
    The bodies are woken. */
 TB_API tb_status tb_joint_set_limit(tb_world *world, tb_joint_id id, int enable, double lower, double upper);
+TB_API tb_status tb_joint_set_twist_limit(tb_world *world, tb_joint_id id, int enable, double lower, double upper);
 TB_API tb_status tb_joint_set_motor(tb_world *world, tb_joint_id id, int enable, double speed, double max_force);
 TB_API tb_status tb_joint_set_spring(tb_world *world, tb_joint_id id, int enable, double hz, double damping_ratio,
                                      double target);

@@ -735,6 +735,20 @@ static int joint_set_limit(lua_State *L)
     return 0;
 }
 
+/* joint:set_twist(lower, upper) (a ball joint's); joint:set_twist(nil):
+   no twist limit */
+static int joint_set_twist(lua_State *L)
+{
+    tl_world *lw;
+    tl_handle *h = check_handle(L, 1, H_JOINT, &lw);
+    const int on = !lua_isnoneornil(L, 2);
+    const double lower = on ? setter_number(L, 2, "joint:set_twist") : 0;
+    const double upper = on ? setter_number(L, 3, "joint:set_twist") : 0;
+    if (tb_joint_set_twist_limit(lw->world, to_joint_id(h), on, lower, upper) != TB_OK)
+        return raise_world_error(L, lw, "joint:set_twist");
+    return 0;
+}
+
 /* joint:set_motor(speed, max_force); joint:set_motor(nil): no motor */
 static int joint_set_motor(lua_State *L)
 {
@@ -766,6 +780,7 @@ static int joint_set_spring(lua_State *L)
 static const luaL_Reg joint_methods[] = {
     { "reaction", joint_reaction }, { "error", joint_error }, { "position", joint_position },
     { "set_limit", joint_set_limit }, { "set_motor", joint_set_motor }, { "set_spring", joint_set_spring },
+    { "set_twist", joint_set_twist },
     { "remove", handle_remove }, { "id", handle_id }, { NULL, NULL }
 };
 
@@ -1469,12 +1484,14 @@ static int world_shape(lua_State *L)
    a = body or particle, b = body or particle (none: the world), anchor =
    {x, y, z}, anchor_b, axis, length, collide = boolean, lower, upper (a
    limit: hinge lower and upper default to -pi and pi, distance lower to
-   0; slider needs both), cone (a ball joint's limit), motor_speed and
+   0; slider needs both), cone (a ball joint's limit), twist = {lower,
+   upper} (a ball joint's twist limit), motor_speed and
    max_motor_force (a motor: both), spring_hz, damping_ratio, target (a
    spring), break_force, break_torque } (tb_joint_def) */
 static const char *const joint_options[] = { "type", "a", "b", "anchor", "anchor_b", "axis", "length", "collide",
-                                             "lower", "upper", "cone", "motor_speed", "max_motor_force", "spring_hz",
-                                             "damping_ratio", "target", "break_force", "break_torque", NULL };
+                                             "lower", "upper", "cone", "twist", "motor_speed", "max_motor_force",
+                                             "spring_hz", "damping_ratio", "target", "break_force", "break_torque",
+                                             NULL };
 
 /* The limit, motor, spring and breaking options of world:joint */
 static void joint_drive_options(lua_State *L, tb_joint_def *def)
@@ -1493,6 +1510,22 @@ static void joint_drive_options(lua_State *L, tb_joint_def *def)
     if ((lower || upper) && def->type == TB_JOINT_DISTANCE && !upper)
         luaL_error(L, "%s: a distance joint's limit needs 'upper'", fname);
     def->enable_limit = lower || upper;
+    if (lua_getfield(L, 2, "twist") != LUA_TNIL) {
+        double both[2];
+        int k;
+        if (!lua_istable(L, -1))
+            luaL_error(L, "%s: 'twist' must be a table {lower, upper} of numbers", fname);
+        for (k = 0; k < 2; ++k) {
+            int isnum;
+            lua_rawgeti(L, -1, k + 1);
+            both[k] = lua_tonumberx(L, -1, &isnum);
+            lua_pop(L, 1);
+            if (!isnum)
+                luaL_error(L, "%s: 'twist' must be a table {lower, upper} of numbers", fname);
+        }
+        def->enable_twist = 1, def->twist_lower = both[0], def->twist_upper = both[1];
+    }
+    lua_pop(L, 1);
     speed = opt_number(L, 2, "motor_speed", fname, &def->motor_speed);
     most = opt_number(L, 2, "max_motor_force", fname, &def->max_motor_force);
     if (speed != most)

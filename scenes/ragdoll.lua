@@ -2,8 +2,9 @@
 -- arms, thighs, shins and feet) on ball joints with cones at the neck,
 -- waist, shoulders and hips and hinges with stops at the elbows, knees and
 -- ankles, dropped in a pile of three on the ground where they come to
--- rest. The contact points of their islands are solved with their joints
--- (docs/joints.md, "Joints and contacts"); no twist limits yet.
+-- rest. The ball joints limit their twist too. The contact points of their
+-- islands are solved with their joints (docs/joints.md, "Joints and
+-- contacts").
 local tumble = require "tumble"
 
 local w = tumble.world{ gravity = {0, 0, -9.81}, dt = 1/60 }
@@ -27,18 +28,22 @@ local function ragdoll(x, y, z)
   local pelvis = bone(at(0, -0.12, 0), at(0, 0.12, 0), 0.1, 8)
   local chest = bone(at(0, 0, 0.15), at(0, 0, 0.45), 0.14, 15)
   local head = bone(at(0, 0, 0.62), at(0, 0, 0.72), 0.1, 5)
-  w:joint{ type = "ball", a = chest, b = pelvis, anchor = at(0, 0, 0.05), axis = {0, 0, 1}, cone = 0.5 }
-  w:joint{ type = "ball", a = head, b = chest, anchor = at(0, 0, 0.55), axis = {0, 0, 1}, cone = 0.6 }
+  w:joint{ type = "ball", a = chest, b = pelvis, anchor = at(0, 0, 0.05), axis = {0, 0, 1}, cone = 0.5,
+           twist = {-0.5, 0.5} }
+  w:joint{ type = "ball", a = head, b = chest, anchor = at(0, 0, 0.55), axis = {0, 0, 1}, cone = 0.6,
+           twist = {-1, 1} }
   for _, side in ipairs{ -1, 1 } do
     local upper = bone(at(0, side * 0.25, 0.45), at(0, side * 0.5, 0.45), 0.05, 2)
     local lower = bone(at(0, side * 0.55, 0.45), at(0, side * 0.8, 0.45), 0.045, 1.5)
-    w:joint{ type = "ball", a = upper, b = chest, anchor = at(0, side * 0.2, 0.45), axis = {0, side, 0}, cone = 1.2 }
+    w:joint{ type = "ball", a = upper, b = chest, anchor = at(0, side * 0.2, 0.45), axis = {0, side, 0}, cone = 1.2,
+             twist = {-1, 1} }
     w:joint{ type = "hinge", a = lower, b = upper, anchor = at(0, side * 0.525, 0.45), axis = {0, 0, 1},
              lower = side > 0 and 0 or -2.5, upper = side > 0 and 2.5 or 0 }
     local thigh = bone(at(0, side * 0.12, -0.15), at(0, side * 0.12, -0.55), 0.07, 7)
     local shin = bone(at(0, side * 0.12, -0.62), at(0, side * 0.12, -0.98), 0.06, 4)
     local foot = bone(at(0.02, side * 0.12, -1.06), at(0.18, side * 0.12, -1.06), 0.04, 1)
-    w:joint{ type = "ball", a = thigh, b = pelvis, anchor = at(0, side * 0.12, -0.07), axis = {0, 0, -1}, cone = 1.0 }
+    w:joint{ type = "ball", a = thigh, b = pelvis, anchor = at(0, side * 0.12, -0.07), axis = {0, 0, -1}, cone = 1.0,
+             twist = {-0.5, 0.5} }
     w:joint{ type = "hinge", a = shin, b = thigh, anchor = at(0, side * 0.12, -0.585), axis = {0, 1, 0},
              lower = 0, upper = 2.3 }
     w:joint{ type = "hinge", a = foot, b = shin, anchor = at(0, side * 0.12, -1.02), axis = {0, 1, 0},

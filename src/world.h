@@ -61,13 +61,14 @@ enum { TB__HEARS_SHAPES, TB__HEARS_JOINTS };
 enum { TB__HEARS_SPRINGS, TB__HEARS_PARTICLE_JOINTS };
 enum {
     TB__JOINT_COLLIDE = 1, TB__JOINT_PARTICLE_A = 2, TB__JOINT_PARTICLE_B = 4,
-    TB__JOINT_LIMIT = 8, TB__JOINT_MOTOR = 16, TB__JOINT_SPRING = 32
+    TB__JOINT_LIMIT = 8, TB__JOINT_MOTOR = 16, TB__JOINT_SPRING = 32, TB__JOINT_TWIST = 64
 };
 /* A joint's drive (world.h, joint_drive): its limits, motor, spring and
    breaking figures, TB__DRIVES of them */
 enum {
     TB__DRIVE_LOWER, TB__DRIVE_UPPER, TB__DRIVE_SPEED, TB__DRIVE_MOST, TB__DRIVE_STIFFNESS, TB__DRIVE_DAMPING,
-    TB__DRIVE_TARGET, TB__DRIVE_HZ, TB__DRIVE_RATIO, TB__DRIVE_BREAK_FORCE, TB__DRIVE_BREAK_TORQUE, TB__DRIVES
+    TB__DRIVE_TARGET, TB__DRIVE_HZ, TB__DRIVE_RATIO, TB__DRIVE_BREAK_FORCE, TB__DRIVE_BREAK_TORQUE,
+    TB__DRIVE_TWIST_LOWER, TB__DRIVE_TWIST_UPPER, TB__DRIVES
 };
 struct tb__split_frame;    /* bodies/bodies.h */
 
@@ -182,7 +183,7 @@ struct tb_world {
     double *joint_reaction;   /* [6 * joint_cap] N, N m: on a, at the last evaluation */
     uint32_t *joint_flags;    /* [joint_cap] TB__JOINT_COLLIDE (a's and b's shapes collide),
                                  TB__JOINT_PARTICLE_A, _B (that side is a particle),
-                                 TB__JOINT_LIMIT, _MOTOR, _SPRING (enabled) */
+                                 TB__JOINT_LIMIT, _MOTOR, _SPRING, _TWIST (enabled) */
     double *joint_drive;      /* [TB__DRIVES * joint_cap] limits (rad or m), motor (rad/s or m/s;
                                  N m or N), spring (N m/rad or N/m, N m s/rad or N s/m, the
                                  target; Hz and ratio as given), breaking (N, N m) */

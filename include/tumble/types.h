@@ -176,6 +176,12 @@ typedef struct tb_joint_def {
        lower unused). */
     int enable_limit;
     double lower, upper;
+    /* BALL: a twist limit (enable_twist) keeps the turn of a about the
+       axis relative to b (rad, 0 at creation; its part about the axis
+       once the swing between the axes is taken out) within [twist_lower,
+       twist_upper], each within [-pi, pi]: a ragdoll's shoulder. */
+    int enable_twist;
+    double twist_lower, twist_upper;
     /* A motor (HINGE, SLIDER) drives the free coordinate's rate towards
        motor_speed (rad/s or m/s) with at most max_motor_force (N m or N,
        >= 0). */

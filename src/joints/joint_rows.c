@@ -168,6 +168,40 @@ static int ball_rows(tb__joint_row *rows, const ends *e)
     return 3;
 }
 
+/* A ball joint's twist: the turn of a about the axis relative to b with
+   the swing between the axes taken out (the twist of the swing-twist
+   split of the relative rotation in b's frame: 2 atan2(q_x, q_w) for its
+   quaternion q, x the axis), 0 at creation; its rate is the mean axis
+   times w_a - w_b, exactly while the axes are together (the limit's
+   Newton steps and the cone's rows carry the rest) */
+static void twist_row(tb__joint_row *row, const ends *e)
+{
+    double M[3][3], axis[3], qw, qx, norm, wa[3], dw[3];
+    int i, k;
+    for (i = 0; i < 3; ++i) /* a's axes in b's frame */
+        for (k = 0; k < 3; ++k)
+            M[i][k] = tb__dot3(e->fb[i], e->fa[k]);
+    /* the quaternion's w and x from the trace and the antisymmetric part
+       about x (scaled alike: only their ratio is read) */
+    qw = 1 + M[0][0] + M[1][1] + M[2][2];
+    qx = M[2][1] - M[1][2];
+    row_start(row, e);
+    for (k = 0; k < 3; ++k)
+        axis[k] = e->fa[0][k] + e->fb[0][k];
+    norm = tb__norm3(axis);
+    for (k = 0; k < 3; ++k) {
+        axis[k] = norm > 0 ? axis[k] / norm : e->fa[0][k];
+        row->lin_a[k] = row->lin_b[k] = 0;
+        row->ang_a[k] = axis[k], row->ang_b[k] = -axis[k];
+        dw[k] = e->a->w[k] - e->b->w[k];
+    }
+    tb__cross(e->a->w, e->fa[0], wa);
+    row->bias = 0.5 * tb__dot3(wa, dw);
+    row->error = 2 * atan2(qx, qw + (qw == 0 && qx == 0));
+    if (row->error > 3.14159265358979323846) /* the shorter way round */
+        row->error -= 2 * 3.14159265358979323846;
+}
+
 /* Joint j's free coordinate (joints.h, tb__joint_coordinate); 0 for
    FIXED */
 static int coordinate_row(const tb_world *w, size_t j, const ends *e, tb__joint_row *row)
@@ -199,8 +233,17 @@ static int drive_rows(const tb_world *w, size_t j, const ends *e, tb__joint_row 
     const uint32_t flags = w->joint_flags[j];
     tb__joint_row row;
     int n = 0;
+    if (flags & TB__JOINT_TWIST) { /* a ball joint's twist */
+        twist_row(&row, e);
+        row.kind = TB__ROW_LIMIT;
+        rows[n] = row;
+        rows[n++].error -= drive[TB__DRIVE_TWIST_LOWER];
+        rows[n] = row;
+        negate(&rows[n]);
+        rows[n++].error += drive[TB__DRIVE_TWIST_UPPER];
+    }
     if (!(flags & (TB__JOINT_LIMIT | TB__JOINT_MOTOR)) || !coordinate_row(w, j, e, &row))
-        return 0;
+        return n;
     if (flags & TB__JOINT_LIMIT) {
         row.kind = TB__ROW_LIMIT;
         rows[n] = row;

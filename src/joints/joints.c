@@ -42,6 +42,8 @@ int tb__joint_rows_of(const tb_world *w, size_t j)
         n += type == TB_JOINT_BALL ? 1 : 2;
     if (flags & TB__JOINT_MOTOR)
         n += 1;
+    if (flags & TB__JOINT_TWIST)
+        n += 2;
     return n;
 }
 
@@ -238,6 +240,23 @@ static tb_status check_limit(tb_world *w, uint32_t type, int particle, int enabl
     return TB_OK;
 }
 
+static tb_status check_twist(tb_world *w, uint32_t type, int particle, int enable, double lower, double upper)
+{
+    const double both[2] = { lower, upper };
+    tb_status st;
+    if (!enable)
+        return TB_OK;
+    if (type != TB_JOINT_BALL || particle)
+        return tb__fail(w, TB_ERR_ARGUMENT, "only a ball joint between bodies has a twist limit");
+    if ((st = tb__check_values(w, both, 2, "joint twist limit")) != TB_OK)
+        return st;
+    if (lower > upper)
+        return tb__fail(w, TB_ERR_ARGUMENT, "joint twist limit: lower %g above upper %g", lower, upper);
+    if (lower < -PI || upper > PI)
+        return tb__fail(w, TB_ERR_ARGUMENT, "twist limits %g to %g rad: they must be within -pi to pi", lower, upper);
+    return TB_OK;
+}
+
 static tb_status check_motor(tb_world *w, uint32_t type, int enable, double speed, double most)
 {
     tb_status st;
@@ -274,6 +293,8 @@ static tb_status check_drive(tb_world *w, const tb_joint_def *def, int particle)
     const double breaking[2] = { def->break_force, def->break_torque };
     tb_status st;
     if ((st = check_limit(w, (uint32_t)def->type, particle, def->enable_limit, def->lower, def->upper)) != TB_OK ||
+        (st = check_twist(w, (uint32_t)def->type, particle, def->enable_twist, def->twist_lower, def->twist_upper)) !=
+            TB_OK ||
         (st = check_motor(w, (uint32_t)def->type, def->enable_motor, def->motor_speed, def->max_motor_force)) !=
             TB_OK ||
         (st = check_spring(w, (uint32_t)def->type, def->enable_spring, def->spring_hz, def->spring_damping_ratio,
@@ -318,9 +339,11 @@ static void set_drive(tb_world *w, uint32_t j, const tb_joint_def *def)
     double *drive = w->joint_drive + TB__DRIVES * j;
     memset(drive, 0, TB__DRIVES * sizeof *drive);
     w->joint_flags[j] |= (def->enable_limit ? TB__JOINT_LIMIT : 0) | (def->enable_motor ? TB__JOINT_MOTOR : 0) |
-                         (def->enable_spring ? TB__JOINT_SPRING : 0);
+                         (def->enable_spring ? TB__JOINT_SPRING : 0) | (def->enable_twist ? TB__JOINT_TWIST : 0);
     if (def->enable_limit)
         drive[TB__DRIVE_LOWER] = def->lower, drive[TB__DRIVE_UPPER] = def->upper;
+    if (def->enable_twist)
+        drive[TB__DRIVE_TWIST_LOWER] = def->twist_lower, drive[TB__DRIVE_TWIST_UPPER] = def->twist_upper;
     if (def->enable_motor)
         drive[TB__DRIVE_SPEED] = def->motor_speed, drive[TB__DRIVE_MOST] = def->max_motor_force;
     if (def->enable_spring) {
@@ -554,6 +577,21 @@ tb_status tb_joint_set_limit(tb_world *w, tb_joint_id id, int enable, double low
     w->joint_flags[j] = (w->joint_flags[j] & ~(uint32_t)TB__JOINT_LIMIT) | (enable ? TB__JOINT_LIMIT : 0);
     w->joint_drive[TB__DRIVES * j + TB__DRIVE_LOWER] = enable ? lower : 0;
     w->joint_drive[TB__DRIVES * j + TB__DRIVE_UPPER] = enable ? upper : 0;
+    wake_ends(w, j);
+    return TB_OK;
+}
+
+tb_status tb_joint_set_twist_limit(tb_world *w, tb_joint_id id, int enable, double lower, double upper)
+{
+    tb_status st;
+    uint32_t j;
+    TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
+    if ((st = settable(w, id, "set a joint's twist limit", &j)) != TB_OK ||
+        (st = check_twist(w, w->joint_type[j], holds_a_particle(w, j), enable, lower, upper)) != TB_OK)
+        return st;
+    w->joint_flags[j] = (w->joint_flags[j] & ~(uint32_t)TB__JOINT_TWIST) | (enable ? TB__JOINT_TWIST : 0);
+    w->joint_drive[TB__DRIVES * j + TB__DRIVE_TWIST_LOWER] = enable ? lower : 0;
+    w->joint_drive[TB__DRIVES * j + TB__DRIVE_TWIST_UPPER] = enable ? upper : 0;
     wake_ends(w, j);
     return TB_OK;
 }

@@ -232,6 +232,49 @@ static void limits_stop_the_swing(void **state)
         }
 }
 
+/* A ball joint's twist limit: a box hung from a ball joint (axis down
+   through it) spun about that axis at 3 rad/s with a slight swing, its
+   twist limited to +-0.3 rad: the twist, measured here from the box's
+   orientation (the swing-twist split of its quaternion about z), stays
+   within the limit under every method, every row holding; the swing
+   left free. */
+static void twist_stops_the_turn(void **state)
+{
+    size_t m;
+    (void)state;
+    for (m = 0; m < METHOD_COUNT; ++m) {
+        const double size[3] = { 0.2, 0.1, 0.05 }, x[3] = { 0, 0, -1 }, spin[3] = { 0.2, 0, 3 }, v[3] = { 0, -0.2, 0 };
+        tb_world *w = world(METHODS[m], G);
+        tb_body_id b = box(w, 1, size, x);
+        tb_joint_def def = joint_to_world(TB_JOINT_BALL, b, 0, 0, -1);
+        double lowest = 0, highest = 0, worst = 0;
+        tb_joint_id id;
+        int s;
+        def.enable_twist = 1, def.twist_lower = -0.3, def.twist_upper = 0.3;
+        id = add(w, &def);
+        assert_int_equal(tb_body_set_angular_velocity(w, b, spin), TB_OK);
+        assert_int_equal(tb_body_set_velocity(w, b, v), TB_OK); /* spin x (centre - pivot) */
+        for (s = 0; s < 300; ++s) {
+            double q[4], twist, error;
+            assert_int_equal(tb_world_step(w, H), TB_OK);
+            assert_int_equal(tb_body_orientation(w, b, q), TB_OK);
+            twist = 2 * atan2(q[3], q[0]); /* about z, the axis's line */
+            if (twist > PI)
+                twist -= 2 * PI;
+            if (twist < -PI)
+                twist += 2 * PI;
+            assert_int_equal(tb_joint_error(w, id, &error), TB_OK);
+            lowest = fmin(lowest, twist), highest = fmax(highest, twist), worst = fmax(worst, error);
+        }
+        print_message("%-16s twist within %.9f to %.9f rad (+-0.3), worst row %.1e\n", METHODS[m], lowest, highest,
+                      worst);
+        assert_true(lowest > -0.3 - 1e-6 && highest < 0.3 + 1e-6);
+        assert_true(highest > 0.29); /* it was reached */
+        assert_below(worst, 1e-9);
+        tb_world_destroy(w);
+    }
+}
+
 /* A box on a vertical slider falls onto the slider's lower stop and
    rests there: the stop's reaction carries its weight (m g, to the
    projection's rounding) and it stays at the stop to 1e-12 m. */
@@ -515,6 +558,9 @@ static void bad_drives_are_refused(void **state)
     REFUSED(TB_JOINT_HINGE, (def.break_force = -1));
     REFUSED(TB_JOINT_HINGE, (def.break_torque = nan));
     REFUSED(TB_JOINT_BALL, (def.axis[2] = 0));
+    REFUSED(TB_JOINT_BALL, (def.enable_twist = 1, def.twist_lower = 0.5, def.twist_upper = -0.5));
+    REFUSED(TB_JOINT_BALL, (def.enable_twist = 1, def.twist_lower = -4, def.twist_upper = 0));
+    REFUSED(TB_JOINT_HINGE, (def.enable_twist = 1, def.twist_lower = -1, def.twist_upper = 1));
 #undef REFUSED
     /* the setters refuse the same, and stale ids, leaving the joint as it was */
     def = joint_to_world(TB_JOINT_HINGE, b, 0, 0, 1);
@@ -542,6 +588,7 @@ static void bad_drives_are_refused(void **state)
 static const struct CMUnitTest tests[] = {
     cmocka_unit_test(springs_ring_at_their_hz),
     cmocka_unit_test(limits_stop_the_swing),
+    cmocka_unit_test(twist_stops_the_turn),
     cmocka_unit_test(slider_rests_on_its_stop),
     cmocka_unit_test(ropes_only_pull),
     cmocka_unit_test(motor_turns_at_its_speed),

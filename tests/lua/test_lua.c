@@ -540,6 +540,18 @@ static void joint_drives_from_lua(void **state)
                  "                break_force = 1000 }\n"
                  "for i = 1, 60 do w:step(1/60) end\n"
                  "local d = rope:position(); assert(d <= 1 + 1e-9 and d > 0.999, d)\n");
+    expect_ok(L, "arm = w:body{ box = {0.3, 0.1, 0.1}, mass = 1, pos = {0, 5, 0} }\n"
+                 "shoulder = w:joint{ type = 'ball', a = arm, anchor = {0, 5, 0.5}, axis = {0, 0, 1}, cone = 1,\n"
+                 "                    twist = {-0.4, 0.4} }\n"
+                 "arm:set_omega(0, 0, 5)\n"
+                 "for i = 1, 30 do w:step(1/60) end\n"
+                 "assert(shoulder:error() < 1e-9)\n"
+                 "local q = {arm:rot()}; local twist = 2 * math.atan(q[4], q[1])\n"
+                 "assert(math.abs(twist) <= 0.4 + 1e-9, twist)\n"
+                 "shoulder:set_twist(nil); shoulder:set_twist(-1, 1)\n");
+    expect_error(L, "w:joint{ type = 'ball', a = arm, twist = {1, -1} }", "twist limit");
+    expect_error(L, "w:joint{ type = 'ball', a = arm, twist = 3 }", "'twist' must be a table");
+    expect_error(L, "shoulder:set_twist(-4, 1)", "within -pi to pi");
     expect_error(L, "w:joint{ type = 'hinge', a = leaf, lower = 1, upper = 0 }", "lower 1 above upper 0");
     expect_error(L, "w:joint{ type = 'slider', a = leaf, upper = 1 }", "needs both");
     expect_error(L, "w:joint{ type = 'hinge', a = leaf, motor_speed = 1 }", "needs both");
