@@ -83,15 +83,15 @@ static tb_status more(tb_world *w, struct tb__joint_work *k, tb__joint_contact *
    points, the soft step's): the slip's speed held at 0 as far as that
    impulse stops it. (The slip the soft step made within the step stays:
    docs/joints.md, "Joints and contacts".) */
-static tb_status patch_rows(tb_world *w, const tb__contacts *c, struct tb__joint_work *k, const tb__soft_patch *pa)
+static tb_status patch_rows(tb_world *w, const tb__contacts *c, struct tb__joint_work *k, const tb__soft_patch *patch)
 {
     double pressed = 0;
     size_t r;
     tb_status st;
-    for (r = pa->first; r < pa->first + pa->count; ++r) {
+    for (r = patch->first; r < patch->first + patch->count; ++r) {
         const tb__soft_row *o = &c->soft_rows[r];
         tb__joint_contact *t;
-        double pa_[3], pb_[3], at_a[3], at_b[3];
+        double on_a[3], on_b[3], at_a[3], at_b[3];
         int d;
         if ((st = more(w, k, &t)) != TB_OK)
             return st;
@@ -99,35 +99,35 @@ static tb_status patch_rows(tb_world *w, const tb__contacts *c, struct tb__joint
         /* each side's core point (a round shape turns about it), as the
            soft step finds the separation from the motion */
         for (d = 0; d < 3; ++d) {
-            pa_[d] = (o->a >= 0 ? c->bodies[o->a].x0[d] : 0) + o->core_a[d];
-            pb_[d] = (o->b >= 0 ? c->bodies[o->b].x0[d] : 0) + o->core_b[d];
+            on_a[d] = (o->a >= 0 ? c->bodies[o->a].x0[d] : 0) + o->core_a[d];
+            on_b[d] = (o->b >= 0 ? c->bodies[o->b].x0[d] : 0) + o->core_b[d];
         }
         t->kind = TB__ROW_LIMIT;
         t->most = 0;
-        t->a = end_of(c, o->a, pa_, t->anchor_a, at_a);
-        t->b = end_of(c, o->b, pb_, t->anchor_b, at_b);
+        t->a = end_of(c, o->a, on_a, t->anchor_a, at_a);
+        t->b = end_of(c, o->b, on_b, t->anchor_b, at_b);
         memcpy(t->normal, o->normal, sizeof t->normal);
         /* C = n.(p_b - p_a) + offset: the separation at the start, plus the
            overlap the contacts leave alone; held when touching */
         t->offset = o->separation - tb__dot3(o->normal, at_b) + tb__dot3(o->normal, at_a) + c->settings.slop;
         t->reach = c->settings.slop;
     }
-    if (pa->friction > 0 && pressed > 0)
+    if (patch->friction > 0 && pressed > 0)
         for (r = 0; r < 2; ++r) {
             tb__joint_contact *t;
-            double pa_[3], pb_[3], at_a[3], at_b[3];
+            double on_a[3], on_b[3], at_a[3], at_b[3];
             int d;
             if ((st = more(w, k, &t)) != TB_OK)
                 return st;
             for (d = 0; d < 3; ++d) {
-                pa_[d] = (pa->a >= 0 ? c->bodies[pa->a].x0[d] : 0) + pa->ca[d];
-                pb_[d] = (pa->b >= 0 ? c->bodies[pa->b].x0[d] : 0) + pa->cb[d];
+                on_a[d] = (patch->a >= 0 ? c->bodies[patch->a].x0[d] : 0) + patch->ca[d];
+                on_b[d] = (patch->b >= 0 ? c->bodies[patch->b].x0[d] : 0) + patch->cb[d];
             }
             t->kind = TB__ROW_FRICTION;
-            t->most = pa->friction * pressed;
-            t->a = end_of(c, pa->a, pa_, t->anchor_a, at_a);
-            t->b = end_of(c, pa->b, pb_, t->anchor_b, at_b);
-            memcpy(t->normal, pa->tangent[r], sizeof t->normal);
+            t->most = patch->friction * pressed;
+            t->a = end_of(c, patch->a, on_a, t->anchor_a, at_a);
+            t->b = end_of(c, patch->b, on_b, t->anchor_b, at_b);
+            memcpy(t->normal, patch->tangent[r], sizeof t->normal);
             t->offset = t->reach = 0;
         }
     return TB_OK;
@@ -164,9 +164,9 @@ tb_status tb__contacts_for_joints(tb_world *w)
         }
     }
     for (i = 0; i < c->soft_patch_count; ++i) {
-        const tb__soft_patch *pa = &c->soft_patches[i];
-        const int32_t any = pa->a >= 0 ? pa->a : pa->b;
-        if (any >= 0 && jointed[root(parent, any)] && (st = patch_rows(w, c, k, pa)) != TB_OK)
+        const tb__soft_patch *patch = &c->soft_patches[i];
+        const int32_t any = patch->a >= 0 ? patch->a : patch->b;
+        if (any >= 0 && jointed[root(parent, any)] && (st = patch_rows(w, c, k, patch)) != TB_OK)
             return st;
     }
     return TB_OK;
