@@ -721,45 +721,39 @@ static double setter_number(lua_State *L, int i, const char *fname)
     return v;
 }
 
-/* joint:set_limit(lower, upper) (a ball joint's cone: set_limit(0,
-   angle)); joint:set_limit(nil): no limit */
-static int joint_set_limit(lua_State *L)
+/* A joint setter of two numbers, or nil for off: its name and the C call */
+typedef tb_status joint_pair_setter(tb_world *world, tb_joint_id id, int enable, double first, double second);
+
+static int set_joint_pair(lua_State *L, const char *fname, joint_pair_setter *set)
 {
     tl_world *lw;
     tl_handle *h = check_handle(L, 1, H_JOINT, &lw);
     const int on = !lua_isnoneornil(L, 2);
-    const double lower = on ? setter_number(L, 2, "joint:set_limit") : 0;
-    const double upper = on ? setter_number(L, 3, "joint:set_limit") : 0;
-    if (tb_joint_set_limit(lw->world, to_joint_id(h), on, lower, upper) != TB_OK)
-        return raise_world_error(L, lw, "joint:set_limit");
+    const double first = on ? setter_number(L, 2, fname) : 0;
+    const double second = on ? setter_number(L, 3, fname) : 0;
+    if (set(lw->world, to_joint_id(h), on, first, second) != TB_OK)
+        return raise_world_error(L, lw, fname);
     return 0;
+}
+
+/* joint:set_limit(lower, upper) (a ball joint's cone: set_limit(0,
+   angle)); joint:set_limit(nil): no limit */
+static int joint_set_limit(lua_State *L)
+{
+    return set_joint_pair(L, "joint:set_limit", tb_joint_set_limit);
 }
 
 /* joint:set_twist(lower, upper) (a ball joint's); joint:set_twist(nil):
    no twist limit */
 static int joint_set_twist(lua_State *L)
 {
-    tl_world *lw;
-    tl_handle *h = check_handle(L, 1, H_JOINT, &lw);
-    const int on = !lua_isnoneornil(L, 2);
-    const double lower = on ? setter_number(L, 2, "joint:set_twist") : 0;
-    const double upper = on ? setter_number(L, 3, "joint:set_twist") : 0;
-    if (tb_joint_set_twist_limit(lw->world, to_joint_id(h), on, lower, upper) != TB_OK)
-        return raise_world_error(L, lw, "joint:set_twist");
-    return 0;
+    return set_joint_pair(L, "joint:set_twist", tb_joint_set_twist_limit);
 }
 
 /* joint:set_motor(speed, max_force); joint:set_motor(nil): no motor */
 static int joint_set_motor(lua_State *L)
 {
-    tl_world *lw;
-    tl_handle *h = check_handle(L, 1, H_JOINT, &lw);
-    const int on = !lua_isnoneornil(L, 2);
-    const double speed = on ? setter_number(L, 2, "joint:set_motor") : 0;
-    const double most = on ? setter_number(L, 3, "joint:set_motor") : 0;
-    if (tb_joint_set_motor(lw->world, to_joint_id(h), on, speed, most) != TB_OK)
-        return raise_world_error(L, lw, "joint:set_motor");
-    return 0;
+    return set_joint_pair(L, "joint:set_motor", tb_joint_set_motor);
 }
 
 /* joint:set_spring(hz, damping_ratio, target); joint:set_spring(nil): no
