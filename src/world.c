@@ -92,6 +92,7 @@ void tb_world_destroy(tb_world *w)
     tb__list_free(w, &w->fields);
     tb__list_free(w, &w->forces);
     tb__rollback_free(w);
+    tb__retake_free(w);
     tb__alloc(w, w, sizeof *w, 0);
 }
 

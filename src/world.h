@@ -188,6 +188,9 @@ struct tb_world {
                                  N m or N), spring (N m/rad or N/m, N m s/rad or N s/m, the
                                  target; Hz and ratio as given), breaking (N, N m) */
     tb__ids joint_ids;
+    int joints_unmet;         /* the last projection left some end off its joints (beyond
+                                 rounding): a step from here is not taken again in halves
+                                 (step.c) */
     struct tb__joint_work *joint_work; /* the solve's rows and factor (joint_work.h): scratch
                                  that every evaluation writes before it reads */
 
@@ -211,6 +214,9 @@ struct tb_world {
        taken again into the same memory every step; NULL until the guard
        first runs */
     struct tb_snapshot *rollback;
+    /* the world before an attempt at a step that may be taken again in
+       halves (step.c); NULL until first needed */
+    struct tb_snapshot *retake;
 };
 
 #endif

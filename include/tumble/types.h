@@ -295,7 +295,9 @@ typedef struct tb_work {
     uint64_t substeps;        /* the substeps they took: 1 a step for the fixed-step
                                  methods, the chosen method's under "auto", the
                                  accepted ones of "dopri5" */
-    uint64_t rejected;        /* substeps "dopri5" rejected and took again smaller */
+    uint64_t rejected;        /* substeps "dopri5" rejected and took again smaller, and
+                                 steps (or halves) whose joints the projection could
+                                 not meet, taken again as two halves */
     uint64_t evaluations;     /* force evaluations made (each runs every force
                                  callback once; a rejected substep's count) */
     double contact_work;      /* J, the energy the contact solver changed (its impulses

@@ -8,8 +8,10 @@
    the drift's start that bring the drifted poses onto the joints, by
    Newton steps on a matrix that is not symmetric; where it finds none, a
    mode faster than the step, the step taken implicitly: the free drift
-   projected, its impulse added; test_joints.released_chains_hold). A
-   Newton step that leaves the error larger goes half the way. Limits
+   projected, its impulse added; test_joints.released_chains_hold;
+   where even that projection cannot meet them, it says so, and step.c
+   takes the step again in halves). A Newton step that leaves the error
+   larger goes half the way. Limits
    join where passed (and in SHAKE while they push), motors only in the
    velocities' projection (test_joint_drives). */
 #include "joints/joint_work.h"
@@ -32,16 +34,11 @@
 /* ... and an error this small is met: rounding on metre-sized joints (a
    larger world stops where a step no longer halves its error) */
 #define MET 1e-14
+/* an error left this far under the largest coordinate is the poses'
+   rounding, which no step can take out (a joint's error is a difference
+   of coordinates, each rounded to about 1e-16 of itself) */
+#define ROUNDING 1e-12
 
-
-/* The moved ends put on their joints by Newton steps that move each
-   through its inverse mass and inertia (lowest in kinetic-energy norm),
-   until the error is met (MET), or below UNMET no step halves it
-   (rounding); a step that leaves it larger goes half the way, up to
-   BACKTRACKS times, since the turns of light bodies outrun the step's
-   linear model. With h > 0, each step's impulse over h (J^T delta / h,
-   what moved the ends) goes to their momenta and the reactions too: the
-   step of an implicit method (tb__joints_shake). */
 /* The rows set up last (with their weighted copies, if asked) kept in
    k->held, which SHAKE's Newton steps and the projection's trials apply
    while each trial sets the rows up again */
@@ -58,6 +55,33 @@ static tb_status keep_rows(tb_world *w, struct tb__joint_work *k, size_t rows, i
     return TB_OK;
 }
 
+/* The largest coordinate of a moved end: the scale of the rounding in
+   its poses */
+static double farthest(const tb_world *w, const struct tb__joint_work *k)
+{
+    const double *x = w->y + w->off[TB__BODY_POS], *px = w->y + w->off[TB__PARTICLE_POS];
+    double most = 0;
+    size_t i;
+    int d;
+    for (i = 0; i < k->moved_count; ++i) {
+        const int32_t s = k->moved[i];
+        const double *at = tb__joint_is_particle(s) ? px + 3 * tb__joint_particle_slot(s) : x + 3 * s;
+        for (d = 0; d < 3; ++d)
+            most = fmax(most, fabs(at[d]));
+    }
+    return most;
+}
+
+/* The moved ends put on their joints by Newton steps that move each
+   through its inverse mass and inertia (lowest in kinetic-energy norm),
+   until the error is met (MET), or below UNMET no step halves it
+   (rounding); a step that leaves it larger goes half the way, up to
+   BACKTRACKS times, since the turns of light bodies outrun the step's
+   linear model. With h > 0, each step's impulse over h (J^T delta / h,
+   what moved the ends) goes to their momenta and the reactions too: the
+   step of an implicit method (tb__joints_shake). w->joints_unmet says
+   whether it left more than rounding (step.c then takes the step again
+   in halves). */
 static tb_status project_positions(tb_world *w, double h)
 {
     double *x = w->y + w->off[TB__BODY_POS], *q = w->y + w->off[TB__BODY_ROT];
@@ -67,12 +91,15 @@ static tb_status project_positions(tb_world *w, double h)
     size_t rows, i;
     tb_status st;
     int step, tries, d;
-    if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+    if ((st = tb__joint_set_up(w, w->y, w->y, 0, TB__SET_UP_MATRIX, &rows)) != TB_OK)
         return st;
     k = w->joint_work;
     most = tb__joint_largest_error(k, rows);
     for (step = 0; step < PROJECTION_STEPS && most > MET; ++step) {
         double share = 1;
+        /* (the trials set up the rows alone) */
+        if (step > 0 && (st = tb__joint_set_up(w, w->y, w->y, 0, TB__SET_UP_MATRIX, &rows)) != TB_OK)
+            return st;
         for (i = 0; i < rows; ++i) { /* the joints, and the limits passed */
             k->x[i] = -k->rows[i].error;
             k->use[i] = k->rows[i].kind == TB__ROW_EQUAL || (k->rows[i].kind == TB__ROW_LIMIT && k->rows[i].error < 0);
@@ -114,7 +141,7 @@ static tb_status project_positions(tb_world *w, double h)
                     x[3 * s + d] += move[d];
                 tb__rotation_isotropic(q + 4 * s, move + 3, 1, 1);
             }
-            if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+            if ((st = tb__joint_set_up(w, w->y, w->y, 0, TB__SET_UP_ROWS, &rows)) != TB_OK)
                 return st;
             next = tb__joint_largest_error(k, rows);
             if (next < most)
@@ -133,6 +160,7 @@ static tb_status project_positions(tb_world *w, double h)
             break; /* rounding */
         most = next;
     }
+    w->joints_unmet = !(most <= UNMET || most <= ROUNDING * farthest(w, k));
     return TB_OK;
 }
 
@@ -146,7 +174,7 @@ tb_status tb__joints_project(tb_world *w, double h)
     if ((st = project_positions(w, 0)) != TB_OK)
         return st;
     /* velocities: the rows' rates taken out by an impulse */
-    if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+    if ((st = tb__joint_set_up(w, w->y, w->y, 0, TB__SET_UP_MATRIX, &rows)) != TB_OK)
         return st;
     k = w->joint_work;
     tb__joint_rates(w, k, rows);
@@ -207,7 +235,7 @@ tb_status tb__joints_hold(tb_world *w, double h)
     tb_status st;
     if (w->joint_count == 0)
         return TB_OK;
-    if ((st = tb__joint_set_up(w, w->y, w->y, 0, 0, &rows)) != TB_OK)
+    if ((st = tb__joint_set_up(w, w->y, w->y, 0, TB__SET_UP_MATRIX, &rows)) != TB_OK)
         return st;
     k = w->joint_work;
     if ((st = keep_rows(w, k, rows, 0)) != TB_OK)
@@ -260,7 +288,7 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
     int step, tries, rounding;
     if (w->joint_count == 0 || !k || k->held_count == 0)
         return TB_OK;
-    if ((st = tb__joint_set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
+    if ((st = tb__joint_set_up(w, w->y, w->y, 0, TB__SET_UP_SHAKE, &rows)) != TB_OK)
         return st;
     most = tb__joint_largest_error(k, rows);
     memset(k->total, 0, rows * sizeof *k->total);
@@ -268,6 +296,9 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
     for (step = 0; step < SHAKE_STEPS && most > MET; ++step) {
         double share = 1;
         tb__envelope e;
+        /* (the trials set up the rows alone) */
+        if (step > 0 && (st = tb__joint_set_up(w, w->y, w->y, 0, TB__SET_UP_SHAKE, &rows)) != TB_OK)
+            return st;
         /* Newton's step: the impulse along the held rows whose drift
            takes C out to first order, through the matrix of the rows now
            times the held ones (not symmetric: with the symmetric one of
@@ -294,7 +325,7 @@ tb_status tb__joints_shake(tb_world *w, double h, tb__rotation_kind rotation)
             tb__joint_apply(w, k->held, rows, k->x, 0);
             for (i = 0; i < k->moved_count; ++i)
                 drift_again(w, k, k->moved[i], h, rotation);
-            if ((st = tb__joint_set_up(w, w->y, w->y, 0, 1, &rows)) != TB_OK)
+            if ((st = tb__joint_set_up(w, w->y, w->y, 0, TB__SET_UP_ROWS, &rows)) != TB_OK)
                 return st;
             next = tb__joint_largest_error(k, rows);
             if (next < most)

@@ -160,11 +160,6 @@ static double through(const tb__joint_row *ri, int side, const double *wj, const
     return sum;
 }
 
-/* Every joint's rows at positions from y, velocities from seen, with
-   their weighted copies, envelope and matrix; with `forces`, the
-   bodies' accelerations under their other forces too; with `shake`, the
-   matrix is the rows now through the inertia now times the held rows
-   (tb__joints_shake), not symmetric. The row count. */
 /* Item m's end on `side`: joint m's, or contact m - joints' */
 static int32_t item_end(const tb_world *w, const struct tb__joint_work *k, size_t m, int side)
 {
@@ -249,8 +244,9 @@ static tb_status order_items(tb_world *w, struct tb__joint_work *k, size_t items
     return TB_OK;
 }
 
-tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int forces, int shake, size_t *count)
+tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int forces, int make, size_t *count)
 {
+    const int shake = make == TB__SET_UP_SHAKE;
     struct tb__joint_work *k;
     size_t rows = 0, j, t, i, q, env = 0;
     tb_status st;
@@ -294,7 +290,7 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
             tb__mul(e[0].R, w->joint_anchor + 6 * j, k->lever + 3 * j);
             n = tb__joint_rows(w, j, &e[0], &e[1], k->rows + rows);
         }
-        for (r = 0; r < n; ++r) {
+        for (r = 0; r < n && make != TB__SET_UP_ROWS; ++r) {
             const tb__joint_row *row = shake ? &k->held[rows + r] : &k->rows[rows + r];
             double (*out)[12] = shake ? k->held_weighted : k->weighted;
             weigh(w, &e[0], row->lin_a, row->ang_a, out[rows + r]);
@@ -339,6 +335,9 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
         if (!contact)
             k->row_end[j] = rows;
     }
+    *count = rows;
+    if (make == TB__SET_UP_ROWS)
+        return TB_OK;
     if ((st = tb__reserve(w, (void **)&k->a, &k->env_cap, 5 * env + 1, sizeof(double))) != TB_OK)
         return st;
     k->l = k->a + env, k->upper = k->l + env, k->kept_a = k->upper + env, k->kept_l = k->kept_a + env;
@@ -353,7 +352,6 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
                     through(&k->rows[q], 1, weighted[i], &k->held[i]);
         k->use[i] = 1;
     }
-    *count = rows;
     return TB_OK;
 }
 

@@ -68,12 +68,15 @@ struct tb__joint_work {
 tb_status tb__joint_reserve(tb_world *w, size_t rows);
 /* An end's index in the per-node arrays: the bodies, then the particles */
 size_t tb__joint_node(const tb_world *w, int32_t end);
-/* Every joint's rows at positions from y, velocities from seen, with
-   their weighted copies, envelope and matrix; with `forces`, the nodes'
-   accelerations under their other forces too; with `shake`, the matrix
-   is the rows now through the inertia now times the held rows
-   (tb__joints_shake), not symmetric. *count: the rows. */
-tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int forces, int shake, size_t *count);
+/* What a set-up makes besides the rows: their weighted copies, envelope
+   and matrix (J M^-1 J^T); SHAKE's, the rows now through the inertia now
+   times the held rows (tb__joints_shake), not symmetric; or nothing (a
+   Newton trial's, which reads the rows' errors alone) */
+enum { TB__SET_UP_MATRIX, TB__SET_UP_SHAKE, TB__SET_UP_ROWS };
+/* Every joint's rows at positions from y, velocities from seen, and what
+   `make` names; with `forces`, the nodes' accelerations under their
+   other forces too. *count: the rows. */
+tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int forces, int make, size_t *count);
 /* k->x = (J M^-1 J^T)^-1 k->x over the rows k->use keeps, those left out
    (or that the factor leaves out) at 0; each within what its row allows:
    a LIMIT row's at least 0, a MOTOR row's within +-most h, a FRICTION

@@ -230,6 +230,7 @@ static tb_status take(tb_world *w, tb_snapshot *s)
     }
     s->world = *w;
     s->world.rollback = NULL;
+    s->world.retake = NULL;
     s->world.joint_work = NULL;
     s->world.scratch = NULL;
     s->world.scratch_count = 0;
@@ -362,6 +363,7 @@ static tb_status restore(tb_world *w, const tb_snapshot *s)
     memcpy(nw.message, w->message, sizeof nw.message);
     nw.stepping = 0;
     nw.rollback = w->rollback;
+    nw.retake = w->retake;
     nw.joint_work = w->joint_work;
     nw.kick_seen = NULL; /* between steps it is always NULL (integrators.c clears it) */
     nw.damping_sums = NULL; /* and so is this (step.c) */
@@ -463,15 +465,22 @@ double tb_snapshot_time(const tb_snapshot *s)
 
 /* ---- the guard's rollback ------------------------------------------------------ */
 
+/* A snapshot kept in *slot and taken again into the same memory: of what
+   a step writes only */
+static tb_status keep_in(tb_world *w, tb_snapshot **slot, const char *whose)
+{
+    if (!*slot) {
+        if (!(*slot = new_snapshot(w)))
+            return tb__fail(w, TB_ERR_MEMORY, "out of memory for %s", whose);
+        (*slot)->roomy = 1;
+        (*slot)->partial = 1;
+    }
+    return take(w, *slot);
+}
+
 tb_status tb__rollback_keep(tb_world *w)
 {
-    if (!w->rollback) {
-        if (!(w->rollback = new_snapshot(w)))
-            return tb__fail(w, TB_ERR_MEMORY, "out of memory for the guard's snapshot");
-        w->rollback->roomy = 1;
-        w->rollback->partial = 1;
-    }
-    return take(w, w->rollback);
+    return keep_in(w, &w->rollback, "the guard's snapshot");
 }
 
 const double *tb__rollback_state(const tb_world *w)
@@ -490,6 +499,24 @@ void tb__rollback_free(tb_world *w)
 {
     free_snapshot(w->rollback);
     w->rollback = NULL;
+}
+
+/* ---- a step taken again in halves (step.c) -------------------------------------- */
+
+tb_status tb__retake_keep(tb_world *w)
+{
+    return keep_in(w, &w->retake, "a step's retake");
+}
+
+tb_status tb__retake(tb_world *w)
+{
+    return restore(w, w->retake);
+}
+
+void tb__retake_free(tb_world *w)
+{
+    free_snapshot(w->retake);
+    w->retake = NULL;
 }
 
 /* ---- the state hash -------------------------------------------------------------- */
@@ -561,6 +588,7 @@ uint64_t tb_world_hash(const tb_world *w)
     h = mix_u64(h, w->body_sleeping);
     if (w->joint_count) { /* (worlds without joints keep the hashes they had) */
         h = mix_u64(h, w->joint_count);
+        h = mix_u64(h, (uint64_t)w->joints_unmet); /* (whether the next step may be halved) */
         h = mix_doubles(h, w->joint_reaction, 6 * w->joint_count);
     }
     if (w->contacts) {

@@ -151,6 +151,87 @@ void tb__split_extrapolate(const tb_world *w, double *saved)
     }
 }
 
+/* Halvings of a step whose joints the projection cannot meet, at most
+   (2^5 = 32 steps in its place) */
+#define MOST_HALVINGS 5
+
+/* One step of h from the state, contacts and joints included; on failure
+   the caller puts the world back */
+static tb_status advance(tb_world *w, double h)
+{
+    tb_status st;
+    double power = 0, sums[2] = { 0, 0 };
+    const int damped = tb__is_damped(w);
+    int summed;
+    if (tb__contacts_active(w) && (st = tb__contacts_prepare(w, h)) != TB_OK)
+        return st;
+    /* the drag's power at the start (and, without contacts, at the end)
+       comes from the particles' sweep when it is the whole step: the same
+       sums, without two passes of their own */
+    summed = damped && tb__one_pass_step(w);
+    if (damped && !summed)
+        power = tb__damping_power(w);
+    w->damping_sums = summed ? sums : NULL;
+    tb__joints_begin_step(w);
+    w->stepping = 1;
+    st = tb__method_step(w, w->method, h);
+    w->stepping = 0;
+    w->damping_sums = NULL;
+    if (st != TB_OK)
+        return st;
+    if (tb__contacts_active(w)) {
+        /* what the solve changes of the energy is the contacts' work; it
+           changes only the bodies and particles in contact */
+        const double before = tb__contacts_energy(w);
+        tb__contacts_solve(w, h);
+        w->work.contact_work += tb__contacts_energy(w) - before;
+    }
+    /* the bodies back on their joints, with the contact points of their
+       islands (joint_shake.c, joint_contacts.c) */
+    if (w->joint_count && ((tb__contacts_active(w) && (st = tb__contacts_for_joints(w)) != TB_OK) ||
+                           (st = tb__joints_project(w, h)) != TB_OK))
+        return st;
+    if (summed)
+        w->work.damping_work += h / 2 * (sums[0] + (tb__contacts_active(w) ? tb__damping_power(w) : sums[1]));
+    else if (damped)
+        w->work.damping_work += h / 2 * (power + tb__damping_power(w));
+    return TB_OK;
+}
+
+/* A step of h; where the projection cannot put the bodies back on their
+   joints (a motion of the joints faster than the step holds, such as the
+   links of a chain whipping a heavy weight round, turned them further in
+   the step than any Newton step can undo), the step is taken again as
+   two halves, and so on MOST_HALVINGS times: the substeps the motion
+   needs, only where it needs them (test_joints.heavy_chain_holds_at_60_hz).
+   Only from poses on their joints: joints no poses meet (a closed loop
+   that does not close) would be halved in vain. Worlds with contacts
+   step whole (their events are per step). */
+static tb_status advance_held(tb_world *w, double h, int halvings)
+{
+    tb_status st;
+    uint64_t evaluations;
+    double t;
+    if (!w->joint_count || w->joints_unmet || tb__contacts_active(w) || halvings == MOST_HALVINGS)
+        return advance(w, h);
+    if ((st = tb__retake_keep(w)) != TB_OK)
+        return st;
+    if ((st = advance(w, h)) != TB_OK || !w->joints_unmet)
+        return st;
+    evaluations = w->work.evaluations; /* (the attempt's are work done) */
+    if ((st = tb__retake(w)) != TB_OK)
+        return st;
+    w->work.evaluations = evaluations;
+    ++w->work.rejected;
+    if ((st = advance_held(w, h / 2, halvings + 1)) != TB_OK)
+        return st;
+    t = w->time; /* the second half starts half way (the step adds h to the time) */
+    w->time += h / 2;
+    st = advance_held(w, h / 2, halvings + 1);
+    w->time = t;
+    return st;
+}
+
 /* A step can fail inside a callback. Methods that write the state only after
    their last force evaluation leave it untouched by construction; the others
    get a copy of the state to roll back to, taken only when something can
@@ -163,11 +244,8 @@ tb_status tb_world_step(tb_world *w, double h)
     int snapshot, guard = w && w->guard != 0;
     double *saved = NULL;
     tb_work work;
-    double power = 0, sums[2] = { 0, 0 };
-    int damped, summed;
     TB__NEED_WORLD(w, TB_ERR_ARGUMENT);
     work = w->work; /* a failed step leaves the counts as they were */
-    damped = tb__is_damped(w);
     if ((st = tb__check_scale(w, h, "step")) != TB_OK)
         return st;
     if ((st = tb__check_busy(w, "step")) != TB_OK)
@@ -183,24 +261,7 @@ tb_status tb_world_step(tb_world *w, double h)
         saved = tb__scratch_vector(w, (size_t)w->method->scratch);
         tb__state_copy(w, saved, w->y);
     }
-    if (tb__contacts_active(w) && (st = tb__contacts_prepare(w, h)) != TB_OK) {
-        if (guard)
-            (void)tb__rollback(w); /* out of memory again: the state was not touched yet */
-        return st;
-    }
-    /* the drag's power at the start (and, without contacts, at the end)
-       comes from the particles' sweep when it is the whole step: the same
-       sums, without two passes of their own */
-    summed = damped && tb__one_pass_step(w);
-    if (damped && !summed)
-        power = tb__damping_power(w);
-    w->damping_sums = summed ? sums : NULL;
-    tb__joints_begin_step(w);
-    w->stepping = 1;
-    st = tb__method_step(w, w->method, h);
-    w->stepping = 0;
-    w->damping_sums = NULL;
-    if (st != TB_OK) {
+    if ((st = advance_held(w, h, 0)) != TB_OK) {
         w->work = work;
         if (guard && tb__rollback(w) != TB_OK)
             tb__state_copy(w, w->y, tb__rollback_state(w)); /* out of memory: the state at least */
@@ -208,28 +269,6 @@ tb_status tb_world_step(tb_world *w, double h)
             tb__state_copy(w, w->y, saved);
         return st;
     }
-    if (tb__contacts_active(w)) {
-        /* what the solve changes of the energy is the contacts' work; it
-           changes only the bodies and particles in contact */
-        const double before = tb__contacts_energy(w);
-        tb__contacts_solve(w, h);
-        w->work.contact_work += tb__contacts_energy(w) - before;
-    }
-    /* the bodies back on their joints, with the contact points of their
-       islands (joint_shake.c, joint_contacts.c) */
-    if (w->joint_count && ((tb__contacts_active(w) && (st = tb__contacts_for_joints(w)) != TB_OK) ||
-                           (st = tb__joints_project(w, h)) != TB_OK)) {
-        w->work = work;
-        if (guard && tb__rollback(w) != TB_OK)
-            tb__state_copy(w, w->y, tb__rollback_state(w));
-        else if (snapshot)
-            tb__state_copy(w, w->y, saved);
-        return st;
-    }
-    if (summed)
-        w->work.damping_work += h / 2 * (sums[0] + (tb__contacts_active(w) ? tb__damping_power(w) : sums[1]));
-    else if (damped)
-        w->work.damping_work += h / 2 * (power + tb__damping_power(w));
     if (guard && (st = tb__guard_check(w, h)) != TB_OK) {
         w->work = work;
         return st; /* rolled back, held forces kept */

@@ -102,5 +102,10 @@ tb_status tb__rollback_keep(tb_world *w);
 const double *tb__rollback_state(const tb_world *w);
 tb_status tb__rollback(tb_world *w);
 void tb__rollback_free(tb_world *w);
+/* The same for the attempt at a step that step.c may take again in
+   halves, in w->retake */
+tb_status tb__retake_keep(tb_world *w);
+tb_status tb__retake(tb_world *w);
+void tb__retake_free(tb_world *w);
 
 #endif
