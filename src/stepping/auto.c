@@ -10,9 +10,9 @@
    fastest drag or damping decay, the fastest body spin, vortex fields.
    Gravity and other constant forces cost the split methods nothing (Verlet
    is exact on them), and isotropic bodies turn exactly under the split
-   methods. What the plan cannot see (force callbacks, field callbacks) goes
-   to "dopri5", which measures its own error. The plan is made when the step,
-   the tolerance or the set of objects changes. */
+   methods. What the plan cannot see (force callbacks, field callbacks,
+   joints) goes to "dopri5", which measures its own error. The plan is
+   made when the step, the tolerance or the set of objects changes. */
 #include "stepping/stepping.h"
 #include "bodies/bodies.h"
 #include "forces/forces.h"
@@ -91,7 +91,11 @@ static tb_status scene_rates(tb_world *w, rates *r)
         else
             r->spin = fmax(r->spin, spin);
     }
-    r->unknown = w->forces.count > 0;
+    /* joints' rates are not estimated (a pendulum's depends on its swing,
+       a chain's on its tension), so they count as unseen: under a plan
+       blind to them a 170-degree pendulum erred by half its length at
+       every tolerance (bench_workprecision, "pendulum") */
+    r->unknown = w->forces.count > 0 || w->joint_count > 0;
     for (i = 0; i < w->fields.count; ++i) {
         const tb__field *f = TB__LIST_AT(&w->fields, tb__field, i);
         if (f->kind == TB__FIELD_CALLBACK)
@@ -130,8 +134,8 @@ tb_status tb__auto_plan_why(tb_world *w, double h, char *why, size_t size)
     if (why && size) {
         why[0] = 0;
         if (r.unknown)
-            len = (size_t)snprintf(why, size, "callbacks hide their rates, so only dopri5, which measures its "
-                                              "error; ");
+            len = (size_t)snprintf(why, size, "%s hide their rates, so only dopri5, which measures its "
+                                              "error; ", w->joint_count ? "joints" : "callbacks");
         if (w->tracer_count && len < size)
             len += (size_t)snprintf(why + len, size - len, "tracers rule out the split methods; ");
         if (len < size)
