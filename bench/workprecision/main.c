@@ -36,8 +36,10 @@
      the chart.
 
    A fixed-step series stops, once it has MIN_POINTS points, when its error
-   is below the floor (1e-12, where rounding takes over, or ten times a
-   converged reference's own uncertainty); and in any case when the next
+   is below the floor (1e-12, where rounding takes over, a scene's own
+   where its steps' rounding adds up to more (the pendulum's projections:
+   1e-10), or ten times a converged reference's own uncertainty); and in
+   any case when the next
    run would take more than RUN_CAP seconds, or after MAX_POINTS points. A
    tolerance sweep stops below the floor once it has passed tolerance 1e-9,
    or at RUN_CAP. RUN_CAP keeps the whole to a few minutes; it also makes
@@ -104,12 +106,12 @@ int main(int argc, char **argv)
     for (i = 0; i < count; ++i) {
         scene *s = &scenes[i];
         curve *c = curves + (size_t)i * SERIES_COUNT;
-        double floor_error = FLOOR;
+        double floor_error = fmax(FLOOR, s->floor);
         char refusals[1024];
         fprintf(stderr, "%s\n", s->name);
         if (s->reference_steps > 0) {
             reference(s);
-            floor_error = fmax(FLOOR, 10 * s->reference_gap);
+            floor_error = fmax(floor_error, 10 * s->reference_gap);
         }
         sweep_scene(s, floor_error, c, refusals, sizeof refusals);
         timing(s, c);

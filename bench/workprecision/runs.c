@@ -83,6 +83,8 @@ static tb_status build_tumble(sim *r, const scene *s, const char *method, double
         memcpy(def.gravity, s->ps.gravity, sizeof def.gravity);
         def.quadratic_drag = s->ps.quadratic_drag;
     }
+    if (s->kind == PENDULUM)
+        def.gravity[2] = -s->gravity;
     if ((st = tb_world_create(&def, &r->world, message, size)) != TB_OK)
         return st;
     if (s->kind == PARTICLES) {
@@ -113,6 +115,18 @@ static tb_status build_tumble(sim *r, const scene *s, const char *method, double
         st = tb_world_add_vortex_field(r->world, s->vortex, centre, NULL);
         if (st == TB_OK)
             st = tb_world_add_tracer(r->world, &t, NULL);
+    } else if (s->kind == PENDULUM) {
+        const double r3 = PENDULUM_RADIUS * PENDULUM_RADIUS * PENDULUM_RADIUS;
+        tb_body_def b = tb_default_body_def();
+        tb_joint_def j = tb_default_joint_def();
+        st = tb_mass_sphere(PENDULUM_MASS / (4.0 / 3 * acos(-1.0) * r3), PENDULUM_RADIUS, &b.mass, NULL);
+        b.position[0] = PENDULUM_LENGTH * sin(s->pendulum_start);
+        b.position[2] = -PENDULUM_LENGTH * cos(s->pendulum_start);
+        if (st == TB_OK)
+            st = tb_world_add_body(r->world, &b, &j.a);
+        j.type = TB_JOINT_HINGE, j.axis[0] = 0, j.axis[1] = 1, j.axis[2] = 0;
+        if (st == TB_OK)
+            st = tb_world_add_joint(r->world, &j, NULL);
     } else {
         tb_body_def b = tb_default_body_def();
         memcpy(b.mass.inertia, s->inertia, sizeof b.mass.inertia);
@@ -157,6 +171,21 @@ static void build_ode(sim *r, const scene *s)
             r->x[i] = dBodyGetPosition(r->body[i]);
             r->v[i] = dBodyGetLinearVel(r->body[i]);
         }
+    } else if (s->kind == PENDULUM) {
+        dMass m;
+        dJointID hinge;
+        dWorldSetGravity(r->ode, 0, 0, -s->gravity);
+        r->body[0] = dBodyCreate(r->ode);
+        dMassSetSphereTotal(&m, PENDULUM_MASS, PENDULUM_RADIUS);
+        dBodySetMass(r->body[0], &m);
+        dBodySetPosition(r->body[0], PENDULUM_LENGTH * sin(s->pendulum_start), 0,
+                         -PENDULUM_LENGTH * cos(s->pendulum_start));
+        dBodySetAutoDisableFlag(r->body[0], 0);
+        hinge = dJointCreateHinge(r->ode, 0);
+        dJointAttach(hinge, r->body[0], 0);
+        dJointSetHingeAnchor(hinge, 0, 0, 0);
+        dJointSetHingeAxis(hinge, 0, 1, 0);
+        r->x[0] = dBodyGetPosition(r->body[0]);
     } else {
         dMass m;
         r->body[0] = dBodyCreate(r->ode);
@@ -279,6 +308,10 @@ static long advance(sim *r, const scene *s, double h, long n)
         if (s->kind == PARTICLES) {
             if (!ode_forces(r, s))
                 return i;
+        } else if (s->kind == PENDULUM) {
+            const dReal *x = r->x[0];
+            if (!(isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2]) && norm3(x) < ODE_BOUND * s->scale))
+                return i;
         } else {
             const dReal *w = dBodyGetAngularVel(r->body[0]);
             if (!(isfinite(w[0]) && isfinite(w[1]) && isfinite(w[2])))
@@ -290,7 +323,8 @@ static long advance(sim *r, const scene *s, double h, long n)
     return n;
 }
 
-/* The final state: 3 n positions, or the body's orientation (w, x, y, z). */
+/* The final state: 3 n positions (the pendulum's sphere's), or the body's
+   orientation (w, x, y, z). */
 static void final_state(const sim *r, const scene *s, double *out)
 {
     size_t i;
@@ -299,6 +333,8 @@ static void final_state(const sim *r, const scene *s, double *out)
             memcpy(out, tb_world_particle_positions(r->world), 3 * s->ps.n * sizeof(double));
         else if (s->kind == TRACER)
             memcpy(out, tb_world_tracer_positions(r->world), 3 * sizeof(double));
+        else if (s->kind == PENDULUM)
+            memcpy(out, tb_world_body_positions(r->world), 3 * sizeof(double));
         else
             memcpy(out, tb_world_body_orientations(r->world), 4 * sizeof(double));
         return;
@@ -306,6 +342,8 @@ static void final_state(const sim *r, const scene *s, double *out)
     if (s->kind == PARTICLES) {
         for (i = 0; i < s->ps.n; ++i)
             memcpy(out + 3 * i, r->body[i] ? r->x[i] : s->ps.x0 + 3 * i, 3 * sizeof(double));
+    } else if (s->kind == PENDULUM) {
+        memcpy(out, r->x[0], 3 * sizeof(double));
     } else {
         const dReal *q = dBodyGetQuaternion(r->body[0]);
         for (i = 0; i < 4; ++i)

@@ -31,11 +31,18 @@
 #define MAX_PARTICLES 64
 #define PLAN_SIZE 16         /* bytes for the name of the method auto chose */
 #define MAX_SAMPLES 9        /* timing samples of a point, at most */
-#define SCENE_COUNT 10
+#define SCENE_COUNT 11
 
 /* ------------------------------------------------------------ scenes -- */
 
-enum kind { PARTICLES, TRACER, BODY };
+enum kind { PARTICLES, TRACER, BODY, PENDULUM };
+
+/* PENDULUM: a sphere of PENDULUM_RADIUS and PENDULUM_MASS whose centre
+   hangs PENDULUM_LENGTH from a hinge at the origin (axis y), released at
+   rest at the scene's pendulum_start from the bottom, under gravity g */
+#define PENDULUM_RADIUS 0.05 /* m */
+#define PENDULUM_MASS 1.0    /* kg */
+#define PENDULUM_LENGTH 1.0  /* m */
 
 typedef struct spring_spec {
     int a, b;            /* particle indices; b < 0: tied to `anchor` */
@@ -70,11 +77,14 @@ typedef struct scene {
     int stiff;               /* stiff springs: not in the adaptive target (it is about smooth scenes) */
     int limits;              /* the chart marks each method's stability limit (the advisor's) */
     double scale;            /* m: position errors are divided by it */
+    double floor;            /* errors below this are the scene's rounding, not the method's (0: FLOOR) */
     particle_system ps;      /* PARTICLES */
     double tracer_x0[3];     /* TRACER: m */
     double vortex[3];        /* TRACER: rad/s, about the origin */
     double inertia[3];       /* BODY: kg m^2, principal; 1 kg, q0 = identity, at rest, no gravity */
     double omega0[3];        /* BODY: rad/s, body frame = world frame at t = 0 */
+    double pendulum_start;   /* PENDULUM: rad from the bottom */
+    double gravity;          /* PENDULUM: m/s^2, along -z */
     double final[3 * MAX_PARTICLES]; /* the truth at t = T: positions, or a quaternion */
     double reference_gap;    /* converged references: error measure between N and N/2 */
 } scene;

@@ -339,7 +339,7 @@ static void plot_is_drawn_with_gnuplot(void **state)
 static void reference_scenes_run(void **state)
 {
     static const char *const names[] = { "oscillator", "damped", "kepler", "vortex", "projectile",
-                                         "chain", "damped_chain", "cloth", "flip", "top" };
+                                         "chain", "damped_chain", "cloth", "flip", "top", "pendulum" };
     size_t k;
     (void)state;
     for (k = 0; k < sizeof names / sizeof names[0]; ++k) {
@@ -350,7 +350,9 @@ static void reference_scenes_run(void **state)
             fail_msg("reference scene %s failed: %s", names[k], err_text);
         work_path(csv, sizeof csv, "ref.csv");
         assert_true(parse_csv(csv, !strcmp(names[k], "vortex") ? "tracer"
-                                   : !strcmp(names[k], "flip") || !strcmp(names[k], "top") ? "body"
+                                   : !strcmp(names[k], "flip") || !strcmp(names[k], "top") ||
+                                             !strcmp(names[k], "pendulum")
+                                         ? "body"
                                                                                             : "particle",
                               last) > 0);
     }
