@@ -566,6 +566,17 @@ static int holds_a_particle(const tb_world *w, uint32_t j)
     return (w->joint_flags[j] & (TB__JOINT_PARTICLE_A | TB__JOINT_PARTICLE_B)) != 0;
 }
 
+/* Joint j's drive `flag` on or off with its two values (0 when off), its
+   bodies woken to feel it */
+static void set_drive_pair(tb_world *w, uint32_t j, uint32_t flag, int enable, int first, double a, int second,
+                           double b)
+{
+    w->joint_flags[j] = (w->joint_flags[j] & ~flag) | (enable ? flag : 0);
+    w->joint_drive[TB__DRIVES * j + (size_t)first] = enable ? a : 0;
+    w->joint_drive[TB__DRIVES * j + (size_t)second] = enable ? b : 0;
+    wake_ends(w, j);
+}
+
 tb_status tb_joint_set_limit(tb_world *w, tb_joint_id id, int enable, double lower, double upper)
 {
     tb_status st;
@@ -574,10 +585,7 @@ tb_status tb_joint_set_limit(tb_world *w, tb_joint_id id, int enable, double low
     if ((st = settable(w, id, "set a joint's limit", &j)) != TB_OK ||
         (st = check_limit(w, w->joint_type[j], holds_a_particle(w, j), enable, lower, upper)) != TB_OK)
         return st;
-    w->joint_flags[j] = (w->joint_flags[j] & ~(uint32_t)TB__JOINT_LIMIT) | (enable ? TB__JOINT_LIMIT : 0);
-    w->joint_drive[TB__DRIVES * j + TB__DRIVE_LOWER] = enable ? lower : 0;
-    w->joint_drive[TB__DRIVES * j + TB__DRIVE_UPPER] = enable ? upper : 0;
-    wake_ends(w, j);
+    set_drive_pair(w, j, TB__JOINT_LIMIT, enable, TB__DRIVE_LOWER, lower, TB__DRIVE_UPPER, upper);
     return TB_OK;
 }
 
@@ -589,10 +597,7 @@ tb_status tb_joint_set_twist_limit(tb_world *w, tb_joint_id id, int enable, doub
     if ((st = settable(w, id, "set a joint's twist limit", &j)) != TB_OK ||
         (st = check_twist(w, w->joint_type[j], holds_a_particle(w, j), enable, lower, upper)) != TB_OK)
         return st;
-    w->joint_flags[j] = (w->joint_flags[j] & ~(uint32_t)TB__JOINT_TWIST) | (enable ? TB__JOINT_TWIST : 0);
-    w->joint_drive[TB__DRIVES * j + TB__DRIVE_TWIST_LOWER] = enable ? lower : 0;
-    w->joint_drive[TB__DRIVES * j + TB__DRIVE_TWIST_UPPER] = enable ? upper : 0;
-    wake_ends(w, j);
+    set_drive_pair(w, j, TB__JOINT_TWIST, enable, TB__DRIVE_TWIST_LOWER, lower, TB__DRIVE_TWIST_UPPER, upper);
     return TB_OK;
 }
 
@@ -604,10 +609,7 @@ tb_status tb_joint_set_motor(tb_world *w, tb_joint_id id, int enable, double spe
     if ((st = settable(w, id, "set a joint's motor", &j)) != TB_OK ||
         (st = check_motor(w, w->joint_type[j], enable, speed, max_force)) != TB_OK)
         return st;
-    w->joint_flags[j] = (w->joint_flags[j] & ~(uint32_t)TB__JOINT_MOTOR) | (enable ? TB__JOINT_MOTOR : 0);
-    w->joint_drive[TB__DRIVES * j + TB__DRIVE_SPEED] = enable ? speed : 0;
-    w->joint_drive[TB__DRIVES * j + TB__DRIVE_MOST] = enable ? max_force : 0;
-    wake_ends(w, j);
+    set_drive_pair(w, j, TB__JOINT_MOTOR, enable, TB__DRIVE_SPEED, speed, TB__DRIVE_MOST, max_force);
     return TB_OK;
 }
 
