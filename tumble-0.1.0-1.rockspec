@@ -51,7 +51,7 @@ build = {
             "src/contacts/shapes.c",
             "src/contacts/contact.c",
             "src/contacts/sleep.c",
-            "src/contacts/soft_step.c", "src/contacts/stack_solve.c", "src/contacts/joint_contacts.c",
+            "src/contacts/soft_step.c", "src/contacts/stack_solve.c", "src/contacts/joint_contacts.c", "src/contacts/soft_joints.c",
             "src/contacts/continuous.c",
             "lua/tumble_lua.c",
             },

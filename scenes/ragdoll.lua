@@ -1,14 +1,17 @@
 -- Ragdolls: thirteen capsules each (pelvis, chest, head, upper and lower
 -- arms, thighs, shins and feet) on ball joints with cones at the neck,
 -- waist, shoulders and hips and hinges with stops at the elbows, knees and
--- ankles, dropped in a pile of three on the ground where they come to
--- rest. The ball joints limit their twist too. The contact points of their
--- islands are solved with their joints (docs/joints.md, "Joints and
--- contacts").
+-- ankles, dropped in a pile of three on the ground (which does not yet come to
+-- rest: docs/joints.md, "Known limits"). The ball joints limit their twist
+-- too. Their joints are met in the
+-- contacts' substeps, then put back on them with the contact points of
+-- their islands (docs/joints.md, "Joints and contacts"). The ground resists
+-- rolling (5 mm): a capsule rolls without loss, and a leg can rock on its
+-- foot for ever.
 local tumble = require "tumble"
 
 local w = tumble.world{ gravity = {0, 0, -9.81}, dt = 1/60 }
-w:shape{ type = "plane", friction = 0.8 }
+w:shape{ type = "plane", friction = 0.8, rolling_resistance = 0.005 }
 
 -- a capsule of radius r and mass m from p to q, p and q apart along x, y or z
 local function bone(p, q, r, m)

@@ -61,7 +61,9 @@ enum { TB__HEARS_SHAPES, TB__HEARS_JOINTS };
 enum { TB__HEARS_SPRINGS, TB__HEARS_PARTICLE_JOINTS };
 enum {
     TB__JOINT_COLLIDE = 1, TB__JOINT_PARTICLE_A = 2, TB__JOINT_PARTICLE_B = 4,
-    TB__JOINT_LIMIT = 8, TB__JOINT_MOTOR = 16, TB__JOINT_SPRING = 32, TB__JOINT_TWIST = 64
+    TB__JOINT_LIMIT = 8, TB__JOINT_MOTOR = 16, TB__JOINT_SPRING = 32, TB__JOINT_TWIST = 64,
+    TB__JOINT_SOFT = 128 /* this step: its bodies are in contact, it is met in the soft step's
+                            substeps (contacts/soft_joints.c), not by SHAKE or the evaluations */
 };
 /* A joint's drive (world.h, joint_drive): its limits, motor, spring and
    breaking figures, TB__DRIVES of them */
@@ -183,10 +185,13 @@ struct tb_world {
     double *joint_reaction;   /* [6 * joint_cap] N, N m: on a, at the last evaluation */
     uint32_t *joint_flags;    /* [joint_cap] TB__JOINT_COLLIDE (a's and b's shapes collide),
                                  TB__JOINT_PARTICLE_A, _B (that side is a particle),
-                                 TB__JOINT_LIMIT, _MOTOR, _SPRING, _TWIST (enabled) */
+                                 TB__JOINT_LIMIT, _MOTOR, _SPRING, _TWIST (enabled),
+                                 TB__JOINT_SOFT (met in the soft step this step) */
     double *joint_drive;      /* [TB__DRIVES * joint_cap] limits (rad or m), motor (rad/s or m/s;
                                  N m or N), spring (N m/rad or N/m, N m s/rad or N s/m, the
                                  target; Hz and ratio as given), breaking (N, N m) */
+    double *joint_warm;       /* [TB__JOINT_ROWS * joint_cap] N or N m: each row's force in the
+                                 soft step's last substep, its next step's warm start */
     tb__ids joint_ids;
     int joints_unmet;         /* the last projection left some end off its joints (beyond
                                  rounding): a step from here is not taken again in halves

@@ -67,9 +67,7 @@ static tb_status map_reserve(tb_world *w, tb__contacts *c)
     return TB_OK;
 }
 
-/* The solver body of a body or particle slot, made on first use; -1 for
-   static things, pinned particles included. */
-static tb_status solver_body(tb_world *w, tb__contacts *c, enum tb__tier tier, uint32_t slot, int32_t *out)
+tb_status tb__contacts_solver_body(tb_world *w, tb__contacts *c, enum tb__tier tier, uint32_t slot, int32_t *out)
 {
     int32_t *map = tier == TB__BODIES ? c->body_map : c->particle_map;
     tb__solver_body *b;
@@ -215,7 +213,7 @@ static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
         s->restitution = c->settings.particle_restitution;
         s->rolling = 0;
         s->core = fmax(c->settings.particle_radius, 0);
-        return solver_body(w, c, TB__PARTICLES, slot, &s->body);
+        return tb__contacts_solver_body(w, c, TB__PARTICLES, slot, &s->body);
     } else {
         const tb__shape *sh = &c->shapes[proxy];
         uint32_t gen, slot;
@@ -227,7 +225,7 @@ static tb_status side_of(tb_world *w, tb__contacts *c, uint32_t proxy, side *s)
         s->body = -1;
         if (sh->body && tb__ids_lookup(&w->body_ids, sh->body, sh->body_generation, &slot) &&
             !w->body_island[slot]) /* (a sleeping body is ground to a slow particle) */
-            return solver_body(w, c, TB__BODIES, slot, &s->body);
+            return tb__contacts_solver_body(w, c, TB__BODIES, slot, &s->body);
         return TB_OK;
     }
 }
@@ -925,6 +923,9 @@ tb_status tb__contacts_prepare(tb_world *w, double h)
     if (k) /* (out of order: shapes were removed and their ids reused, or a plane came late) */
         sort_keys(c->order, c->order_scratch, c->entry_count);
     if ((st = index_keys(w, c)) != TB_OK)
+        return st;
+    /* the bodies jointed to those in contact (soft_joints.c) */
+    if ((st = tb__soft_joints_prepare(w, c)) != TB_OK)
         return st;
     /* room to park this step's entries after the solve */
     if ((st = tb__reserve(w, (void **)&c->park_index, &c->park_index_cap, c->entry_count + 1,

@@ -189,6 +189,12 @@ struct tb__contacts {
     size_t wide_row_cap, wide_patch_cap;
     int soft_pass;             /* the bodies the soft step's loops move now (tb__soft_body.pass) */
     struct tb__stacks *stacks; /* stack_solve.c: rows solved together */
+    struct tb__soft_joint *soft_joints; /* soft_joints.c: the joints of bodies in contact */
+    size_t soft_joint_count, soft_joint_cap;
+    struct tb__soft_joint_row *joint_rows; /* ... and their rows */
+    size_t joint_row_count, joint_row_cap;
+    int32_t *joint_groups;     /* [2 nodes] soft_joints.c's scratch */
+    size_t joint_group_cap;
     int prepared;              /* entries hold this step's contacts, to solve */
     int solved;                /* entries hold the last step's solved contacts */
 };
@@ -200,6 +206,13 @@ int tb__contacts_active(const tb_world *w);
    islands with joints handed to the joints' projection (joints.h,
    tb__joint_contact) */
 tb_status tb__contacts_for_joints(tb_world *w);
+/* The solver body of a body or particle slot, made on first use; -1 for
+   static things, pinned particles included */
+tb_status tb__contacts_solver_body(tb_world *w, tb__contacts *c, enum tb__tier tier, uint32_t slot, int32_t *out);
+/* soft_joints.c: with the step's contacts found, every body jointed to a
+   solver body made one, and the joints between them marked
+   TB__JOINT_SOFT: met in the soft step's substeps this step */
+tb_status tb__soft_joints_prepare(tb_world *w, tb__contacts *c);
 /* Before the integrator: find this step's contacts at the start positions. */
 tb_status tb__contacts_prepare(tb_world *w, double h);
 /* After the integrator's free motion: solve the contacts (the soft

@@ -207,18 +207,9 @@ static void separations(tb__contacts *c)
         c->soft_rows[i].now = separation_from_motion(c, &c->soft_rows[i]);
 }
 
-/* The soft constraint's coefficients for a substep of hs: a spring of
-   `hertz` (at most a quarter of the substep rate, beyond which a substep
-   cannot follow it) with `damping_ratio`, met implicitly over the substep:
-   the velocity it aims at is -bias_rate times the overlap, the row's mass
-   is scaled by mass_scale, and impulse_scale of the accumulated impulse
-   is taken back, so that a held overlap settles where the spring holds
-   the load. */
-typedef struct soft {
-    double bias_rate, mass_scale, impulse_scale;
-} soft;
+typedef tb__softness soft; /* (soft_step.h) */
 
-static soft softness(double hertz, double zeta, double hs)
+tb__softness tb__soft_softness(double hertz, double zeta, double hs)
 {
     const double f = tb__least(hertz, 0.25 / hs), omega = 2 * 3.14159265358979323846 * f;
     const double a1 = 2 * zeta + hs * omega, a2 = hs * omega * a1, a3 = 1 / (1 + a2);
@@ -1203,9 +1194,9 @@ static tb_status wide_islands_apart(tb_world *w, tb__contacts *c, size_t *narrow
     tb__soft_patch *swap_patches;
     size_t cap;
     *any = 0;
-    /* the wide islands without a deep overlap or a particle: pass marks
-       a particle and a body with a point deeper than the slop, group
-       joins an island's bodies */
+    /* the wide islands without a deep overlap, a particle or a joint:
+       pass marks a particle, a jointed body and a body with a point
+       deeper than the slop, group joins an island's bodies */
     for (i = 0; i < c->body_count; ++i) {
         c->soft_bodies[i].group = (int32_t)i;
         c->soft_bodies[i].pass = c->bodies[i].tier != TB__BODIES;
@@ -1221,6 +1212,13 @@ static tb_status wide_islands_apart(tb_world *w, tb__contacts *c, size_t *narrow
             c->soft_bodies[p->b].pass = 1;
         if (!p->stacked && p->a >= 0 && p->b >= 0)
             c->soft_bodies[group_of(c->soft_bodies, p->a)].group = group_of(c->soft_bodies, p->b);
+    }
+    for (i = 0; i < c->soft_joint_count; ++i) { /* (a joint's island too: its bodies need not touch) */
+        const tb__soft_joint *s = &c->soft_joints[i];
+        if (s->a >= 0)
+            c->soft_bodies[s->a].pass = 1;
+        if (s->b >= 0)
+            c->soft_bodies[s->b].pass = 1;
     }
     for (i = 0; i < c->body_count; ++i)
         if (c->soft_bodies[i].pass)
@@ -1276,7 +1274,8 @@ static tb_status wide_islands_apart(tb_world *w, tb__contacts *c, size_t *narrow
 static tb_status substeps(tb_world *w, tb__contacts *c, double h, int n, double hertz, int set_up)
 {
     const double hs = h / n;
-    const soft sf = softness(hertz, c->settings.damping_ratio, hs);
+    const soft sf = tb__soft_softness(hertz, c->settings.damping_ratio, hs);
+    const double joint_rate = tb__soft_joints_rate(hertz, hs);
     tb_status st;
     int i, struck;
     if (set_up && (st = tb__stacks_set_up(w, c)) != TB_OK)
@@ -1292,26 +1291,46 @@ static tb_status substeps(tb_world *w, tb__contacts *c, double h, int n, double 
         struck = impacts(c, hs);
         drop_parting(c);
         push_share(c, 1);
+        tb__soft_joints_warm(c, 1);
+        tb__soft_joints_solve(c, hs);
         tb__stacks_solve(c, hs, 1);
         solve_patches(c, hs, &sf, 1);
         tb__stacks_solve(c, hs, 1);
         tb__stacks_push(c, sf.bias_rate, 1);
+        tb__soft_joints_push(c, joint_rate, 1);
         drift(c, hs);
+        tb__soft_joints_push(c, joint_rate, -1);
         tb__stacks_push(c, sf.bias_rate, -1);
         if (struck)
             impacts_moved(c);
         separations(c);
+        tb__soft_joints_now(w, c);
         respond(c);
+        /* the relax: the joints again after the contacts, so that the
+           drift moves jointed bodies by velocities their joints allow
+           (met only before the contacts, a light limb's velocity was the
+           contacts', and a ragdoll at rest crept at 2 cm/s and never
+           slept) */
+        tb__soft_joints_solve(c, hs);
         tb__stacks_solve(c, hs, 0);
         solve_patches(c, hs, &sf, 0);
+        tb__soft_joints_solve(c, hs);
         if (struck)
             unbounce(c);
         half_kick(c);
+        tb__soft_joints_count(c, 0);
     }
+    tb__soft_joints_settle(c, 1); /* (the last rigid pass, around the contacts') */
+    tb__soft_joints_solve(c, hs);
     settle(c, hs, &sf);
+    tb__soft_joints_solve(c, hs);
+    tb__soft_joints_settle(c, 0);
+    tb__soft_joints_count(c, 1);
     restitution(c);
     tb__soft_continuous(w, c);
     store(w, c, n);
+    if (c->soft_pass == 0) /* (the joints' islands are stepped at the step's rate) */
+        tb__soft_joints_store(w, c, h, hs);
     return TB_OK;
 }
 
@@ -1342,6 +1361,8 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
                           sizeof *c->soft_bodies)) != TB_OK)
         return st;
     load(w, c, n);
+    if ((st = tb__soft_joints_load(w, c, h / n)) != TB_OK)
+        return st;
     if ((st = set_up_rows(w, c, h, n)) != TB_OK)
         return st;
     separations(c);
@@ -1388,6 +1409,9 @@ tb_status tb__soft_step(tb_world *w, tb__contacts *c, double h)
 void tb__soft_free(tb_world *w, tb__contacts *c)
 {
     tb__stacks_free(w, c);
+    tb__alloc(w, c->soft_joints, c->soft_joint_cap * sizeof *c->soft_joints, 0);
+    tb__alloc(w, c->joint_groups, c->joint_group_cap * sizeof *c->joint_groups, 0);
+    tb__alloc(w, c->joint_rows, c->joint_row_cap * sizeof *c->joint_rows, 0);
     tb__alloc(w, c->wide_patches, c->wide_patch_cap * sizeof *c->wide_patches, 0);
     tb__alloc(w, c->wide_rows, c->wide_row_cap * sizeof *c->wide_rows, 0);
     tb__alloc(w, c->soft_patches, c->soft_patch_cap * sizeof *c->soft_patches, 0);

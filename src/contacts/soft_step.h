@@ -6,6 +6,7 @@
 #define TB_SOFT_STEP_H
 
 #include "contacts/contacts.h"
+#include "joints/joints.h"
 
 /* The larger and the smaller of a and b, b when they compare equal (so
    the sign of a zero is b's), a NaN never chosen over a number: fmax and
@@ -40,6 +41,7 @@ typedef struct tb__soft_body {
                                    too wide to, with no point deeper than the slop, stepped
                                    apart at twice the rate (wide_islands_apart) */
     int32_t group;              /* a body of its island (union-find, wide_islands_apart) */
+    int jointed;                /* an end of a joint met in the substeps (soft_joints.c) */
 } tb__soft_body;
 
 /* A manifold: its points' normal rows, then friction (two rows at the
@@ -67,6 +69,31 @@ typedef struct tb__soft_patch {
                                    deeper than the slop: stepped at twice the rate */
 } tb__soft_patch;
 
+/* A joint of bodies in contact, met in the substeps (soft_joints.c) */
+typedef struct tb__soft_joint {
+    uint32_t joint;
+    int32_t a, b;               /* solver bodies, -1: what does not move */
+    size_t first, count;        /* its rows */
+    double lever[3];            /* m: the anchor on a from a's centre, now */
+    double reaction[6];         /* N s, N m s: the step's impulse on a, the torque about its anchor */
+} tb__soft_joint;
+
+/* One of a soft joint's rows at the poses now (joints.h, tb__joint_row),
+   in the contact rows' form: its rate n.(v_b - v_a) + arm_b.w_b -
+   arm_a.w_a */
+typedef struct tb__soft_joint_row {
+    int32_t a, b;               /* solver bodies, -1: what does not move */
+    int kind;                   /* TB__ROW_EQUAL, _LIMIT or _MOTOR */
+    double normal[3];           /* the linear part on b (on a: its opposite) */
+    double arm_a[3], arm_b[3];
+    double spin_a[3], spin_b[3];/* the inverse inertia now times those */
+    double error;               /* C now: m, rad or a cosine (LIMIT: >= 0 holds) */
+    double speed, most;         /* MOTOR: the rate asked; the force's bound */
+    double impulse;             /* N s or N m s: this substep's */
+    double kept;                /* ... the last substep's, before the last rigid pass */
+    double push;                /* N s or N m s: the push of its error over this drift */
+} tb__soft_joint_row;
+
 typedef struct tb__soft_row {
     tb__point *point;
     int32_t a, b;               /* solver bodies, -1: the static world */
@@ -90,6 +117,41 @@ typedef struct tb__soft_row {
     double bounce;              /* N s: this substep's impact impulse (impacts) */
     int bounced;                /* bounced by impacts in some substep */
 } tb__soft_row;
+
+/* The soft constraint's coefficients for a substep of hs: a spring of
+   `hertz` (at most a quarter of the substep rate, beyond which a substep
+   cannot follow it) with damping ratio zeta, met implicitly over the
+   substep: the velocity it aims at is -bias_rate times the error, the
+   row's mass is scaled by mass_scale, and impulse_scale of the
+   accumulated impulse is taken back, so that a held overlap settles
+   where the spring holds the load. */
+typedef struct tb__softness {
+    double bias_rate, mass_scale, impulse_scale;
+} tb__softness;
+tb__softness tb__soft_softness(double hertz, double zeta, double hs);
+
+/* soft_joints.c: each soft joint's rows at the start poses, their
+   impulses from last step's forces (the warm start), no reaction yet;
+   the rows again at the poses now (after a drift); a share of their
+   impulses applied again; every joint of the pass under way solved
+   once, rigid; their errors pushed out over the drift (sign +1 before
+   it, -1 after it: taken back); a substep's impulses added to the
+   reactions (last 0), or what the last rigid pass added (last 1); the
+   forces and reactions stored */
+tb_status tb__soft_joints_load(tb_world *w, tb__contacts *c, double hs);
+void tb__soft_joints_now(tb_world *w, tb__contacts *c);
+void tb__soft_joints_warm(tb__contacts *c, double share);
+void tb__soft_joints_solve(tb__contacts *c, double hs);
+void tb__soft_joints_push(tb__contacts *c, double rate, int sign);
+void tb__soft_joints_count(tb__contacts *c, int last);
+/* The last rigid pass's impulses begin at 0 (begin 1: the last
+   substep's, kept, are not its to take back), and are then added to
+   them (0) */
+void tb__soft_joints_settle(tb__contacts *c, int begin);
+void tb__soft_joints_store(tb_world *w, tb__contacts *c, double h, double hs);
+/* The rate (1/s) the joints' errors are pushed out at, with contacts of
+   `hertz` in substeps of hs */
+double tb__soft_joints_rate(double hertz, double hs);
 
 /* The relative velocity of b against a along row o's normal */
 double tb__soft_rate(const tb__contacts *c, const tb__soft_row *o);

@@ -164,13 +164,12 @@ static tb_status project_positions(tb_world *w, double h)
     return TB_OK;
 }
 
-tb_status tb__joints_project(tb_world *w, double h)
+/* The projection (tb__joints_project) of every joint's ends */
+static tb_status project(tb_world *w, double h)
 {
     struct tb__joint_work *k;
-    size_t rows, i;
+    size_t rows, i, j;
     tb_status st;
-    if (w->joint_count == 0)
-        return TB_OK;
     if ((st = project_positions(w, 0)) != TB_OK)
         return st;
     /* velocities: the rows' rates taken out by an impulse */
@@ -183,17 +182,36 @@ tb_status tb__joints_project(tb_world *w, double h)
         k->x[i] = (r->kind == TB__ROW_MOTOR ? r->speed : 0) - k->x[i];
         k->use[i] = r->kind != TB__ROW_LIMIT || r->error <= r->reach; /* (friction too) */
     }
+    for (j = 0; j < w->joint_count; ++j) /* the soft step's motors are met in its substeps */
+        for (i = k->row_start[j]; (w->joint_flags[j] & TB__JOINT_SOFT) && i < k->row_end[j]; ++i)
+            k->use[i] &= k->rows[i].kind != TB__ROW_MOTOR;
     /* (a split method's motors have their first half before its drift) */
     tb__joint_solve(k, rows, k->impulses ? h / 2 : h);
     if (k->impulses) { /* the step's impulses over its length: the force */
         tb__joint_add_reactions(w, k, k->rows, k->lever);
         for (i = 0; i < 6 * w->joint_count; ++i)
-            w->joint_reaction[i] /= h;
+            if (!(w->joint_flags[i / 6] & TB__JOINT_SOFT)) /* (the soft step's are forces) */
+                w->joint_reaction[i] /= h;
         k->impulses = 0;
     }
     tb__joint_apply(w, k->rows, rows, k->x, 0);
     k->contact_count = 0; /* (the contacts' points are this projection's) */
     return TB_OK;
+}
+
+tb_status tb__joints_project(tb_world *w, double h)
+{
+    tb_status st;
+    if (w->joint_count == 0)
+        return TB_OK;
+    if (!w->joint_work && (st = tb__joint_reserve(w, 0)) != TB_OK)
+        return st;
+    /* every joint, those the soft step met too: it leaves their errors
+       of the order of its pushes' (contacts/soft_joints.c) */
+    w->joint_work->projecting = 1;
+    st = project(w, h);
+    w->joint_work->projecting = 0;
+    return st;
 }
 
 /* ---- the split methods' drift (SHAKE, with the velocities' part at the

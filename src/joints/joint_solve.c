@@ -272,6 +272,10 @@ tb_status tb__joint_set_up(tb_world *w, const double *y, const double *seen, int
         tb__joint_end e[2];
         size_t first = rows;
         int n, r, side;
+        if (!contact && (w->joint_flags[j] & TB__JOINT_SOFT) && !k->projecting) { /* the soft step's */
+            k->row_start[j] = k->row_end[j] = rows;
+            continue;
+        }
         for (side = 0; side < 2; ++side) { /* each end once a set-up */
             const int32_t s = contact ? (side ? contact->b : contact->a) : tb__joint_end_slot(w, j, side);
             if (s == TB__JOINT_WORLD) {
@@ -552,6 +556,8 @@ void tb__joint_add_reactions(tb_world *w, const struct tb__joint_work *k, const 
     int d;
     for (j = 0; j < w->joint_count; ++j) {
         double *reaction = w->joint_reaction + 6 * j, force[3] = { 0, 0, 0 }, turn[3];
+        if (w->joint_flags[j] & TB__JOINT_SOFT) /* (the soft step's: soft_joints.c) */
+            continue;
         for (i = k->row_start[j]; i < k->row_end[j]; ++i)
             for (d = 0; d < 3; ++d) {
                 force[d] += rows[i].lin_a[d] * k->x[i];
@@ -705,6 +711,9 @@ void tb__joint_keep(tb_world *w, struct tb__joint_work *k, double *buffer, int p
 
 void tb__joints_begin_step(tb_world *w)
 {
+    size_t j;
+    for (j = 0; j < w->joint_count; ++j) /* (the contacts mark theirs: soft_joints.c) */
+        w->joint_flags[j] &= ~(uint32_t)TB__JOINT_SOFT;
     if (w->joint_work)
         w->joint_work->impulses = 0, w->joint_work->contact_count = 0;
 }

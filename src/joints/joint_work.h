@@ -49,6 +49,8 @@ struct tb__joint_work {
     size_t moved_count;
     size_t body_cap;         /* nodes */
     unsigned now;            /* this set-up's stamp */
+    int projecting;          /* the projection's set-ups: the joints the soft step met
+                                (TB__JOINT_SOFT) are put on their joints too */
     int impulses;            /* the reactions hold impulses of this step's drifts
                                 (tb__joints_shake), for the projection to finish */
     uint64_t *apart;         /* [apart_count] the body pairs whose shapes pass through each

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define JOINT_ARRAYS 8
+#define JOINT_ARRAYS 9
 #define PI 3.14159265358979323846
 
 static void body_removed(tb_world *w, uint32_t body_index1);
@@ -57,6 +57,7 @@ static void arrays_of(tb_world *w, void **arrays[JOINT_ARRAYS], size_t sizes[JOI
     arrays[5] = (void **)&w->joint_reaction; sizes[5] = 6 * sizeof(double);
     arrays[6] = (void **)&w->joint_flags;    sizes[6] = sizeof(uint32_t);
     arrays[7] = (void **)&w->joint_drive;    sizes[7] = TB__DRIVES * sizeof(double);
+    arrays[8] = (void **)&w->joint_warm;     sizes[8] = TB__JOINT_ROWS * sizeof(double);
 }
 
 /* The pose of body slot s (x, R), or the world's for s = -1 */
@@ -419,6 +420,7 @@ tb_status tb_world_add_joint(tb_world *w, const tb_joint_def *def, tb_joint_id *
     into_frame(xb, Rb, anchor_b, frame, w->joint_anchor + 6 * j + 3, w->joint_frame + 18 * j + 9);
     w->joint_length[j] = length;
     memset(w->joint_reaction + 6 * j, 0, 6 * sizeof(double));
+    memset(w->joint_warm + TB__JOINT_ROWS * j, 0, TB__JOINT_ROWS * sizeof(double));
     set_drive(w, j, def);
     if (sa >= 0)
         tb__wake_body(w, (uint32_t)sa);
@@ -543,10 +545,12 @@ tb_status tb_joint_position(const tb_world *w, tb_joint_id id, double *position,
     return TB_OK;
 }
 
-/* The bodies joint j holds, woken: what drives them changed */
+/* The bodies joint j holds, woken: what drives them changed (and its rows
+   with it: the soft step's warm start is dropped) */
 static void wake_ends(tb_world *w, uint32_t j)
 {
     int k;
+    memset(w->joint_warm + TB__JOINT_ROWS * j, 0, TB__JOINT_ROWS * sizeof(double));
     for (k = 0; k < 2; ++k)
         if (body_slot_of(w, j, k) >= 0)
             tb__wake_body(w, (uint32_t)body_slot_of(w, j, k));

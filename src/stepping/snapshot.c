@@ -12,6 +12,7 @@
 #include "stepping/stepping.h"
 #include "bodies/bodies.h"
 #include "contacts/contacts.h"
+#include "joints/joints.h"
 #include "forces/forces.h"
 
 #include <string.h>
@@ -127,6 +128,7 @@ static size_t list_blocks(tb_world *w, tb__contacts *c, block *b)
         add(b, &n, &w->joint_reaction, 6 * nj * sizeof(double), 6 * jc * sizeof(double), 0);
         add(b, &n, &w->joint_flags, nj * sizeof(uint32_t), jc * sizeof(uint32_t), 1);
         add(b, &n, &w->joint_drive, TB__DRIVES * nj * sizeof(double), TB__DRIVES * jc * sizeof(double), 1);
+        add(b, &n, &w->joint_warm, TB__JOINT_ROWS * nj * sizeof(double), TB__JOINT_ROWS * jc * sizeof(double), 0);
         ids_blocks(b, &n, &w->joint_ids);
     }
 
@@ -590,6 +592,7 @@ uint64_t tb_world_hash(const tb_world *w)
         h = mix_u64(h, w->joint_count);
         h = mix_u64(h, (uint64_t)w->joints_unmet); /* (whether the next step may be halved) */
         h = mix_doubles(h, w->joint_reaction, 6 * w->joint_count);
+        h = mix_doubles(h, w->joint_warm, TB__JOINT_ROWS * w->joint_count);
     }
     if (w->contacts) {
         const tb__contacts *c = w->contacts;

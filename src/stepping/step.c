@@ -163,6 +163,7 @@ static tb_status advance(tb_world *w, double h)
     double power = 0, sums[2] = { 0, 0 };
     const int damped = tb__is_damped(w);
     int summed;
+    tb__joints_begin_step(w);
     if (tb__contacts_active(w) && (st = tb__contacts_prepare(w, h)) != TB_OK)
         return st;
     /* the drag's power at the start (and, without contacts, at the end)
@@ -172,7 +173,6 @@ static tb_status advance(tb_world *w, double h)
     if (damped && !summed)
         power = tb__damping_power(w);
     w->damping_sums = summed ? sums : NULL;
-    tb__joints_begin_step(w);
     w->stepping = 1;
     st = tb__method_step(w, w->method, h);
     w->stepping = 0;
@@ -187,7 +187,8 @@ static tb_status advance(tb_world *w, double h)
         w->work.contact_work += tb__contacts_energy(w) - before;
     }
     /* the bodies back on their joints, with the contact points of their
-       islands (joint_shake.c, joint_contacts.c) */
+       islands (joint_shake.c, joint_contacts.c); the soft step carried
+       the loads of those in contact (soft_joints.c) */
     if (w->joint_count && ((tb__contacts_active(w) && (st = tb__contacts_for_joints(w)) != TB_OK) ||
                            (st = tb__joints_project(w, h)) != TB_OK))
         return st;
