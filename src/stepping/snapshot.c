@@ -176,6 +176,9 @@ static void carry_scratch(tb__contacts *dst, const tb__contacts *src)
     dst->wide_rows = src->wide_rows, dst->wide_row_cap = src->wide_row_cap;
     dst->wide_patches = src->wide_patches, dst->wide_patch_cap = src->wide_patch_cap;
     dst->stacks = src->stacks; /* stack_solve.c's: set up again every step */
+    dst->soft_joints = src->soft_joints, dst->soft_joint_cap = src->soft_joint_cap, dst->soft_joint_count = 0;
+    dst->joint_rows = src->joint_rows, dst->joint_row_cap = src->joint_row_cap, dst->joint_row_count = 0;
+    dst->joint_groups = src->joint_groups, dst->joint_group_cap = src->joint_group_cap;
 }
 
 /* A snapshot's blocks: where it keeps each pointer, and the bytes it
