@@ -17,7 +17,20 @@
    tumble should hold it at 60 Hz with every gap under 1 mm. Where a step
    is too long for the links' whip, tumble takes it again in halves
    (step.c): the line says how many steps were (tb_work.rejected) and
-   the substeps taken in all, and the mean step's time counts them. */
+   the substeps taken in all, and the mean step's time counts them.
+
+   Part 3, ragdolls (reference/ragdoll.h: 13 capsules, 5 ball joints with
+   cones and twist limits, 6 hinges with stops) dropped in a pile on the
+   plane, 4 to a layer, 3 and 8 of them, 6 s at 60 Hz: the mean step,
+   ns per joint per step, the worst joint error at any step (tumble: its
+   rows' largest, m or the cosine of axes that should be square; ODE: the
+   distance between its anchors), the kinetic energy at the end (jitter:
+   at rest it is 0), the deepest a capsule went into the plane, and for
+   tumble the bodies asleep at the end. ODE (ode_ragdolls) with
+   QuickStep(20) and dWorldStep; its ball joints have no cone or twist
+   limits. Issue 19: a pile of 20, at least 10 times faster than QuickStep
+   per joint; tumble's projection over a pile's envelope took more than
+   14 minutes for the 20 (docs/joints.md, "Known limits"). */
 #define _POSIX_C_SOURCE 200809L
 #define BENCH_NAME "bench_joints"
 
@@ -26,7 +39,9 @@
 
 #include <ode/ode.h>
 
+#include "ode_contacts.h"
 #include "pendulum.h"
+#include "ragdoll.h"
 
 static const double G = 9.81, PI = 3.14159265358979323846;
 
@@ -324,12 +339,170 @@ static void chain(void)
     print_chain("ODE QuickStep(20)", 60, 1, ode_chain(60, 1, 1, 100));
 }
 
+/* ---- part 3 ------------------------------------------------------------------ */
+
+#define PILE_SECONDS 6
+
+typedef struct pile_run {
+    double us, gap, kinetic, deepest;
+    int asleep, bodies, finite;
+} pile_run;
+
+static pile_run tumble_pile(int count)
+{
+    const double h = 1.0 / 60;
+    tb_world_def def = tb_default_world_def();
+    tb_shape_def ground = tb_default_shape_def();
+    tb_world *w;
+    tb_body_id *body = malloc((size_t)count * REF_RAGDOLL_BONES * sizeof *body);
+    ref_bone *bone = malloc((size_t)count * REF_RAGDOLL_BONES * sizeof *bone);
+    pile_run run = { 0, 0, 0, 0, 0, 0, 1 };
+    double sum = 0;
+    int i, k, s;
+    if (!body || !bone) {
+        fprintf(stderr, "bench_joints: out of memory\n");
+        exit(1);
+    }
+    def.gravity[0] = def.gravity[1] = 0, def.gravity[2] = -G;
+    check(tb_world_create(&def, &w, NULL, 0), NULL, "world");
+    ground.type = TB_SHAPE_PLANE;
+    ground.friction = 0.8;
+    check(tb_world_add_shape(w, &ground, NULL), w, "plane");
+    for (i = 0; i < count; ++i) {
+        ref_ragdoll_joint js[REF_RAGDOLL_JOINTS];
+        double at[3];
+        ref_ragdoll_place(i, at);
+        ref_ragdoll(at[0], at[1], at[2], bone + i * REF_RAGDOLL_BONES, js);
+        for (k = 0; k < REF_RAGDOLL_BONES; ++k) {
+            const ref_bone *b = &bone[i * REF_RAGDOLL_BONES + k];
+            const double l = ref_bone_length(b);
+            const double r2 = sqrt(0.5);
+            tb_body_def bd = tb_default_body_def();
+            tb_shape_def sd = tb_default_shape_def();
+            int d;
+            check(tb_mass_capsule(1, b->radius, l, &bd.mass, NULL), w, "mass");
+            check(tb_mass_set_total(&bd.mass, b->mass, NULL), w, "mass");
+            for (d = 0; d < 3; ++d)
+                bd.position[d] = (b->p[d] + b->q[d]) / 2;
+            if (b->q[0] != b->p[0]) /* a capsule's axis is its z: turned onto p to q */
+                bd.orientation[0] = r2, bd.orientation[1] = 0, bd.orientation[2] = r2, bd.orientation[3] = 0;
+            else if (b->q[1] != b->p[1])
+                bd.orientation[0] = r2, bd.orientation[1] = -r2, bd.orientation[2] = 0, bd.orientation[3] = 0;
+            check(tb_world_add_body(w, &bd, &body[i * REF_RAGDOLL_BONES + k]), w, "body");
+            sd.type = TB_SHAPE_CAPSULE;
+            sd.body = body[i * REF_RAGDOLL_BONES + k];
+            sd.radius = b->radius;
+            sd.half_length = l / 2;
+            check(tb_world_add_shape(w, &sd, NULL), w, "capsule");
+        }
+        for (k = 0; k < REF_RAGDOLL_JOINTS; ++k) {
+            const ref_ragdoll_joint *r = &js[k];
+            tb_joint_def jd = tb_default_joint_def();
+            jd.type = r->hinge ? TB_JOINT_HINGE : TB_JOINT_BALL;
+            jd.a = body[i * REF_RAGDOLL_BONES + r->a];
+            jd.b = body[i * REF_RAGDOLL_BONES + r->b];
+            memcpy(jd.anchor, r->anchor, sizeof jd.anchor);
+            memcpy(jd.axis, r->axis, sizeof jd.axis);
+            jd.enable_limit = 1;
+            jd.lower = r->hinge ? r->lower : 0;
+            jd.upper = r->hinge ? r->upper : r->cone;
+            if (!r->hinge)
+                jd.enable_twist = 1, jd.twist_lower = r->twist[0], jd.twist_upper = r->twist[1];
+            check(tb_world_add_joint(w, &jd, NULL), w, "joint");
+        }
+    }
+    for (s = 0; s < PILE_SECONDS * 60; ++s) {
+        const double t0 = seconds();
+        if (tb_world_step(w, h) != TB_OK) {
+            run.finite = 0;
+            break;
+        }
+        sum += seconds() - t0;
+        for (i = 0; i < (int)tb_world_joint_count(w); ++i) {
+            double e;
+            tb_joint_error(w, tb_world_joint_at(w, (size_t)i), &e);
+            run.gap = isfinite(e) ? fmax(run.gap, e) : INFINITY;
+        }
+        for (k = 0; k < count * REF_RAGDOLL_BONES; ++k) {
+            const ref_bone *b = &bone[k];
+            const double l = ref_bone_length(b);
+            double x[3], q[4], low;
+            tb_body_position(w, body[k], x);
+            tb_body_orientation(w, body[k], q);
+            low = x[2] - fabs(1 - 2 * (q[1] * q[1] + q[2] * q[2])) * l / 2 - b->radius;
+            run.finite &= isfinite(low);
+            run.deepest = fmax(run.deepest, -low);
+        }
+    }
+    for (k = 0; k < count * REF_RAGDOLL_BONES; ++k) {
+        double m, inertia[3], v[3], om[3], P[3], L[3];
+        int asleep = 0;
+        tb_body_velocity(w, body[k], v);
+        tb_body_angular_velocity(w, body[k], om);
+        tb_body_momentum(w, body[k], P, L);
+        tb_body_mass(w, body[k], &m, inertia);
+        run.kinetic += 0.5 * (P[0] * v[0] + P[1] * v[1] + P[2] * v[2] + L[0] * om[0] + L[1] * om[1] + L[2] * om[2]);
+        tb_body_asleep(w, body[k], &asleep);
+        run.asleep += asleep;
+    }
+    run.bodies = count * REF_RAGDOLL_BONES;
+    run.us = 1e6 * sum / (s ? s : 1);
+    tb_world_destroy(w);
+    free(body);
+    free(bone);
+    return run;
+}
+
+static void print_pile(const char *who, int count, pile_run r, double per_joint_ns, const char *ratio)
+{
+    char asleep[64] = "";
+    if (r.bodies)
+        snprintf(asleep, sizeof asleep, ", %d of %d asleep", r.asleep, r.bodies);
+    printf("ragdolls  %-20s %2d: %s%.1f us/step, %.0f ns/joint/step%s, worst joint %.1e, kinetic %.2e J at %d s, "
+           "deepest %.4f m%s\n", who, count, r.finite ? "" : "NOT FINITE: ", r.us, per_joint_ns, ratio, r.gap,
+           r.kinetic, PILE_SECONDS, r.deepest, asleep);
+}
+
+static void ragdolls(void)
+{
+    static const int counts[2] = { 3, 8 };
+    int k;
+    printf("ragdolls  13 capsules, 12 joints each, dropped in a pile, 4 to a layer, %d s at 60 Hz (target: 10 times "
+           "QuickStep's speed per joint, at rest without jitter, joints within 1 mm, none through the ground)\n",
+           PILE_SECONDS);
+    for (k = 0; k < 2; ++k) {
+        const int joints = counts[k] * REF_RAGDOLL_JOINTS;
+        const pile_run t = tumble_pile(counts[k]);
+        ode_ragdoll_def d = ode_default_ragdoll_def();
+        ode_ragdoll_result o[2];
+        int m;
+        char ratio[64];
+        print_pile("tumble verlet", counts[k], t, 1e3 * t.us / joints, "");
+        d.count = counts[k];
+        d.steps = PILE_SECONDS * 60;
+        for (m = 0; m < 2; ++m) {
+            pile_run r = { 0, 0, 0, 0, 0, 0, 1 };
+            d.iterations = m ? 0 : 20;
+            if (!ode_ragdolls(&d, &o[m])) {
+                printf("ragdolls  ODE did not run\n");
+                return;
+            }
+            r.us = 1e3 * o[m].ms_mean, r.gap = o[m].gap, r.kinetic = o[m].kinetic, r.deepest = o[m].deepest;
+            r.finite = o[m].finite;
+            snprintf(ratio, sizeof ratio, " (tumble/ODE %.2f)", t.us / r.us);
+            print_pile(m ? "ODE dWorldStep" : "ODE QuickStep(20)", counts[k], r, 1e3 * r.us / joints, ratio);
+        }
+    }
+}
+
 int main(void)
 {
+    setvbuf(stdout, NULL, _IOLBF, 0);
     printf("tumble joints beside ODE %s (double)\n", TB_BENCH_ODE);
     bench_print_build();
     bench_print_asserts();
     pendulum();
     chain();
+    ragdolls();
     return 0;
 }

@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime under -std=c99 */
 
 #include "ode_contacts.h"
+#include "ragdoll.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -735,5 +736,169 @@ int ode_heavy_landing(const ode_heavy_def *def, ode_heavy_result *out)
     dSpaceDestroy(space);
     dWorldDestroy(world);
     dCloseODE();
+    return 1;
+}
+
+/* ------------------------------------------------------------- ragdolls -- */
+
+ode_ragdoll_def ode_default_ragdoll_def(void)
+{
+    ode_ragdoll_def d;
+    d.count = 20;
+    d.hz = 60;
+    d.iterations = 20;
+    d.steps = 360;
+    d.gravity = 9.81;
+    return d;
+}
+
+/* The near callback of the ragdolls: no contacts between bodies a joint
+   holds (tumble's default, collide 0) */
+static void ragdoll_near(void *data, dGeomID a, dGeomID b)
+{
+    dBodyID ba = dGeomGetBody(a), bb = dGeomGetBody(b);
+    if (ba && bb && dAreConnectedExcluding(ba, bb, dJointTypeContact))
+        return;
+    near_callback(data, a, b);
+}
+
+/* A quaternion turning z onto the axis from p to q (apart along one axis) */
+static void capsule_turn(const double p[3], const double q[3], dQuaternion out)
+{
+    const double h = sqrt(0.5);
+    out[0] = 1, out[1] = out[2] = out[3] = 0;
+    if (q[0] != p[0])
+        out[0] = h, out[2] = h;
+    else if (q[1] != p[1])
+        out[0] = h, out[1] = -h;
+}
+
+int ode_ragdolls(const ode_ragdoll_def *def, ode_ragdoll_result *out)
+{
+    const int bones = def ? def->count * REF_RAGDOLL_BONES : 0, joints = def ? def->count * REF_RAGDOLL_JOINTS : 0;
+    dWorldID world;
+    dSpaceID space;
+    dBodyID *body;
+    dJointID *joint;
+    ref_bone *bone;
+    near_ctx c;
+    double sum = 0, h;
+    int i, k, n;
+
+    memset(out, 0, sizeof *out);
+    if (!def || def->count < 1 || def->count > 1000 || !finite_positive(def->hz) || def->iterations < 0 ||
+        def->steps < 1 || !finite_positive(def->gravity))
+        return 0;
+    body = malloc((size_t)bones * sizeof *body);
+    joint = malloc((size_t)joints * sizeof *joint);
+    bone = malloc((size_t)bones * sizeof *bone);
+    if (!body || !joint || !bone || !ode_open()) {
+        free(body);
+        free(joint);
+        free(bone);
+        return 0;
+    }
+    h = 1 / def->hz;
+    world = quick_world(def->gravity, def->iterations ? def->iterations : 20, &space);
+    for (i = 0; i < def->count; ++i) {
+        ref_ragdoll_joint js[REF_RAGDOLL_JOINTS];
+        double at[3];
+        ref_ragdoll_place(i, at);
+        ref_ragdoll(at[0], at[1], at[2], bone + i * REF_RAGDOLL_BONES, js);
+        for (k = 0; k < REF_RAGDOLL_BONES; ++k) {
+            const ref_bone *b = &bone[i * REF_RAGDOLL_BONES + k];
+            const double l = ref_bone_length(b);
+            dBodyID id = dBodyCreate(world);
+            dGeomID g = dCreateCapsule(space, b->radius, l);
+            dMass mass;
+            dQuaternion q;
+            dMassSetCapsuleTotal(&mass, b->mass, 3, b->radius, l);
+            dBodySetMass(id, &mass);
+            dGeomSetBody(g, id);
+            dBodySetPosition(id, (b->p[0] + b->q[0]) / 2, (b->p[1] + b->q[1]) / 2, (b->p[2] + b->q[2]) / 2);
+            capsule_turn(b->p, b->q, q);
+            dBodySetQuaternion(id, q);
+            body[i * REF_RAGDOLL_BONES + k] = id;
+        }
+        for (k = 0; k < REF_RAGDOLL_JOINTS; ++k) {
+            const ref_ragdoll_joint *r = &js[k];
+            dBodyID a = body[i * REF_RAGDOLL_BONES + r->a], b = body[i * REF_RAGDOLL_BONES + r->b];
+            dJointID j = r->hinge ? dJointCreateHinge(world, 0) : dJointCreateBall(world, 0);
+            dJointAttach(j, a, b);
+            if (r->hinge) {
+                dJointSetHingeAnchor(j, r->anchor[0], r->anchor[1], r->anchor[2]);
+                dJointSetHingeAxis(j, r->axis[0], r->axis[1], r->axis[2]);
+                dJointSetHingeParam(j, dParamLoStop, r->lower);
+                dJointSetHingeParam(j, dParamHiStop, r->upper);
+            } else {
+                dJointSetBallAnchor(j, r->anchor[0], r->anchor[1], r->anchor[2]);
+            }
+            joint[i * REF_RAGDOLL_JOINTS + k] = j;
+        }
+    }
+    c.world = world;
+    c.group = dJointGroupCreate(0);
+    c.mu = 0.8;
+    c.max_contacts = 4;
+    out->finite = 1;
+    for (n = 0; n < def->steps; ++n) {
+        const double t0 = seconds();
+        c.contacts = 0;
+        dSpaceCollide(space, &c, ragdoll_near);
+        if (def->iterations)
+            dWorldQuickStep(world, h);
+        else
+            dWorldStep(world, h);
+        dJointGroupEmpty(c.group);
+        sum += seconds() - t0;
+        for (k = 0; k < joints; ++k) {
+            dVector3 p, q;
+            double d;
+            if (dJointGetType(joint[k]) == dJointTypeHinge) {
+                dJointGetHingeAnchor(joint[k], p);
+                dJointGetHingeAnchor2(joint[k], q);
+            } else {
+                dJointGetBallAnchor(joint[k], p);
+                dJointGetBallAnchor2(joint[k], q);
+            }
+            d = sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+            if (!(d <= out->gap))
+                out->gap = isfinite(d) ? d : INFINITY;
+        }
+        for (k = 0; k < bones; ++k) {
+            const dReal *x = dBodyGetPosition(body[k]), *R = dBodyGetRotation(body[k]);
+            const ref_bone *b = &bone[k];
+            const double l = ref_bone_length(b);
+            const double low = x[2] - fabs(R[10]) * l / 2 - b->radius; /* (R[10]: z of the body's z) */
+            if (!isfinite(low))
+                out->finite = 0;
+            else if (-low > out->deepest)
+                out->deepest = -low;
+        }
+    }
+    for (k = 0; k < bones; ++k) {
+        const dReal *v = dBodyGetLinearVel(body[k]), *w = dBodyGetAngularVel(body[k]);
+        dMass m;
+        dBodyGetMass(body[k], &m);
+        out->kinetic += 0.5 * m.mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        {   /* w.I.w with I in the world: R I_body R^T */
+            const dReal *R = dBodyGetRotation(body[k]);
+            double wb[3], e = 0;
+            int a2, b2;
+            for (a2 = 0; a2 < 3; ++a2)
+                wb[a2] = R[a2] * w[0] + R[4 + a2] * w[1] + R[8 + a2] * w[2];
+            for (a2 = 0; a2 < 3; ++a2)
+                for (b2 = 0; b2 < 3; ++b2)
+                    e += wb[a2] * m.I[4 * a2 + b2] * wb[b2];
+            out->kinetic += 0.5 * e;
+        }
+    }
+    out->ms_mean = 1e3 * sum / def->steps;
+    dJointGroupDestroy(c.group);
+    dSpaceDestroy(space);
+    dWorldDestroy(world);
+    free(body);
+    free(joint);
+    free(bone);
     return 1;
 }

@@ -329,6 +329,38 @@ ode_heavy_def ode_default_heavy_def(void);
    initialise. */
 int ode_heavy_landing(const ode_heavy_def *def, ode_heavy_result *out);
 
+/* ------------------------------------------------------------ ragdolls
+   `count` ragdolls of ragdoll.h dropped in a pile (ref_ragdoll_place) on
+   the plane, mu 0.8, up to 4 contacts a pair, none between bodies a joint
+   holds; ODE's ball joints have no cone or twist limits (its hinges have
+   their stops, dParamLoStop and HiStop); QuickStep with `iterations`, or
+   dWorldStep (iterations 0); `steps` steps of 1/hz. The mean wall time of
+   a step (collision and step), the worst distance between a joint's two
+   anchors at any step, the kinetic energy at the end, and the deepest
+   any capsule went into the plane. */
+typedef struct ode_ragdoll_def {
+    int count;
+    double hz;      /* 1/s */
+    int iterations; /* QuickStep's; 0: dWorldStep */
+    int steps;
+    double gravity; /* m/s^2 */
+} ode_ragdoll_def;
+
+typedef struct ode_ragdoll_result {
+    double ms_mean;  /* ms a step */
+    double gap;      /* m: the worst joint's anchors apart */
+    double kinetic;  /* J at the end */
+    double deepest;  /* m: the deepest point of a capsule under the plane */
+    int finite;      /* 0: a pose or speed became non-finite */
+} ode_ragdoll_result;
+
+/* 20 ragdolls, 60 Hz, QuickStep(20), 360 steps, g 9.81 */
+ode_ragdoll_def ode_default_ragdoll_def(void);
+
+/* Returns 1 if the run happened, 0 if def was refused or ODE did not
+   initialise. */
+int ode_ragdolls(const ode_ragdoll_def *def, ode_ragdoll_result *out);
+
 #ifdef __cplusplus
 }
 #endif
