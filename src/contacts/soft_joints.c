@@ -13,7 +13,7 @@
    let a box resting on it sink through in 0.6 s, and the projection had
    to carry every load; now it only takes out what the substeps leave
    (test_joint_drives.jointed_bodies_carry_loads,
-   test_joints.dropped_ragdoll_comes_to_rest). */
+   test_lua.dropped_ragdoll_comes_to_rest). */
 #include "contacts/soft_step.h"
 #include "joints/joints.h"
 #include "bodies/bodies.h"
