@@ -1199,7 +1199,7 @@ static tb_status wide_islands_apart(tb_world *w, tb__contacts *c, size_t *narrow
        deeper than the slop, group joins an island's bodies */
     for (i = 0; i < c->body_count; ++i) {
         c->soft_bodies[i].group = (int32_t)i;
-        c->soft_bodies[i].pass = c->bodies[i].tier != TB__BODIES;
+        c->soft_bodies[i].pass = c->bodies[i].tier != TB__BODIES || c->soft_bodies[i].jointed;
     }
     for (i = 0; i < c->soft_patch_count; ++i) {
         const tb__soft_patch *p = &c->soft_patches[i];
@@ -1212,13 +1212,6 @@ static tb_status wide_islands_apart(tb_world *w, tb__contacts *c, size_t *narrow
             c->soft_bodies[p->b].pass = 1;
         if (!p->stacked && p->a >= 0 && p->b >= 0)
             c->soft_bodies[group_of(c->soft_bodies, p->a)].group = group_of(c->soft_bodies, p->b);
-    }
-    for (i = 0; i < c->soft_joint_count; ++i) { /* (a joint's island too: its bodies need not touch) */
-        const tb__soft_joint *s = &c->soft_joints[i];
-        if (s->a >= 0)
-            c->soft_bodies[s->a].pass = 1;
-        if (s->b >= 0)
-            c->soft_bodies[s->b].pass = 1;
     }
     for (i = 0; i < c->body_count; ++i)
         if (c->soft_bodies[i].pass)
